@@ -1,0 +1,133 @@
+"""The Python face of every BSDF: validated, vectorised calls into the C++ core.
+
+Conventions (see docs/ARCHITECTURE.md): local frame with +z the normal, wi and wo both
+pointing away from the surface; ``eval`` returns f * |cos theta_o|; ``pdf`` is a
+solid-angle density; ``sample`` returns weight = f |cos theta_o| / pdf. Results have one
+column per channel: 3 (linear sRGB under D65) when ``wavelengths`` is None, else one per
+requested wavelength (nm). RGB results are spectral results on the default grid projected
+through colour-matching functions, never three-wavelength shortcuts.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from .. import _validate as check
+from ..lobes import Lobe
+from ..spectra import DEFAULT_WAVELENGTHS, srgb_weights
+
+_REGISTRY: dict[str, type["BSDF"]] = {}
+
+
+@dataclass(frozen=True)
+class BSDFSample:
+    """The result of ``BSDF.sample`` for N incident directions."""
+
+    wo: np.ndarray      # (N, 3) sampled outgoing directions (zeros where none)
+    weight: np.ndarray  # (N, C) f |cos theta_o| / pdf (zeros where none)
+    pdf: np.ndarray     # (N,) solid-angle density; 1 for delta lobes by convention
+    lobe: np.ndarray    # (N,) the Lobe bit that produced each sample, 0 = failed
+    eta: np.ndarray     # (N,) relative index crossed, n_t / n_i (1 for reflection)
+
+
+class BSDF:
+    """Base class. Subclasses set ``type_name`` and implement ``_build`` and ``_params``."""
+
+    type_name: ClassVar[str] = ""
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if cls.type_name:
+            _REGISTRY[cls.type_name] = cls
+
+    def __init__(self) -> None:
+        self._cores: dict[tuple[float, ...], Any] = {}
+
+    # -- to be provided by subclasses -------------------------------------------------
+    def _build(self, wavelengths: np.ndarray):
+        """The C++ object for these wavelengths (nm)."""
+        raise NotImplementedError
+
+    def _params(self) -> dict[str, Any]:
+        """Constructor arguments as plain JSON-compatible values."""
+        raise NotImplementedError
+
+    # -- the interface ----------------------------------------------------------------
+    @property
+    def lobes(self) -> Lobe:
+        return Lobe(self._core(DEFAULT_WAVELENGTHS[:1]).lobes)
+
+    def eval(self, wi, wo, wavelengths=None, lobes: Lobe | int = Lobe.ALL) -> np.ndarray:
+        """f(wi, wo) |cos theta_o|, shape (N, C)."""
+        a, b = check.direction_pair(wi, wo)
+        wl, to_rgb = self._channels(wavelengths)
+        values = self._core(wl).eval(a, b, check.lobe_mask(lobes))
+        return values @ to_rgb.T if to_rgb is not None else values
+
+    def pdf(self, wi, wo, lobes: Lobe | int = Lobe.ALL) -> np.ndarray:
+        """Solid-angle density of ``sample`` returning wo, shape (N,)."""
+        a, b = check.direction_pair(wi, wo)
+        return self._core(DEFAULT_WAVELENGTHS[:1]).pdf(a, b, check.lobe_mask(lobes))
+
+    def sample(self, wi, u1=None, u2=None, *, seed: int = 0, wavelengths=None,
+               lobes: Lobe | int = Lobe.ALL) -> BSDFSample:
+        """Sample wo for each wi. Uniforms u1 (N,) and u2 (N, 2) are drawn from ``seed``
+        (numpy PCG64) when not given, so the call is repeatable."""
+        w = check.directions("wi", wi)
+        n = len(w)
+        if u1 is None or u2 is None:
+            rng = np.random.default_rng(check.seed(seed))
+            r1, r2 = rng.random(n), rng.random((n, 2))
+            u1 = r1 if u1 is None else u1
+            u2 = r2 if u2 is None else u2
+        u1 = check.uniforms("u1", u1, (n,))
+        u2 = check.uniforms("u2", u2, (n, 2))
+        wl, to_rgb = self._channels(wavelengths)
+        wo, weight, pdf, lobe, eta = self._core(wl).sample(w, u1, u2, check.lobe_mask(lobes))
+        if to_rgb is not None:
+            weight = weight @ to_rgb.T
+        return BSDFSample(wo=wo, weight=weight, pdf=pdf, lobe=lobe, eta=eta)
+
+    # -- serialisation ----------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """A plain dict: {'type': ..., parameters...}; inverse of ``from_dict``."""
+        return {"type": self.type_name, **self._params()}
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, BSDF) and self.to_dict() == other.to_dict()
+
+    def __repr__(self) -> str:
+        params = ", ".join(f"{k}={v!r}" for k, v in self._params().items())
+        return f"{type(self).__name__}({params})"
+
+    # -- internals --------------------------------------------------------------------
+    def _channels(self, wavelengths):
+        if wavelengths is None:
+            return DEFAULT_WAVELENGTHS, srgb_weights(DEFAULT_WAVELENGTHS)
+        wl = check.real_array("wavelengths", wavelengths, 0.0, lo_open=True)
+        return np.atleast_1d(wl).ravel(), None
+
+    def _core(self, wavelengths: np.ndarray):
+        key = tuple(float(x) for x in wavelengths)
+        core = self._cores.get(key)
+        if core is None:
+            if len(self._cores) > 16:  # bounded: callers may sweep many wavelength sets
+                self._cores.clear()
+            core = self._cores[key] = self._build(np.asarray(wavelengths, dtype=np.float64))
+        return core
+
+
+def from_dict(d: dict[str, Any]) -> BSDF:
+    """Rebuild a BSDF from ``to_dict`` output (also the HTTP and table-file form)."""
+    if not isinstance(d, dict) or "type" not in d:
+        raise ValueError("a BSDF dict needs a 'type' key; known types: " + ", ".join(sorted(_REGISTRY)))
+    cls = _REGISTRY.get(d["type"])
+    if cls is None:
+        raise ValueError(f"unknown BSDF type {d['type']!r}; known types: {', '.join(sorted(_REGISTRY))}")
+    params = {k: v for k, v in d.items() if k != "type"}
+    try:
+        return cls(**params)
+    except TypeError as e:
+        raise ValueError(f"bad parameters for BSDF type {d['type']!r}: {e}") from None

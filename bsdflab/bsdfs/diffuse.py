@@ -1,0 +1,34 @@
+"""Lambertian reflector (the seed's appendix A.1): f = reflectance / pi."""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import _core
+from ..spectra import Spectrum
+from .base import BSDF
+
+
+class Diffuse(BSDF):
+    """Ideal diffuse reflection.
+
+    Parameters
+    ----------
+    reflectance : float, RGB triple, dict or Spectrum, in [0, 1]
+        Albedo (hemispherical reflectance). An RGB triple is linear sRGB. Default 0.5.
+    two_sided : bool
+        If True, light arriving from below (z < 0) is reflected back below as well;
+        otherwise (Mitsuba's default) the underside is black.
+    """
+
+    type_name = "diffuse"
+
+    def __init__(self, reflectance=0.5, two_sided: bool = False):
+        super().__init__()
+        self.reflectance = Spectrum.coerce(reflectance, "reflectance", 0.0, 1.0)
+        self.two_sided = bool(two_sided)
+
+    def _build(self, wavelengths: np.ndarray):
+        return _core.Diffuse(wavelengths, self.reflectance.at(wavelengths), self.two_sided)
+
+    def _params(self):
+        return {"reflectance": self.reflectance.to_dict(), "two_sided": self.two_sided}

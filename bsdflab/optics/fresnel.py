@@ -1,0 +1,96 @@
+"""Fresnel coefficients of a single planar interface, real or complex indices.
+
+Sign convention (Born & Wolf; the same as the `tmm` package), for light going from a
+medium of index n_i into one of index n_t (indices n + i k, k >= 0 absorbing):
+
+    r_s = (n_i cos_i - n_t cos_t) / (n_i cos_i + n_t cos_t)
+    r_p = (n_t cos_i - n_i cos_t) / (n_t cos_i + n_i cos_t)
+    t_s = 2 n_i cos_i / (n_i cos_i + n_t cos_t)
+    t_p = 2 n_i cos_i / (n_t cos_i + n_i cos_t)
+
+cos_t follows from Snell's law with complex arithmetic, on the branch of a forward or
+decaying wave, so total internal reflection and absorbing media need no special cases.
+Energy goes with squared magnitudes: R = |r|^2 per polarisation, and the unpolarised
+reflectance is the mean of R_s and R_p (the seed averaged amplitudes; that is wrong).
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .. import _core
+
+
+class Amplitudes(NamedTuple):
+    r_s: np.ndarray
+    r_p: np.ndarray
+    t_s: np.ndarray
+    t_p: np.ndarray
+    cos_t: np.ndarray
+
+
+class Reflectance(NamedTuple):
+    s: np.ndarray
+    p: np.ndarray
+    unpolarised: np.ndarray
+
+
+def _complex(name, value):
+    try:
+        a = np.asarray(value, dtype=np.complex128)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real or complex number or array") from None
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be finite (found NaN or infinity)")
+    return a
+
+
+def _inputs(cos_i, n_i, n_t):
+    c = _complex("cos_i", cos_i)
+    ni = _complex("n_i", n_i)
+    nt = _complex("n_t", n_t)
+    if np.any(c.real < 0) or np.any(c.real > 1) or np.any(c.imag != 0):
+        raise ValueError("cos_i must be real and in [0, 1] (light arrives from the n_i side)")
+    for name, n in (("n_i", ni), ("n_t", nt)):
+        if np.any(n.real <= 0):
+            raise ValueError(f"{name} must have a real part > 0")
+        if np.any(n.imag < 0):
+            raise ValueError(f"{name} must have an imaginary part (k) >= 0")
+    try:
+        c, ni, nt = np.broadcast_arrays(c, ni, nt)
+    except ValueError:
+        raise ValueError(f"cos_i, n_i and n_t do not broadcast: shapes {c.shape}, "
+                         f"{ni.shape}, {nt.shape}") from None
+    return c, ni, nt
+
+
+def fresnel_amplitudes(cos_i, n_i, n_t) -> Amplitudes:
+    """Complex amplitude coefficients (r_s, r_p, t_s, t_p) and the complex cos_t.
+
+    Parameters broadcast against each other; results have the broadcast shape.
+    """
+    c, ni, nt = _inputs(cos_i, n_i, n_t)
+    shape = c.shape
+    out = _core.fresnel_amplitudes(np.ravel(ni), np.ravel(nt), np.ravel(c))
+    return Amplitudes(*(np.reshape(a, shape) for a in out))
+
+
+def fresnel_reflectance(cos_i, n_i, n_t) -> Reflectance:
+    """Reflectances R_s = |r_s|^2, R_p = |r_p|^2 and the unpolarised mean."""
+    a = fresnel_amplitudes(cos_i, n_i, n_t)
+    rs, rp = np.abs(a.r_s) ** 2, np.abs(a.r_p) ** 2
+    return Reflectance(rs, rp, 0.5 * (rs + rp))
+
+
+def fresnel_transmittance(cos_i, n_i, n_t) -> Reflectance:
+    """Transmittances T = Re(n_t cos_t) / Re(n_i cos_i) |t|^2 (s) and the p analogue
+    Re(n_t conj(cos_t)) / Re(n_i conj(cos_i)) |t_p|^2, for a non-absorbing incident medium.
+    T_s + R_s = 1 and T_p + R_p = 1 at a lossless interface."""
+    c, ni, nt = _inputs(cos_i, n_i, n_t)
+    a = fresnel_amplitudes(c, ni, nt)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ts = np.real(nt * a.cos_t) / np.real(ni * c) * np.abs(a.t_s) ** 2
+        tp = np.real(nt * np.conj(a.cos_t)) / np.real(ni * np.conj(c)) * np.abs(a.t_p) ** 2
+    ts, tp = np.nan_to_num(ts), np.nan_to_num(tp)
+    return Reflectance(ts, tp, 0.5 * (ts + tp))

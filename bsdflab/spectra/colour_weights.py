@@ -1,0 +1,99 @@
+"""Spectrum <-> linear sRGB through colour-science's tables.
+
+A reflectance-like spectrum v(lambda) on a grid becomes colour by
+    XYZ = sum_l v(l) S(l) cmf(l) / sum_l S(l) ybar(l)
+    RGB = M_XYZ->sRGB XYZ
+with CIE 1931 2-degree colour-matching functions and illuminant S (D65 by default). The
+3 x L matrix W mapping v to RGB is precomputed once per grid, so converting N spectra is
+one matrix product. RGB inputs (e.g. a diffuse albedo given as a triple) are lifted to
+spectra with Mallett & Yuksel's (2019) sRGB basis, which is linear in RGB and
+reproduces sRGB reflectances under D65.
+
+The illuminant's white computed on the grid is chromatically adapted (Bradford) to the
+RGB space's white point, so a perfect white reflector is exactly (1, 1, 1).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from .._validate import real_array
+
+
+@dataclass(frozen=True)
+class ColourSpace:
+    """Which observer, illuminant and RGB space spectra are projected to."""
+
+    cmfs: str = "CIE 1931 2 Degree Standard Observer"
+    illuminant: str = "D65"
+    rgb: str = "sRGB"
+
+
+@lru_cache(maxsize=32)
+def _weights(grid: tuple[float, ...], space: ColourSpace) -> np.ndarray:
+    import colour
+
+    wl = np.asarray(grid)
+    cmfs = colour.MSDS_CMFS[space.cmfs]
+    illum = colour.SDS_ILLUMINANTS[space.illuminant]
+    cmf = np.stack([np.interp(wl, cmfs.wavelengths, cmfs.values[:, k], left=0, right=0)
+                    for k in range(3)])
+    s = np.interp(wl, illum.wavelengths, illum.values, left=0, right=0)
+    xyz_w = cmf * s / np.sum(cmf[1] * s)
+    rgb_space = rgb_colourspace(space)
+    # The illuminant's white as seen through these CMFs on this grid differs from the
+    # RGB space's nominal white point by ~1e-4; adapt it (Bradford) so that a perfect
+    # reflector maps to RGB (1, 1, 1) exactly, as colour.XYZ_to_RGB would with that white.
+    white = xyz_w.sum(axis=1)
+    target = colour.xy_to_XYZ(rgb_space.whitepoint)
+    cat = colour.adaptation.matrix_chromatic_adaptation_VonKries(white, target, transform="Bradford")
+    W = rgb_space.matrix_XYZ_to_RGB @ cat @ xyz_w
+    W.setflags(write=False)
+    return W
+
+
+def rgb_colourspace(space: ColourSpace = ColourSpace()):
+    """colour-science's RGB colourspace with matrices derived from its primaries and white
+    point (not the 4-decimal rounded IEC sRGB matrix, which maps white to 1 +- 2e-4)."""
+    import colour
+
+    cs = colour.RGB_COLOURSPACES[space.rgb].copy()
+    cs.use_derived_transformation_matrices(True)
+    return cs
+
+
+def srgb_weights(wavelengths, space: ColourSpace = ColourSpace()) -> np.ndarray:
+    """The (3, L) matrix taking a spectrum sampled at `wavelengths` (nm) to linear RGB."""
+    wl = real_array("wavelengths", wavelengths, 0.0, lo_open=True, ndim=1)
+    return _weights(tuple(float(x) for x in wl), space)
+
+
+def spectrum_to_rgb(values, wavelengths, space: ColourSpace = ColourSpace()) -> np.ndarray:
+    """Linear RGB of spectra `values` (..., L) sampled at `wavelengths` (L,)."""
+    W = srgb_weights(wavelengths, space)
+    v = np.asarray(values, dtype=np.float64)
+    if v.shape[-1] != W.shape[1]:
+        raise ValueError(f"values must end in an axis of {W.shape[1]} wavelengths, got shape {v.shape}")
+    return v @ W.T
+
+
+@lru_cache(maxsize=32)
+def _basis(grid: tuple[float, ...]) -> np.ndarray:
+    import colour
+
+    basis = colour.recovery.MSDS_BASIS_FUNCTIONS_sRGB_MALLETT2019
+    wl = np.asarray(grid)
+    B = np.stack([np.interp(wl, basis.wavelengths, basis.values[:, k]) for k in range(3)])
+    B.setflags(write=False)
+    return B
+
+
+def rgb_to_spectrum(rgb, wavelengths) -> np.ndarray:
+    """Spectra (..., L) for linear sRGB triples (..., 3) in [0, 1] (Mallett-Yuksel 2019)."""
+    c = np.asarray(rgb, dtype=np.float64)
+    if c.shape[-1] != 3:
+        raise ValueError(f"rgb must end in an axis of 3, got shape {c.shape}")
+    wl = real_array("wavelengths", wavelengths, 0.0, lo_open=True, ndim=1)
+    return c @ _basis(tuple(float(x) for x in wl))

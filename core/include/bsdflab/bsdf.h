@@ -1,0 +1,63 @@
+// The BSDF interface of the core (Mitsuba's convention):
+//   eval(wi, wo)      -> f(wi, wo) * |cos theta_o|, one value per channel
+//   pdf(wi, wo)       -> solid-angle density of sample() producing wo
+//   sample(wi, u1,u2) -> wo, weight = f |cos theta_o| / pdf, pdf, the sampled lobe
+// Delta lobes evaluate to 0 in eval/pdf and are reached only through sample().
+//
+// A BSDF object is built for a fixed list of channels (wavelengths, in nm): spectral
+// parameters are resolved per channel by the Python layer before construction, so the
+// core never interpolates spectra in a hot loop. Implementations are immutable after
+// construction and therefore safe to share between threads.
+#pragma once
+#include <cstdint>
+#include <vector>
+#include "vector.h"
+
+namespace bsdflab {
+
+// Lobe flags: one bit per (diffuse | glossy | delta) x (reflection | transmission).
+enum Lobe : uint32_t {
+    kNone = 0,
+    kDiffuseReflection = 1u << 0,
+    kGlossyReflection = 1u << 1,
+    kDeltaReflection = 1u << 2,
+    kDiffuseTransmission = 1u << 3,
+    kGlossyTransmission = 1u << 4,
+    kDeltaTransmission = 1u << 5,
+    kReflection = kDiffuseReflection | kGlossyReflection | kDeltaReflection,
+    kTransmission = kDiffuseTransmission | kGlossyTransmission | kDeltaTransmission,
+    kDelta = kDeltaReflection | kDeltaTransmission,
+    kAll = kReflection | kTransmission,
+};
+
+struct BSDFSample {
+    Vec3 wo;
+    double pdf = 0;     // solid-angle density; 1 by convention for a delta lobe
+    uint32_t lobe = 0;  // the single lobe that produced wo; 0 = no sample
+    double eta = 1;     // relative index crossed (n_t / n_i), 1 for reflection
+};
+
+class BSDF {
+public:
+    explicit BSDF(std::vector<double> wavelengths) : wavelengths_(std::move(wavelengths)) {}
+    virtual ~BSDF() = default;
+
+    int channels() const { return static_cast<int>(wavelengths_.size()); }
+    const std::vector<double> &wavelengths() const { return wavelengths_; }
+    virtual uint32_t lobes() const = 0;
+
+    // Writes channels() values to `out`; zeros when nothing is reachable.
+    virtual void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, double *out) const = 0;
+    virtual double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes) const = 0;
+    // Writes channels() weights to `weight`; returns lobe 0 and zero weights on failure.
+    virtual BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y,
+                              uint32_t lobes, double *weight) const = 0;
+
+protected:
+    void zero(double *out) const {
+        for (int c = 0; c < channels(); ++c) out[c] = 0.0;
+    }
+    std::vector<double> wavelengths_;
+};
+
+} // namespace bsdflab

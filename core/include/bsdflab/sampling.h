@@ -1,0 +1,15 @@
+// Warps from the unit square to directions, with their solid-angle densities.
+#pragma once
+#include "vector.h"
+
+namespace bsdflab {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kInvPi = 1.0 / kPi;
+
+// Concentric (Shirley-Chiu) map of the square to the unit disk, then lifted to the
+// hemisphere: density cos(theta) / pi.
+Vec3 square_to_cosine_hemisphere(double u1, double u2);
+inline double cosine_hemisphere_pdf(const Vec3 &w) { return w.z > 0 ? w.z * kInvPi : 0.0; }
+
+} // namespace bsdflab

@@ -1,0 +1,14 @@
+// Entry point of bsdflab._core: one bind_* function per header group.
+#include <pybind11/pybind11.h>
+#include "bsdflab/parallel.h"
+
+namespace py = pybind11;
+void bind_bsdf(py::module_ &m);
+void bind_fresnel(py::module_ &m);
+
+PYBIND11_MODULE(_core, m) {
+    m.doc() = "bsdflab C++ core: optics, BSDFs and estimators (vectorised, GIL released)";
+    m.def("worker_count", &bsdflab::worker_count, "threads used by parallel loops");
+    bind_bsdf(m);
+    bind_fresnel(m);
+}
