@@ -27,7 +27,7 @@ class BSDFSample:
 
     wo: np.ndarray      # (N, 3) sampled outgoing directions (zeros where none)
     weight: np.ndarray  # (N, C) f |cos theta_o| / pdf (zeros where none)
-    pdf: np.ndarray     # (N,) solid-angle density; 1 for delta lobes by convention
+    pdf: np.ndarray     # (N,) solid-angle density; for a delta lobe the probability of picking it
     lobe: np.ndarray    # (N,) the Lobe bit that produced each sample, 0 = failed
     eta: np.ndarray     # (N,) relative index crossed, n_t / n_i (1 for reflection)
 

@@ -32,7 +32,7 @@ enum Lobe : uint32_t {
 
 struct BSDFSample {
     Vec3 wo;
-    double pdf = 0;     // solid-angle density; 1 by convention for a delta lobe
+    double pdf = 0;     // solid-angle density; for a delta lobe, the probability of picking it
     uint32_t lobe = 0;  // the single lobe that produced wo; 0 = no sample
     double eta = 1;     // relative index crossed (n_t / n_i), 1 for reflection
 };

@@ -1,0 +1,35 @@
+"""`bsdflab` entry point: one subcommand per module in this package."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .. import __version__
+from . import info, lobe
+
+COMMANDS = (lobe, info)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="bsdflab",
+        description="Measure, tabulate, render and validate layered thin-film BSDFs.")
+    parser.add_argument("--version", action="version", version=f"bsdflab {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for module in COMMANDS:
+        module.register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.run(args) or 0)
+    except ValueError as e:  # bad input: a clear message, not a traceback
+        print(f"bsdflab {args.command}: error: {e}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""matplotlib figures of bsdflab quantities (Agg backend; files, never windows)."""

@@ -1,0 +1,116 @@
+"""The lobe figure: in-plane scattering lobe plus albedo vs incidence angle."""
+from __future__ import annotations
+
+import os
+import tempfile
+
+import numpy as np
+
+from ..bsdfs import BSDF
+from ..lobes import Lobe
+
+
+def _in_plane(theta: np.ndarray) -> np.ndarray:
+    """Directions in the x-z plane at signed polar angle theta (from +z toward +x)."""
+    return np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=1)
+
+
+def _albedo(bsdf: BSDF, wi: np.ndarray, lobes: Lobe, samples: int, seed: int) -> np.ndarray:
+    """Mean sample weight for one incident direction (linear sRGB)."""
+    s = bsdf.sample(np.repeat(wi[None], samples, axis=0), seed=seed, lobes=lobes)
+    return s.weight.mean(axis=0)
+
+
+def _display(rgb: np.ndarray) -> np.ndarray:
+    """Linear sRGB -> displayable sRGB in [0, 1] (colour-science's encoding)."""
+    import colour
+
+    return np.clip(colour.cctf_encoding(np.clip(rgb, 0, None), function="sRGB"), 0, 1)
+
+
+def lobe_figure(bsdf: BSDF, theta_i: float, path: str, samples: int = 200_000,
+                seed: int = 0) -> dict[str, np.ndarray]:
+    """Write the figure to `path` (PNG, atomically) and return albedos (linear sRGB)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    wi = _in_plane(np.array([-theta_i]))[0]  # light from the -x side
+    fig = plt.figure(figsize=(11, 4.6), constrained_layout=True)
+    ax = fig.add_subplot(1, 2, 1, projection="polar")
+    ax.set_theta_zero_location("N")
+    ax.set_theta_direction(-1)
+    ax.set_thetamin(-180)
+    ax.set_thetamax(180)
+
+    summary = {}
+    smooth = bsdf.lobes & Lobe.SMOOTH
+    if smooth:
+        t = np.linspace(-np.pi, np.pi, 721)
+        wo = _in_plane(t)
+        f = bsdf.eval(wi, wo) / np.maximum(np.abs(wo[:, 2]), 1e-9)[:, None]  # BSDF value
+        for c, colour_name in enumerate(("tab:red", "tab:green", "tab:blue")):
+            ax.plot(t, f[:, c], color=colour_name, lw=1.2, label="RGB"[c])
+        ax.set_title("f(wi, wo) in the plane of incidence [1/sr]", fontsize=10)
+    if bsdf.lobes & Lobe.DELTA:
+        s = bsdf.sample(np.repeat(wi[None], samples, axis=0), seed=seed)
+        for lobe, label in ((Lobe.DELTA_REFLECTION, "reflection"), (Lobe.DELTA_TRANSMISSION, "transmission")):
+            hit = s.lobe == int(lobe)
+            if not np.any(hit):
+                continue
+            energy = s.weight[hit].sum(axis=0) / samples  # (3,) the lobe's share of the albedo
+            wo = s.wo[hit][0]
+            angle = np.arctan2(wo[0], wo[2])
+            ax.annotate("", xy=(angle, float(energy.mean())), xytext=(0, 0),
+                        arrowprops=dict(arrowstyle="->", lw=2.5, color=_display(energy)))
+            ax.text(angle, float(energy.mean()) * 1.05, f"delta {label}\nRGB {np.round(energy, 3)}",
+                    fontsize=8, ha="center")
+        ax.set_title("delta lobes: arrow length = energy fraction", fontsize=10)
+    ax.annotate("", xy=(0, 0), xytext=(-theta_i, ax.get_rmax() * 0.9),
+                arrowprops=dict(arrowstyle="->", lw=1.5, color="0.4"))
+    ax.text(-theta_i, ax.get_rmax() * 0.95, "incident", fontsize=8, color="0.4", ha="center")
+    if smooth:
+        ax.legend(loc="lower left", fontsize=8)
+
+    # Albedo vs incidence angle, per lobe kind, with the colour as a swatch strip.
+    ax2 = fig.add_subplot(1, 2, 2)
+    angles = np.radians(np.linspace(0, 89, 46))
+    n = max(2000, samples // 50)
+    parts = [(Lobe.REFLECTION, "reflected"), (Lobe.TRANSMISSION, "transmitted")]
+    for lobe, label in parts:
+        if not bsdf.lobes & lobe:
+            continue
+        alb = np.array([_albedo(bsdf, _in_plane(np.array([-a]))[0], lobe, n, seed) for a in angles])
+        ax2.plot(np.degrees(angles), alb.mean(axis=1), color="k", lw=1.5,
+                 ls="-" if lobe == Lobe.REFLECTION else "--", label=f"{label} (mean of RGB)")
+        ax2.scatter(np.degrees(angles), alb.mean(axis=1), c=_display(alb), s=40, zorder=3,
+                    edgecolors="0.3", linewidths=0.4)
+    ax2.set_xlabel("incidence angle [deg]")
+    ax2.set_ylabel("albedo (dots in their sRGB colour)")
+    ax2.set_ylim(0, 1.05)
+    ax2.grid(alpha=0.3)
+    ax2.legend(fontsize=8)
+    ax2.set_title(f"{bsdf.to_dict()['type']}: albedo vs angle", fontsize=10)
+
+    for lobe, name in ((Lobe.REFLECTION, "albedo_R"), (Lobe.TRANSMISSION, "albedo_T")):
+        if bsdf.lobes & lobe:
+            summary[name] = _albedo(bsdf, wi, lobe, samples, seed)
+    _save_atomically(fig, path)
+    plt.close(fig)
+    return summary
+
+
+def _save_atomically(fig, path: str) -> None:
+    """Write to a temporary file beside `path`, then rename: never a half-written file."""
+    directory = os.path.dirname(os.path.abspath(path))
+    os.makedirs(directory, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=directory, suffix=".png.tmp")
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=110, format="png")
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise

@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# One entry point for a fresh Debian machine (run as root, or with the system packages
+# below already present):
+#   ./dev.sh demo   set everything up, then run the main job
+#   ./dev.sh test   set everything up, then run the test suite (what CI runs)
+#   ./dev.sh setup  only set up (system packages, .venv, build of the C++ core)
+# Extra arguments after `test` go to pytest (e.g. ./dev.sh test -m slow).
+set -euo pipefail
+cd "$(dirname "$0")"
+
+# libembree-dev: ray intersection for the renderer; libllvm19: Mitsuba's llvm_ad_* variants
+# (the default LLVM 15 crashes them); python3-venv/-dev: a venv and headers on Debian's Python.
+SYSTEM_PACKAGES=(build-essential python3-dev python3-venv libembree-dev libllvm19)
+VENV=.venv
+
+install_system_packages() {
+    command -v dpkg-query >/dev/null 2>&1 || { echo "dev.sh: not a Debian system; install ${SYSTEM_PACKAGES[*]} yourself" >&2; return 0; }
+    local missing=()
+    for p in "${SYSTEM_PACKAGES[@]}"; do
+        dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+    done
+    [ ${#missing[@]} -eq 0 ] && return 0
+    if [ "$(id -u)" -ne 0 ]; then
+        echo "dev.sh: missing system packages: ${missing[*]} (run as root or install them)" >&2
+        exit 1
+    fi
+    echo "dev.sh: installing system packages: ${missing[*]}"
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq --no-install-recommends "${missing[@]}"
+}
+
+setup() {
+    install_system_packages
+    if [ ! -x "$VENV/bin/python" ]; then
+        python3 -m venv "$VENV"
+    fi
+    "$VENV/bin/python" -m pip install -q --upgrade pip
+    # Editable install: builds bsdflab._core (C++) and installs every dependency from
+    # pyproject.toml, the test extras included.
+    "$VENV/bin/python" -m pip install -q -e ".[test]"
+}
+
+cmd=${1:-demo}
+shift || true
+case "$cmd" in
+    setup) setup ;;
+    demo)
+        setup
+        mkdir -p out
+        "$VENV/bin/bsdflab" lobe --material conductor --metal Au --theta-i 30 --out out/lobe.png "$@"
+        ;;
+    test)
+        setup
+        "$VENV/bin/python" -m pytest -m "not slow" "$@"
+        ;;
+    *) echo "usage: ./dev.sh [demo|test|setup] [args...]" >&2; exit 2 ;;
+esac

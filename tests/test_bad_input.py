@@ -1,0 +1,92 @@
+"""Bad input: Python raises a ValueError naming the parameter; the core never crashes."""
+import json
+
+import numpy as np
+import pytest
+
+import bsdflab as bl
+from bsdflab import _core
+
+UP = np.array([0.0, 0.0, 1.0])
+
+
+@pytest.mark.parametrize("make, match", [
+    (lambda: bl.Diffuse(-0.1), "reflectance must be >= 0"),
+    (lambda: bl.Diffuse(1.5), "reflectance must be <= 1"),
+    (lambda: bl.Diffuse([0.2, 1.2, 0.3]), "reflectance"),
+    (lambda: bl.Diffuse(np.nan), "reflectance must be finite"),
+    (lambda: bl.Diffuse("red"), "reflectance"),
+    (lambda: bl.Conductor(material="Unobtainium"), "unknown metal"),
+    (lambda: bl.Conductor(eta=-1.0, k=2.0), "eta must be > 0"),
+    (lambda: bl.Conductor(eta=1.0, k=-2.0), "k must be >= 0"),
+    (lambda: bl.Conductor(material="Au", eta=1.0), "either material"),
+    (lambda: bl.Conductor(ext_ior=0.0), "ext_ior must be > 0"),
+    (lambda: bl.Dielectric(int_ior=0.0), "int_ior must be > 0"),
+    (lambda: bl.Dielectric(int_ior=np.inf), "int_ior must be finite"),
+    (lambda: bl.Dielectric(ext_ior=-1.5), "ext_ior must be > 0"),
+    (lambda: bl.from_dict({"type": "plastic"}), "unknown BSDF type"),
+    (lambda: bl.from_dict({"int_ior": 1.5}), "'type'"),
+    (lambda: bl.from_dict({"type": "dielectric", "colour": 3}), "bad parameters"),
+])
+def test_01_bad_parameters(make, match):
+    with pytest.raises(ValueError, match=match):
+        make()
+
+
+@pytest.mark.parametrize("wi, wo, match", [
+    (np.zeros((4, 2)), np.zeros((4, 3)), "wi must have shape"),
+    (np.array([[0, 0, 2.0]]), UP, "unit vectors"),
+    (np.array([[0, 0, np.nan]]), UP, "finite"),
+    (UP, np.array([[0, 0, 1.0], [0, 0, 0.0]]), "unit vectors"),
+    (np.tile(UP, (3, 1)), np.tile(UP, (2, 1)), "same length"),
+    (UP, "up", "wo must be"),
+])
+def test_02_bad_directions(wi, wo, match):
+    with pytest.raises(ValueError, match=match):
+        bl.Diffuse(0.5).eval(wi, wo)
+
+
+def test_03_bad_sample_arguments():
+    d = bl.Diffuse(0.5)
+    with pytest.raises(ValueError, match="u1 must have shape"):
+        d.sample(np.tile(UP, (3, 1)), u1=np.zeros(2), u2=np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="u2 must be <= 1"):
+        d.sample(UP, u1=[0.5], u2=[[0.5, 1.5]])
+    with pytest.raises(ValueError, match="seed"):
+        d.sample(UP, seed=-1)
+    with pytest.raises(ValueError, match="lobes"):
+        d.eval(UP, UP, lobes=1 << 9)
+    with pytest.raises(ValueError, match="wavelengths must be > 0"):
+        d.eval(UP, UP, wavelengths=[0.0])
+
+
+@pytest.mark.parametrize("core", [
+    _core.Diffuse([500.0], [0.5], False), _core.Diffuse([500.0], [0.5], True),
+    _core.Conductor([500.0], [0.2], [3.0], 1.0, True), _core.Dielectric([500.0], 1.5, 1.0),
+])
+def test_04_core_tolerates_degenerate_directions(core):
+    bad = np.array([[np.nan, 0, 1], [0, 0, np.inf], [0, 0, 0], [1, 0, 0], [0, 0, -np.inf],
+                    [1e300, 1e300, 1e300], [0, 0, 1e-300]], dtype=float)
+    good = np.tile([0.0, 0.6, 0.8], (len(bad), 1))
+    for wi, wo in ((bad, good), (good, bad), (bad, bad)):
+        assert np.all(core.eval(wi, wo) == 0)
+        assert np.all(core.pdf(wi, wo) == 0)
+    wo, weight, pdf, lobe, eta = core.sample(bad, np.full(len(bad), 0.5), np.full((len(bad), 2), 0.5))
+    assert np.all(lobe == 0) and np.all(weight == 0) and np.all(np.isfinite(wo))
+    # out-of-range uniforms (the core's callers may pass anything) never produce NaN
+    u1 = np.array([np.nan, -1.0, 2.0]); u2 = np.array([[np.nan, 0.5], [-3, 7], [0.5, np.inf]])
+    wo, weight, pdf, lobe, eta = core.sample(good[:3], u1, u2)
+    assert np.all(np.isfinite(weight)) and np.all(np.isfinite(pdf))
+
+
+def test_05_models_round_trip_through_json():
+    models = [bl.Diffuse(0.3), bl.Diffuse([0.1, 0.2, 0.3], two_sided=True),
+              bl.Diffuse({"type": "tabulated", "wavelengths": [400, 700], "values": [0.2, 0.9]}),
+              bl.Conductor(material="Au"), bl.Conductor(eta=0.2, k=3.0), bl.Conductor(),
+              bl.Dielectric(1.33, 1.0)]
+    wi, wo = np.array([[0.0, 0.6, 0.8]]), np.array([[0.3, 0.0, np.sqrt(1 - 0.09)]])
+    for m in models:
+        d = json.loads(json.dumps(m.to_dict()))
+        back = bl.from_dict(d)
+        assert back == m
+        assert np.array_equal(back.eval(wi, wo), m.eval(wi, wo))
