@@ -8,11 +8,12 @@ Quick use::
     rgb = bl.Diffuse(0.5).eval([0, 0, 1], [0, 0.6, 0.8])      # (1, 3) linear sRGB
 """
 from . import optics, spectra
-from .bsdfs import BSDF, BSDFSample, Conductor, Dielectric, Diffuse, from_dict
+from .bsdfs import (BSDF, BSDFSample, Conductor, Dielectric, Diffuse, RoughConductor,
+                    RoughDielectric, from_dict)
 from .lobes import Lobe
 from .spectra import DEFAULT_WAVELENGTHS, Spectrum, spectrum_to_rgb
 
 __version__ = "0.1.0"
 
 __all__ = ["BSDF", "BSDFSample", "Conductor", "DEFAULT_WAVELENGTHS", "Dielectric", "Diffuse",
-           "Lobe", "Spectrum", "from_dict", "optics", "spectra", "spectrum_to_rgb", "__version__"]
+           "Lobe", "RoughConductor", "RoughDielectric", "Spectrum", "from_dict", "optics", "spectra", "spectrum_to_rgb", "__version__"]

@@ -106,3 +106,15 @@ def seed(value: Any) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
         raise ValueError(f"seed must be a non-negative integer, got {value!r}")
     return int(value)
+
+
+def per_row(name: str, value: Any, n: int, lo: float | None = None) -> np.ndarray | None:
+    """None, a number, or one value per row: a float64 array of shape (n,) or None."""
+    if value is None:
+        return None
+    a = real_array(name, value, lo)
+    if a.ndim == 0:
+        return np.full(n, float(a))
+    if a.shape != (n,):
+        raise ValueError(f"{name} must be a number or have shape ({n},), got {a.shape}")
+    return np.ascontiguousarray(a)

@@ -60,10 +60,17 @@ def test_03_bad_sample_arguments():
         d.eval(UP, UP, wavelengths=[0.0])
 
 
-@pytest.mark.parametrize("core", [
+CORES = [
     _core.Diffuse([500.0], [0.5], False), _core.Diffuse([500.0], [0.5], True),
-    _core.Conductor([500.0], [0.2], [3.0], 1.0, True), _core.Dielectric([500.0], 1.5, 1.0),
-])
+    _core.SmoothInterface([500.0], _core.ConductorTerm([0.2 + 3j], 1.0), True),
+    _core.SmoothInterface([500.0], _core.DielectricTerm(1, 1.5, 1.0), False),
+    _core.RoughInterface([500.0], _core.ConductorTerm([0.2 + 3j], 1.0), 0.3, True),
+    _core.RoughInterface([500.0], _core.DielectricTerm(1, 1.5, 1.0), 0.3, False),
+    _core.RoughInterface([500.0], _core.FilmTerm([500.0], 1.0, [[1.8 + 0.1j]], [400.0], [1.5], True), 0.3, False),
+]
+
+
+@pytest.mark.parametrize("core", CORES)
 def test_04_core_tolerates_degenerate_directions(core):
     bad = np.array([[np.nan, 0, 1], [0, 0, np.inf], [0, 0, 0], [1, 0, 0], [0, 0, -np.inf],
                     [1e300, 1e300, 1e300], [0, 0, 1e-300]], dtype=float)

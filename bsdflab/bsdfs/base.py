@@ -57,22 +57,31 @@ class BSDF:
     # -- the interface ----------------------------------------------------------------
     @property
     def lobes(self) -> Lobe:
-        return Lobe(self._core(DEFAULT_WAVELENGTHS[:1]).lobes)
+        return Lobe(self._core(DEFAULT_WAVELENGTHS).lobes)
 
-    def eval(self, wi, wo, wavelengths=None, lobes: Lobe | int = Lobe.ALL) -> np.ndarray:
-        """f(wi, wo) |cos theta_o|, shape (N, C)."""
+    def eval(self, wi, wo, wavelengths=None, lobes: Lobe | int = Lobe.ALL,
+             thickness=None) -> np.ndarray:
+        """f(wi, wo) |cos theta_o|, shape (N, C).
+
+        ``thickness`` (nm; a number or one per row) replaces a thin-film coating's total
+        thickness for this call, e.g. a texture's value at each shading point."""
         a, b = check.direction_pair(wi, wo)
         wl, to_rgb = self._channels(wavelengths)
-        values = self._core(wl).eval(a, b, check.lobe_mask(lobes))
+        t = check.per_row("thickness", thickness, len(a), lo=0.0)
+        values = self._core(wl).eval(a, b, check.lobe_mask(lobes), t)
         return values @ to_rgb.T if to_rgb is not None else values
 
-    def pdf(self, wi, wo, lobes: Lobe | int = Lobe.ALL) -> np.ndarray:
-        """Solid-angle density of ``sample`` returning wo, shape (N,)."""
+    def pdf(self, wi, wo, lobes: Lobe | int = Lobe.ALL, thickness=None) -> np.ndarray:
+        """Solid-angle density of ``sample`` returning wo, shape (N,).
+
+        Where the choice between lobes depends on wavelength (thin films), the density is
+        that of the default colour grid's channel mean, which is what ``sample`` uses."""
         a, b = check.direction_pair(wi, wo)
-        return self._core(DEFAULT_WAVELENGTHS[:1]).pdf(a, b, check.lobe_mask(lobes))
+        t = check.per_row("thickness", thickness, len(a), lo=0.0)
+        return self._core(DEFAULT_WAVELENGTHS).pdf(a, b, check.lobe_mask(lobes), t)
 
     def sample(self, wi, u1=None, u2=None, *, seed: int = 0, wavelengths=None,
-               lobes: Lobe | int = Lobe.ALL) -> BSDFSample:
+               lobes: Lobe | int = Lobe.ALL, thickness=None) -> BSDFSample:
         """Sample wo for each wi. Uniforms u1 (N,) and u2 (N, 2) are drawn from ``seed``
         (numpy PCG64) when not given, so the call is repeatable."""
         w = check.directions("wi", wi)
@@ -85,7 +94,8 @@ class BSDF:
         u1 = check.uniforms("u1", u1, (n,))
         u2 = check.uniforms("u2", u2, (n, 2))
         wl, to_rgb = self._channels(wavelengths)
-        wo, weight, pdf, lobe, eta = self._core(wl).sample(w, u1, u2, check.lobe_mask(lobes))
+        t = check.per_row("thickness", thickness, n, lo=0.0)
+        wo, weight, pdf, lobe, eta = self._core(wl).sample(w, u1, u2, check.lobe_mask(lobes), t)
         if to_rgb is not None:
             weight = weight @ to_rgb.T
         return BSDFSample(wo=wo, weight=weight, pdf=pdf, lobe=lobe, eta=eta)

@@ -1,4 +1,5 @@
-"""Smooth dielectric interface (the seed's appendix A.3, with energy-correct Fresnel)."""
+"""Smooth dielectric interface (the seed's appendix A.3, with energy-correct Fresnel),
+optionally thin-film coated."""
 from __future__ import annotations
 
 import numpy as np
@@ -6,6 +7,8 @@ import numpy as np
 from .. import _core
 from .._validate import real_scalar
 from .base import BSDF
+from .interface_term import (DEFAULT_EXT_IOR, DEFAULT_INT_IOR, ext_ior_param, film_to_list,
+                             make_term, parse_film)
 
 
 class Dielectric(BSDF):
@@ -14,7 +17,9 @@ class Dielectric(BSDF):
     The exterior (index ``ext_ior``) is above the surface (+z), the interior
     (``int_ior``) below. Reflection and transmission are chosen with the unpolarised
     Fresnel reflectance R = (|r_s|^2 + |r_p|^2) / 2 and T = 1 - R; light arriving from
-    inside beyond the critical angle is totally reflected.
+    inside beyond the critical angle is totally reflected. With a ``film``, R and T are
+    those of the coated interface per wavelength (the choice uses their channel means;
+    weights carry each channel's value over that probability).
 
     Transmitted radiance is scaled by (n_i / n_t)^2, the solid-angle compression of
     radiance transport (radiance / n^2 is conserved): this is the weight a camera path
@@ -26,17 +31,24 @@ class Dielectric(BSDF):
         Index of refraction of the interior. Default 1.5046 (BK7 at 589 nm, Mitsuba's default).
     ext_ior : float > 0
         Index of refraction of the exterior. Default 1.000277 (air).
+    film : list of Layer or dicts, optional
+        A thin-film coating on the exterior side (top first); thickness variable per query.
     """
 
     type_name = "dielectric"
 
-    def __init__(self, int_ior: float = 1.5046, ext_ior: float = 1.000277):
+    def __init__(self, int_ior: float = DEFAULT_INT_IOR, ext_ior: float = DEFAULT_EXT_IOR, film=None):
         super().__init__()
         self.int_ior = real_scalar("int_ior", int_ior, 0.0, lo_open=True)
-        self.ext_ior = real_scalar("ext_ior", ext_ior, 0.0, lo_open=True)
+        self.ext_ior = ext_ior_param(ext_ior)
+        self.film = parse_film(film)
 
     def _build(self, wavelengths: np.ndarray):
-        return _core.Dielectric(wavelengths, self.int_ior, self.ext_ior)
+        term = make_term(wavelengths, self.ext_ior, self.film, int_ior=self.int_ior)
+        return _core.SmoothInterface(wavelengths, term, False)
 
     def _params(self):
-        return {"int_ior": self.int_ior, "ext_ior": self.ext_ior}
+        p = {"int_ior": self.int_ior, "ext_ior": self.ext_ior}
+        if self.film:
+            p["film"] = film_to_list(self.film)
+        return p

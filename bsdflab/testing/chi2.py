@@ -287,7 +287,7 @@ class ChiSquareTest:
 
 def bsdf_chi2(bsdf, wi, *, lobes: Lobe | int = Lobe.ALL, significance: float = 0.01,
               test_count: int = 1, sample_count: int = 1_000_000, seed: int = 0,
-              res=31, min_expected: float = 5.0) -> ChiSquareTest:
+              res=31, min_expected: float = 5.0, quadrature_order: int = 5) -> ChiSquareTest:
     """A ``ChiSquareTest`` of ``bsdf.sample`` against ``bsdf.pdf`` for one incident
     direction (not yet run: call ``.run()``).
 
@@ -303,8 +303,9 @@ def bsdf_chi2(bsdf, wi, *, lobes: Lobe | int = Lobe.ALL, significance: float = 0
         Incident direction, unit length, local frame (+z normal).
     lobes : Lobe
         Lobes to sample and evaluate. At least one must be non-delta.
-    significance, test_count, sample_count, seed, res, min_expected
-        As for ``ChiSquareTest``.
+    significance, test_count, sample_count, seed, res, min_expected, quadrature_order
+        As for ``ChiSquareTest``. Raise ``quadrature_order`` for very peaked lobes (e.g.
+        GGX alpha < 0.1), whose per-cell integrals the default order underestimates.
 
     Returns
     -------
@@ -343,7 +344,7 @@ def bsdf_chi2(bsdf, wi, *, lobes: Lobe | int = Lobe.ALL, significance: float = 0
 
     return ChiSquareTest(sample_fn, pdf_fn, res=res, sample_count=sample_count,
                          min_expected=min_expected, significance=significance,
-                         test_count=test_count, seed=seed)
+                         test_count=test_count, seed=seed, quadrature_order=quadrature_order)
 
 
 # -- grid geometry ----------------------------------------------------------------------

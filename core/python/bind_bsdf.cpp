@@ -9,48 +9,69 @@ namespace py = pybind11;
 using namespace bsdflab;
 using namespace bsdflab::py_helpers;
 
-static py::array_t<double> eval_many(const BSDF &b, const Darr &wi, const Darr &wo, uint32_t lobes) {
+// Optional per-row film thickness (nm); None -> every row uses the model's default.
+static Darr thickness_rows(const py::object &thickness, std::size_t n) {
+    if (thickness.is_none()) return Darr();
+    Darr t = py::cast<Darr>(thickness);
+    if (t.ndim() != 1 || static_cast<std::size_t>(t.shape(0)) != n)
+        throw std::invalid_argument("thickness must have shape (N,)");
+    return t;
+}
+
+static Query query_row(const Darr &t, std::size_t i) {
+    Query q;
+    if (t.size() > 0) q.film_thickness_nm = t.data()[i];
+    return q;
+}
+
+static py::array_t<double> eval_many(const BSDF &b, const Darr &wi, const Darr &wo, uint32_t lobes,
+                                     const py::object &thickness) {
     require_rows3(wi, "wi");
     require_rows3(wo, "wo");
     if (wi.shape(0) != wo.shape(0)) throw std::invalid_argument("wi and wo must have the same length");
     std::size_t n = wi.shape(0), C = b.channels();
+    Darr t = thickness_rows(thickness, n);
     py::array_t<double> out({n, C});
     const double *pi = wi.data(), *po = wo.data();
     double *o = out.mutable_data();
     {
         py::gil_scoped_release nogil;
         parallel_for(n, kGrain, [&](std::size_t s, std::size_t e) {
-            for (std::size_t i = s; i < e; ++i) b.eval(row(pi, i), row(po, i), lobes, o + i * C);
+            for (std::size_t i = s; i < e; ++i)
+                b.eval(row(pi, i), row(po, i), lobes, query_row(t, i), o + i * C);
         });
     }
     return out;
 }
 
-static py::array_t<double> pdf_many(const BSDF &b, const Darr &wi, const Darr &wo, uint32_t lobes) {
+static py::array_t<double> pdf_many(const BSDF &b, const Darr &wi, const Darr &wo, uint32_t lobes,
+                                    const py::object &thickness) {
     require_rows3(wi, "wi");
     require_rows3(wo, "wo");
     if (wi.shape(0) != wo.shape(0)) throw std::invalid_argument("wi and wo must have the same length");
     std::size_t n = wi.shape(0);
+    Darr t = thickness_rows(thickness, n);
     py::array_t<double> out(n);
     const double *pi = wi.data(), *po = wo.data();
     double *o = out.mutable_data();
     {
         py::gil_scoped_release nogil;
         parallel_for(n, kGrain, [&](std::size_t s, std::size_t e) {
-            for (std::size_t i = s; i < e; ++i) o[i] = b.pdf(row(pi, i), row(po, i), lobes);
+            for (std::size_t i = s; i < e; ++i) o[i] = b.pdf(row(pi, i), row(po, i), lobes, query_row(t, i));
         });
     }
     return out;
 }
 
 static py::tuple sample_many(const BSDF &b, const Darr &wi, const Darr &u1, const Darr &u2,
-                             uint32_t lobes) {
+                             uint32_t lobes, const py::object &thickness) {
     require_rows3(wi, "wi");
     std::size_t n = wi.shape(0), C = b.channels();
     if (u1.ndim() != 1 || static_cast<std::size_t>(u1.shape(0)) != n)
         throw std::invalid_argument("u1 must have shape (N,)");
     if (u2.ndim() != 2 || static_cast<std::size_t>(u2.shape(0)) != n || u2.shape(1) != 2)
         throw std::invalid_argument("u2 must have shape (N, 2)");
+    Darr t = thickness_rows(thickness, n);
     py::array_t<double> wo({n, std::size_t(3)}), weight({n, C}), pdf(n), eta(n);
     py::array_t<uint32_t> lobe(n);
     const double *pi = wi.data(), *pu1 = u1.data(), *pu2 = u2.data();
@@ -61,7 +82,8 @@ static py::tuple sample_many(const BSDF &b, const Darr &wi, const Darr &u1, cons
         py::gil_scoped_release nogil;
         parallel_for(n, kGrain, [&](std::size_t s, std::size_t e) {
             for (std::size_t i = s; i < e; ++i) {
-                BSDFSample bs = b.sample(row(pi, i), pu1[i], pu2[2 * i], pu2[2 * i + 1], lobes, pw + i * C);
+                BSDFSample bs = b.sample(row(pi, i), pu1[i], pu2[2 * i], pu2[2 * i + 1], lobes,
+                                         query_row(t, i), pw + i * C);
                 pwo[3 * i] = bs.wo.x; pwo[3 * i + 1] = bs.wo.y; pwo[3 * i + 2] = bs.wo.z;
                 pp[i] = bs.pdf; pl[i] = bs.lobe; pe[i] = bs.eta;
             }
@@ -85,20 +107,14 @@ void bind_bsdf(py::module_ &m) {
         .def_property_readonly("wavelengths", &BSDF::wavelengths)
         .def_property_readonly("lobes", &BSDF::lobes)
         .def("eval", &eval_many, py::arg("wi"), py::arg("wo"), py::arg("lobes") = uint32_t(kAll),
-             "f * |cos theta_o| per channel, shape (N, C)")
+             py::arg("thickness") = py::none(), "f * |cos theta_o| per channel, shape (N, C)")
         .def("pdf", &pdf_many, py::arg("wi"), py::arg("wo"), py::arg("lobes") = uint32_t(kAll),
-             "solid-angle density of sample(), shape (N,)")
+             py::arg("thickness") = py::none(), "solid-angle density of sample(), shape (N,)")
         .def("sample", &sample_many, py::arg("wi"), py::arg("u1"), py::arg("u2"),
-             py::arg("lobes") = uint32_t(kAll), "(wo, weight, pdf, lobe, eta)");
+             py::arg("lobes") = uint32_t(kAll), py::arg("thickness") = py::none(),
+             "(wo, weight, pdf, lobe, eta)");
 
     py::class_<Diffuse, BSDF>(m, "Diffuse")
         .def(py::init<std::vector<double>, std::vector<double>, bool>(), py::arg("wavelengths"),
              py::arg("reflectance"), py::arg("two_sided"));
-    py::class_<Conductor, BSDF>(m, "Conductor")
-        .def(py::init<std::vector<double>, std::vector<double>, std::vector<double>, double, bool>(),
-             py::arg("wavelengths"), py::arg("eta"), py::arg("k"), py::arg("ext_ior"),
-             py::arg("two_sided"));
-    py::class_<Dielectric, BSDF>(m, "Dielectric")
-        .def(py::init<std::vector<double>, double, double>(), py::arg("wavelengths"),
-             py::arg("int_ior"), py::arg("ext_ior"));
 }

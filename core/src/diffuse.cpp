@@ -15,7 +15,8 @@ static bool upper_pair(Vec3 &wi, Vec3 &wo, bool two_sided) {
     return wi.z > 0 && wo.z > 0;
 }
 
-void Diffuse::eval(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, double *out) const {
+void Diffuse::eval(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, const Query &,
+                   double *out) const {
     Vec3 wi = wi_, wo = wo_;
     if (!(lobes & kDiffuseReflection) || !usable_direction(wi) || !usable_direction(wo) ||
         !upper_pair(wi, wo, two_sided_)) {
@@ -25,7 +26,7 @@ void Diffuse::eval(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, double *out
     for (int c = 0; c < channels(); ++c) out[c] = reflectance_[c] * kInvPi * wo.z;
 }
 
-double Diffuse::pdf(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes) const {
+double Diffuse::pdf(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, const Query &) const {
     Vec3 wi = wi_, wo = wo_;
     if (!(lobes & kDiffuseReflection) || !usable_direction(wi) || !usable_direction(wo) ||
         !upper_pair(wi, wo, two_sided_))
@@ -34,7 +35,7 @@ double Diffuse::pdf(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes) const {
 }
 
 BSDFSample Diffuse::sample(const Vec3 &wi, double, double u2x, double u2y, uint32_t lobes,
-                           double *weight) const {
+                           const Query &, double *weight) const {
     BSDFSample s;
     zero(weight);
     if (!(lobes & kDiffuseReflection) || !usable_direction(wi)) return s;

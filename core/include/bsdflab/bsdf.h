@@ -30,6 +30,12 @@ enum Lobe : uint32_t {
     kAll = kReflection | kTransmission,
 };
 
+// Per-query surface parameters that may vary across a surface (textures in a renderer).
+// A negative value means "use the model's own default".
+struct Query {
+    double film_thickness_nm = -1.0;
+};
+
 struct BSDFSample {
     Vec3 wo;
     double pdf = 0;     // solid-angle density; for a delta lobe, the probability of picking it
@@ -47,11 +53,12 @@ public:
     virtual uint32_t lobes() const = 0;
 
     // Writes channels() values to `out`; zeros when nothing is reachable.
-    virtual void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, double *out) const = 0;
-    virtual double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes) const = 0;
+    virtual void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                      double *out) const = 0;
+    virtual double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const = 0;
     // Writes channels() weights to `weight`; returns lobe 0 and zero weights on failure.
-    virtual BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y,
-                              uint32_t lobes, double *weight) const = 0;
+    virtual BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
+                              const Query &q, double *weight) const = 0;
 
 protected:
     void zero(double *out) const {

@@ -1,0 +1,109 @@
+"""Shared parameter handling of the interface models (smooth / rough x dielectric /
+conductor, each with an optional thin-film coating): what the exterior, the interior and
+the film are, and the C++ Fresnel term they make at a set of wavelengths."""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _core
+from .._validate import real_scalar
+from ..optics.metals import metal_ior
+from ..optics.thin_film import Layer
+from ..spectra import Spectrum
+
+MAX_FILM_LAYERS = 32  # the core's fixed scratch size (fresnel_terms.h)
+
+DEFAULT_EXT_IOR = 1.000277  # air
+DEFAULT_INT_IOR = 1.5046    # BK7 at 589 nm (Mitsuba's default)
+
+
+def parse_film(film) -> tuple[Layer, ...]:
+    """A coating: None, a Layer, a dict, or a list of them (top = exterior side first)."""
+    if film is None:
+        return ()
+    items = film if isinstance(film, (list, tuple)) else [film]
+    if len(items) > MAX_FILM_LAYERS:
+        raise ValueError(f"film must have at most {MAX_FILM_LAYERS} layers, got {len(items)}")
+    layers = []
+    for i, item in enumerate(items):
+        if isinstance(item, Layer):
+            layers.append(item)
+        elif isinstance(item, dict) and {"material", "thickness_nm"} <= set(item):
+            layers.append(Layer.from_dict(item) if isinstance(item["material"], dict)
+                          else Layer(item["material"], item["thickness_nm"]))
+        else:
+            raise ValueError(f"film[{i}] must be a Layer or a dict with 'material' and "
+                             f"'thickness_nm', got {item!r}")
+    return tuple(layers)
+
+
+def film_to_list(layers: tuple[Layer, ...]) -> list[dict[str, Any]] | None:
+    return [layer.to_dict() for layer in layers] or None
+
+
+class ConductorInterior:
+    """Complex index eta + i k of a conductor: a named metal or two spectra."""
+
+    def __init__(self, material: str | None, eta, k):
+        if material is not None and (eta is not None or k is not None):
+            raise ValueError("give either material or (eta, k), not both")
+        if material is None and eta is None and k is None:
+            material = "none"
+        self.material = material
+        if material == "none":
+            # A perfect mirror, as Mitsuba's default: eta = 0, k = 1 gives R = 1 everywhere.
+            self.eta, self.k = Spectrum.constant(0.0), Spectrum.constant(1.0)
+        else:
+            if material is not None:
+                eta, k = metal_ior(material)
+            self.eta = Spectrum.coerce(eta if eta is not None else 1.0, "eta", 0.0, lo_open=True)
+            self.k = Spectrum.coerce(k if k is not None else 0.0, "k", 0.0)
+
+    def index(self, wavelengths: np.ndarray) -> np.ndarray:
+        return self.eta.at(wavelengths) + 1j * self.k.at(wavelengths)
+
+    def params(self) -> dict[str, Any]:
+        if self.material == "none":
+            return {}
+        if self.material is not None:
+            return {"material": self.material}
+        return {"eta": self.eta.to_dict(), "k": self.k.to_dict()}
+
+
+class ConductorParams:
+    """Read-only access to a conductor model's interior (``eta``, ``k``, ``material``)."""
+
+    interior: ConductorInterior
+
+    @property
+    def material(self) -> str | None:
+        return self.interior.material
+
+    @property
+    def eta(self) -> Spectrum:
+        return self.interior.eta
+
+    @property
+    def k(self) -> Spectrum:
+        return self.interior.k
+
+
+def ext_ior_param(value) -> float:
+    return real_scalar("ext_ior", value, 0.0, lo_open=True)
+
+
+def make_term(wavelengths: np.ndarray, ext_ior: float, layers: tuple[Layer, ...], *,
+              int_ior: float | None = None, conductor: ConductorInterior | None = None):
+    """The C++ Fresnel term for these wavelengths: dielectric (int_ior) or conductor."""
+    wl = np.asarray(wavelengths, dtype=np.float64)
+    if not layers:
+        if conductor is not None:
+            return _core.ConductorTerm(list(conductor.index(wl)), ext_ior)
+        return _core.DielectricTerm(len(wl), int_ior, ext_ior)
+    substrate = (conductor.index(wl) if conductor is not None
+                 else np.full(len(wl), int_ior, dtype=np.complex128))
+    layer_n = [list(np.broadcast_to(layer.material.index(wl), wl.shape)) for layer in layers]
+    return _core.FilmTerm(list(wl), ext_ior, layer_n, [layer.thickness_nm for layer in layers],
+                          list(substrate), conductor is None)
