@@ -28,13 +28,17 @@ THICKNESSES = np.linspace(0.0, 1500.0, 50)
 TMM_SAMPLES = 400
 
 
-def best_time(fn, repeats=5):
-    """Fastest of `repeats` runs, in seconds (the least disturbed by other load)."""
-    best = np.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
+def best_times(contenders, repeats=8):
+    """Fastest of `repeats` runs of each contender, in seconds. The contenders take turns
+    within every round, in a rotating order, so a change in the machine's load or a cache
+    left cold by the previous contender hits them all alike."""
+    best = {name: np.inf for name in contenders}
+    names = list(contenders)
+    for round_ in range(repeats):
+        for name in names[round_ % len(names):] + names[:round_ % len(names)]:
+            start = time.perf_counter()
+            contenders[name]()
+            best[name] = min(best[name], time.perf_counter() - start)
     return best
 
 
@@ -72,11 +76,15 @@ def main():
     reference = run_tmm(samples)
     inputs = core_inputs()
 
-    t_ours = best_time(run_bsdflab) / count
-    t_core = best_time(lambda: _core.thin_film_reflectance(*inputs)) / count
-    t_full = best_time(lambda: _core.thin_film(*inputs)) / count
-    t_colour = best_time(run_colour) / count
-    t_tmm = best_time(lambda: run_tmm(samples), repeats=2) / TMM_SAMPLES
+    t = best_times({
+        "ours": run_bsdflab,
+        "core": lambda: _core.thin_film_reflectance(*inputs),
+        "full": lambda: _core.thin_film(*inputs),
+        "colour": run_colour,
+        "tmm": lambda: run_tmm(samples),
+    })
+    t_ours, t_core, t_full, t_colour = (t[k] / count for k in ("ours", "core", "full", "colour"))
+    t_tmm = t["tmm"] / TMM_SAMPLES
 
     print(f"thin-film reflectance, {count} (wavelength, angle, thickness) triples, "
           f"bsdflab threads = {_core.worker_count()}")

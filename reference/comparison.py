@@ -82,6 +82,7 @@ class Comparison:
     target: float = TARGET
     model_difference: str = ""          # an expected, documented non-float32 difference
     notes: tuple[str, ...] = ()
+    quantities: tuple[str, ...] = QUANTITIES  # the keys of max_error, in report order
 
     @property
     def eval_error(self) -> float:
@@ -109,7 +110,7 @@ class Comparison:
 
     def report(self) -> str:
         wl = "sRGB" if self.wavelength is None else f"{self.wavelength:g} nm"
-        errs = "  ".join(f"{q} {self.max_error[q]:.1e}" for q in QUANTITIES)
+        errs = "  ".join(f"{q} {self.max_error[q]:.1e}" for q in self.quantities)
         lines = [
             f"{self.label} @ {wl} vs {self.reference}",
             f"  {self.n_pairs} pairs, {self.n_well_conditioned} well-conditioned in float32 "
@@ -121,7 +122,8 @@ class Comparison:
         if self.model_difference:
             lines.append(f"  expected model difference: {self.model_difference}")
         for g in self.ill_conditioned:
-            gerr = "  ".join(f"{q} {g.max_error[q]:.1e}" for q in QUANTITIES if g.max_error[q] > 0)
+            gerr = "  ".join(f"{q} {g.max_error[q]:.1e}" for q in self.quantities
+                             if g.max_error[q] > 0)
             lines.append(f"  ill-conditioned, {g.reason}: {g.count} pairs; max error "
                          f"{gerr or '0'}; error/bound <= {g.max_error_over_bound:.2f}; "
                          f"lobe flips {g.lobe_flips}")

@@ -4,8 +4,9 @@ A float32 code is accurate to about the rounding of its inputs and intermediates
 pair's *sensitivity* is how far bsdflab's own float64 result moves when
 
   * its inputs move by INPUT_PERTURBATION = 8 float32 ulps: the index ratio (via
-    ext_ior) and the direction cosines relatively, the uniforms absolutely (they go
-    through 2u - 1); every sign combination;
+    ext_ior) and the direction cosines relatively (``perturbations``: z only, or every
+    component for microfacet models, whose half vectors mix all of them), the uniforms
+    absolutely (they go through 2u - 1); every sign combination;
   * and, for a dielectric, under two internal roundings no input reaches: a lobe
     probability formed as a complement 1 - p (relative error x (1 - p) / p), and
     1 - cos^2 theta_i inside Snell's law (see ``_dielectric_rounding``).
@@ -36,13 +37,25 @@ RARE_LOBE = 0.1             # a dielectric lobe probability below this is "rare"
 SAMPLED_LOW_COS = 0.5       # a diffuse sample below this is "towards the horizon"
 
 
-def _perturbed(d: dict, q, sign_ior: float, sign_cos: float, sign_u: float):
+def _perturbed(d: dict, q, sign_ior: float, sign_dir: tuple, sign_u: float):
     d = dict(d)
     if sign_ior:
         d["ext_ior"] = d["ext_ior"] * (1 + sign_ior * INPUT_PERTURBATION)
-    scale = np.array([1.0, 1.0, 1 + sign_cos * INPUT_PERTURBATION])
+    scale = 1 + np.asarray(sign_dir, dtype=float) * INPUT_PERTURBATION
     shift = lambda u: np.clip(u + sign_u * INPUT_PERTURBATION, 0.0, 1.0)
     return from_dict(d), type(q)(wi=q.wi * scale, wo=q.wo * scale, u1=shift(q.u1), u2=shift(q.u2))
+
+
+def perturbations(d: dict, q, every_component: bool = False):
+    """(BSDF, queries) for each sign combination of the input perturbations: ext_ior (where
+    float32 rounds the index ratio), the uniforms, and the directions' z components -- or,
+    with ``every_component``, each of x, y and z independently (the same pattern for wi
+    and wo)."""
+    signs_ior = (-1.0, 1.0) if _ior_is_rounded(d) else (0.0,)
+    signs_dir = (list(itertools.product((-1.0, 1.0), repeat=3)) if every_component
+                 else [(0.0, 0.0, -1.0), (0.0, 0.0, 1.0)])
+    for s_ior, s_dir, s_u in itertools.product(signs_ior, signs_dir, (-1.0, 1.0)):
+        yield _perturbed(d, q, s_ior, s_dir, s_u)
 
 
 def _ior_is_rounded(d: dict) -> bool:
@@ -60,9 +73,7 @@ def sensitivity(d: dict, q, base: dict, channels) -> tuple[dict[str, np.ndarray]
     sens = {k: np.zeros(len(q.wi)) for k in QUANTITIES}
     flips = np.zeros(len(q.wi), dtype=bool)
     valid = base["lobe"] != 0
-    signs_ior = (-1.0, 1.0) if _ior_is_rounded(d) else (0.0,)
-    for s_ior, s_cos, s_u in itertools.product(signs_ior, (-1.0, 1.0), (-1.0, 1.0)):
-        bsdf_p, q_p = _perturbed(d, q, s_ior, s_cos, s_u)
+    for bsdf_p, q_p in perturbations(d, q):
         r = bsdflab_answers(bsdf_p, q_p, channels)
         same = r["lobe"] == base["lobe"]
         flips |= ~same

@@ -19,6 +19,9 @@ dielectric,twosided}.cpp, include/mitsuba/render/fresnel.h):
     Mitsuba scales transmitted weights by eta_ti^2 = (n_i / n_t)^2, as bsdflab does;
     sample eta is n_t / n_i in both.
   * two-sided: Mitsuba's ``twosided`` mirrors wi and wo to the upper side, as bsdflab.
+  * rough (GGX) interfaces go over as ``roughconductor`` / ``roughdielectric`` with
+    distribution 'ggx', the same alpha and sample_visible; mitsuba_rough.py compares
+    them, since the two codes warp uniforms to visible normals differently.
 """
 from __future__ import annotations
 
@@ -100,16 +103,17 @@ def to_mitsuba(bsdf, wavelength: float | None = None) -> dict[str, Any]:
     if kind == "diffuse":
         plugin = {"type": "diffuse",
                   "reflectance": _value(Spectrum.from_dict(d["reflectance"]), wl, "reflectance")}
-    elif kind == "conductor":
-        plugin = {"type": "conductor"}  # no eta/k: Mitsuba's material 'none', (0, 1), R = 1
+    elif kind in ("conductor", "roughconductor"):
+        plugin = {"type": kind}  # no eta/k: Mitsuba's material 'none', (0, 1), R = 1
         if "material" in d or "eta" in d:
             plugin.update(_conductor_index(d, wl))
-    elif kind == "dielectric":
-        plugin = {"type": "dielectric", "int_ior": float(d["int_ior"]),
-                  "ext_ior": float(d["ext_ior"])}
+    elif kind in ("dielectric", "roughdielectric"):
+        plugin = {"type": kind, "int_ior": float(d["int_ior"]), "ext_ior": float(d["ext_ior"])}
     else:
-        raise ValueError(f"no Mitsuba counterpart for bsdflab BSDF type {kind!r} "
-                         "(supported: diffuse, conductor, dielectric)")
+        raise ValueError(f"no Mitsuba counterpart for bsdflab BSDF type {kind!r} (supported: "
+                         "diffuse, conductor, dielectric, roughconductor, roughdielectric)")
+    if kind.startswith("rough"):  # GGX, separable Smith G, visible-normal sampling
+        plugin.update(distribution="ggx", alpha=float(d["alpha"]), sample_visible=True)
     if d.get("two_sided"):
         plugin = {"type": "twosided", "bsdf": plugin}
     return plugin
@@ -136,20 +140,34 @@ def _rgb_round_trip(d: dict, wavelength) -> tuple[float, str]:
 
 
 def _notes(d: dict) -> tuple[str, ...]:
-    if d["type"] == "conductor":
+    if d["type"] in ("conductor", "roughconductor"):
         return (f"Mitsuba's conductor takes the relative index: (eta, k) / ext_ior, "
                 f"ext_ior = {d['ext_ior']:g}",)
-    if d["type"] == "dielectric":
+    if d["type"] in ("dielectric", "roughdielectric"):
         return ("transmission weight (n_i/n_t)^2 in both (radiance mode)",)
     return ()
 
 
 def _critical(d: dict) -> tuple[float, int] | None:
     """(eta_ti > 1, side) of the dense side of a refracting interface, else None."""
-    if d["type"] != "dielectric" or d["int_ior"] == d["ext_ior"]:
+    if d["type"] not in ("dielectric", "roughdielectric") or d["int_ior"] == d["ext_ior"]:
         return None
     eta = d["int_ior"] / d["ext_ior"]
     return (eta, -1) if eta > 1 else (1 / eta, 1)
+
+
+def _setup(bsdf, n_pairs, wavelength, target):
+    """Checked arguments of a comparison: (BSDF dict, wavelength, target, text of the
+    model difference that widened the default target, or '')."""
+    d = _bsdf_dict(bsdf)
+    wl = _check_wavelength(wavelength)
+    if isinstance(n_pairs, bool) or int(n_pairs) != n_pairs or n_pairs < 1:
+        raise ValueError(f"n_pairs must be a positive integer, got {n_pairs!r}")
+    round_trip, round_trip_text = _rgb_round_trip(d, wl)
+    target = TARGET + round_trip if target is None else float(target)
+    if not target > 0:
+        raise ValueError(f"target must be > 0, got {target!r}")
+    return d, wl, target, round_trip_text
 
 
 def compare_bsdf(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | None = 550.0,
@@ -161,15 +179,7 @@ def compare_bsdf(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | N
     Mitsuba's RGB instead. target: relative error allowed on well-conditioned pairs;
     default TARGET (1e-5), plus the spectral round trip of RGB parameters in sRGB mode.
     """
-    d = _bsdf_dict(bsdf)
-    wl = _check_wavelength(wavelength)
-    if isinstance(n_pairs, bool) or int(n_pairs) != n_pairs or n_pairs < 1:
-        raise ValueError(f"n_pairs must be a positive integer, got {n_pairs!r}")
-    round_trip, round_trip_text = _rgb_round_trip(d, wl)
-    target = TARGET + round_trip if target is None else float(target)
-    if not target > 0:
-        raise ValueError(f"target must be > 0, got {target!r}")
-
+    d, wl, target, round_trip_text = _setup(bsdf, n_pairs, wavelength, target)
     b = from_dict(d)
     q = draw_queries(int(n_pairs), seed, _critical(d))
     channels = None if wl is None else [wl]
@@ -179,32 +189,47 @@ def compare_bsdf(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | N
     err = errors_between(ours, theirs, same_lobe & (ours["lobe"] != 0))
 
     sens, flips = sensitivity(d, q, ours, channels)
-    ill = flips | np.any([sens[k] > ILL_CONDITIONED for k in QUANTITIES], axis=0)
+    return _summarise(
+        repr(b), wl, err, sens, flips, lambda idx: reasons(d, q, ours, idx, flips),
+        same_lobe=same_lobe, sampled=same_lobe & (ours["lobe"] != 0),
+        validity_mismatch=(ours["lobe"] != 0) != (theirs["lobe"] != 0), target=target,
+        model_difference=round_trip_text, notes=_notes(d))
+
+
+def _summarise(label: str, wl, err: dict, sens: dict, flips: np.ndarray, why, *,
+               same_lobe: np.ndarray, sampled: np.ndarray, validity_mismatch: np.ndarray,
+               target: float, model_difference: str, notes: tuple[str, ...],
+               quantities: tuple[str, ...] = QUANTITIES) -> Comparison:
+    """The ``Comparison`` of per-pair errors ``err`` and float32 sensitivities ``sens``
+    (dicts over ``quantities``). flips: pairs whose lobe or validity flips under float32
+    roundings; why(idx): the reason of each ill-conditioned pair in idx; same_lobe,
+    sampled, validity_mismatch: per pair, the samples' lobes agree / both codes sampled
+    the same lobe / exactly one code has a valid answer."""
+    ill = flips | np.any([sens[k] > ILL_CONDITIONED for k in quantities], axis=0)
     well = ~ill
-    bound = {k: target + sens[k] for k in QUANTITIES}
-    validity_mismatch = (ours["lobe"] != 0) != (theirs["lobe"] != 0)
+    bound = {k: target + sens[k] for k in quantities}
 
     groups = []
     ill_idx = np.flatnonzero(ill)
-    why = reasons(d, q, ours, ill_idx, flips)
+    why = why(ill_idx)
     for reason in sorted(set(why)):
         idx = ill_idx[[r == reason for r in why]]
         groups.append(IllConditionedGroup(
             reason=reason, count=len(idx),
-            max_error={k: float(err[k][idx].max()) for k in QUANTITIES},
-            max_error_over_bound=float(max((err[k][idx] / bound[k][idx]).max() for k in QUANTITIES)),
+            max_error={k: float(err[k][idx].max()) for k in quantities},
+            max_error_over_bound=float(max((err[k][idx] / bound[k][idx]).max() for k in quantities)),
             lobe_flips=int(np.sum(~same_lobe[idx] & flips[idx]))))
 
     return Comparison(
-        label=repr(b), reference=f"Mitsuba {mitsuba().__version__} ({variant()})",
-        wavelength=wl, n_pairs=int(n_pairs), n_well_conditioned=int(well.sum()),
-        max_error={k: float(err[k][well].max(initial=0.0)) for k in QUANTITIES},
-        n_sampled=int(np.sum(same_lobe & (ours["lobe"] != 0))),
+        label=label, reference=f"Mitsuba {mitsuba().__version__} ({variant()})",
+        wavelength=wl, n_pairs=len(flips), n_well_conditioned=int(well.sum()),
+        max_error={k: float(err[k][well].max(initial=0.0)) for k in quantities},
+        n_sampled=int(np.sum(sampled)),
         n_lobe_mismatch=int(np.sum(~same_lobe & ~flips & ~validity_mismatch)),
         n_validity_mismatch=int(np.sum(validity_mismatch & ~flips)),
-        n_over_target=int(np.sum(well & np.any([err[k] > target for k in QUANTITIES], axis=0))),
-        ill_conditioned=tuple(groups), target=target, model_difference=round_trip_text,
-        notes=_notes(d))
+        n_over_target=int(np.sum(well & np.any([err[k] > target for k in quantities], axis=0))),
+        ill_conditioned=tuple(groups), target=target, model_difference=model_difference,
+        notes=notes, quantities=quantities)
 
 
 # -- the standard set ---------------------------------------------------------------------
@@ -234,10 +259,13 @@ def standard_cases() -> list[tuple[str, BSDF, float | None]]:
 
 
 def main() -> int:
+    from .mitsuba_rough import compare_rough, rough_cases  # it builds on this module
+
     failed = []
-    cases = standard_cases()
-    for name, bsdf, wl in cases:
-        c = compare_bsdf(bsdf, n_pairs=1000, seed=0, wavelength=wl)
+    cases = [(*c, compare_bsdf) for c in standard_cases()]
+    cases += [(*c, compare_rough) for c in rough_cases()]
+    for name, bsdf, wl, compare in cases:
+        c = compare(bsdf, n_pairs=1000, seed=0, wavelength=wl)
         print(f"[{name}]\n{c.report()}\n")
         if not c.passed:
             failed.append(name)

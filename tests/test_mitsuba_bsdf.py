@@ -121,8 +121,9 @@ def test_07_to_mitsuba_rejects_what_it_cannot_convert():
     coated = {**Conductor("Au").to_dict(), "film": [{"material": 1.5, "thickness_nm": 400}]}
     with pytest.raises(ValueError, match="thin-film"):
         mb.to_mitsuba(coated, 550)
-    rough = {"type": "roughdielectric"}  # hypothetical dict of a model not converted here
-    with pytest.raises(ValueError):
+    # rough interfaces convert (test_mitsuba_rough.py), but Mitsuba 3 has no coated one
+    rough = {"type": "roughdielectric", "film": [{"material": 1.5, "thickness_nm": 400}]}
+    with pytest.raises(ValueError, match="thin-film"):
         mb.to_mitsuba(rough, 550)
     with pytest.raises(ValueError, match="n_pairs"):
         mb.compare_bsdf(Diffuse(0.5), n_pairs=0)

@@ -19,6 +19,7 @@ Tabulated(wavelengths_nm, n, k)
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -147,6 +148,11 @@ class Tabulated(Dispersion):
                              f"{len(self.n)} and {len(self.k)}")
         if np.any(np.diff(self.wavelengths_nm) <= 0):
             raise ValueError("wavelengths_nm must be strictly increasing")
+        # private, read-only copies: immutable like the other models
+        self.wavelengths_nm, self.n, self.k = (np.array(a) for a in (self.wavelengths_nm,
+                                                                      self.n, self.k))
+        for a in (self.wavelengths_nm, self.n, self.k):
+            a.setflags(write=False)
 
     def index(self, wavelength_nm) -> np.ndarray:
         wl = wavelengths_nm(wavelength_nm)
@@ -165,6 +171,9 @@ class Tabulated(Dispersion):
         return (isinstance(other, Tabulated)
                 and all(np.array_equal(getattr(self, a), getattr(other, a))
                         for a in ("wavelengths_nm", "n", "k")))
+
+    def __hash__(self):
+        return hash((self.wavelengths_nm.tobytes(), self.n.tobytes(), self.k.tobytes()))
 
     def __repr__(self):
         wl = self.wavelengths_nm
@@ -191,9 +200,9 @@ def as_dispersion(value: Any, name: str) -> Dispersion:
         return value
     if isinstance(value, dict):
         return dispersion_from_dict(value)
-    if np.ndim(value) == 0 and isinstance(value, (int, float, complex, np.number)):
+    if np.ndim(value) == 0 and isinstance(value, (int, float, complex, np.number, np.ndarray)):
         z = complex(value)
-        if not (np.isfinite(z.real) and np.isfinite(z.imag)):
+        if not (math.isfinite(z.real) and math.isfinite(z.imag)):
             raise ValueError(f"{name} must be finite, got {value!r}")
         if z.real <= 0:
             raise ValueError(f"{name} must have a real part n > 0, got {value!r}")

@@ -309,9 +309,11 @@ def _check_index(name, n):
 def _indices(media, names, wl, power, reverse):
     out = []
     for material, name in zip(media, names):
-        # a constant index stays a single value, which the one-film kernel applies to all rows
-        at = wl.flat[0] if isinstance(material, Constant) else wl
-        n = np.asarray(material.index(at), dtype=np.complex128)
+        if isinstance(material, Constant):
+            # checked when made; a single value, which the one-film kernel applies to all rows
+            out.append(np.array(complex(material.n, material.k)))
+            continue
+        n = np.asarray(material.index(wl), dtype=np.complex128)
         _check_index(name, n)
         out.append(n)
     arriving = -1 if reverse else 0

@@ -102,7 +102,7 @@ void bind_bsdf(py::module_ &m) {
         .value("DeltaTransmission", kDeltaTransmission)
         .value("All", kAll);
 
-    py::class_<BSDF>(m, "BSDF")
+    py::class_<BSDF, std::shared_ptr<BSDF>>(m, "BSDF")
         .def_property_readonly("channels", &BSDF::channels)
         .def_property_readonly("wavelengths", &BSDF::wavelengths)
         .def_property_readonly("lobes", &BSDF::lobes)
@@ -114,7 +114,7 @@ void bind_bsdf(py::module_ &m) {
              py::arg("lobes") = uint32_t(kAll), py::arg("thickness") = py::none(),
              "(wo, weight, pdf, lobe, eta)");
 
-    py::class_<Diffuse, BSDF>(m, "Diffuse")
+    py::class_<Diffuse, BSDF, std::shared_ptr<Diffuse>>(m, "Diffuse")
         .def(py::init<std::vector<double>, std::vector<double>, bool>(), py::arg("wavelengths"),
              py::arg("reflectance"), py::arg("two_sided"));
 }

@@ -30,10 +30,10 @@ void bind_interfaces(py::module_ &m) {
              py::arg("wavelengths"), py::arg("ext_ior"), py::arg("layer_n"), py::arg("layer_d_nm"),
              py::arg("n_substrate"), py::arg("substrate_transmits"));
 
-    py::class_<SmoothInterface, BSDF>(m, "SmoothInterface")
+    py::class_<SmoothInterface, BSDF, std::shared_ptr<SmoothInterface>>(m, "SmoothInterface")
         .def(py::init<std::vector<double>, std::shared_ptr<const FresnelTerm>, bool>(),
              py::arg("wavelengths"), py::arg("term"), py::arg("two_sided"));
-    py::class_<RoughInterface, BSDF>(m, "RoughInterface")
+    py::class_<RoughInterface, BSDF, std::shared_ptr<RoughInterface>>(m, "RoughInterface")
         .def(py::init<std::vector<double>, std::shared_ptr<const FresnelTerm>, double, bool>(),
              py::arg("wavelengths"), py::arg("term"), py::arg("alpha"), py::arg("two_sided"));
 }

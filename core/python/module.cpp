@@ -6,6 +6,7 @@ namespace py = pybind11;
 void bind_bsdf(py::module_ &m);
 void bind_fresnel(py::module_ &m);
 void bind_interfaces(py::module_ &m);
+void bind_layered(py::module_ &m);
 void bind_thin_film(py::module_ &m);
 
 PYBIND11_MODULE(_core, m) {
@@ -14,5 +15,6 @@ PYBIND11_MODULE(_core, m) {
     bind_bsdf(m);
     bind_fresnel(m);
     bind_interfaces(m);
+    bind_layered(m);
     bind_thin_film(m);
 }

@@ -1,0 +1,121 @@
+"""Cross-check bsdflab's rough (GGX) interfaces against Mitsuba 3, query by query.
+
+    python3 -m bsdflab.reference.mitsuba_bsdf     # reports, rough materials included
+
+``RoughConductor`` / ``RoughDielectric`` go over as Mitsuba's ``roughconductor`` /
+``roughdielectric`` (mitsuba_bsdf.to_mitsuba). Both codes warp uniforms to visible
+normals differently (visible_normals.py), so identical uniforms give different samples.
+For each random query (wi, wo, u1, u2) of query_sets.py (both sides, grazing; near the
+critical angle from the dense side of a dielectric, where most microfacets reflect
+totally) the checks are:
+
+  1. eval and pdf of the pair (wi, wo): deterministic, so they must agree directly;
+  2. each code's own sample, judged by the other code: bsdflab's (wo, weight, pdf) for
+     (u1, u2) against Mitsuba's eval(wi, wo) / pdf(wi, wo) and pdf(wi, wo), wo rounded to
+     float32 ("weight@bsdflab_wo", "pdf@bsdflab_wo"); Mitsuba's sample for (u1, u2)
+     against bsdflab's eval / pdf there ("weight@mitsuba_wo", "pdf@mitsuba_wo");
+  3. the samples themselves: bsdflab given the uniforms that reach Mitsuba's disk point
+     (visible_normals.bsdflab_uniforms) must draw Mitsuba's direction, lobe, weight, pdf
+     and eta (the quantities of the smooth checks).
+
+Errors are relative to Mitsuba's value (comparison.py); which queries float32 cannot
+resolve, and their bounds, come from rough_conditioning.py.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from bsdflab.bsdfs import BSDF, from_dict
+
+from .comparison import QUANTITIES, Comparison, errors_between, rel_error
+from .mitsuba_bsdf import _critical, _notes, _setup, _summarise, to_mitsuba
+from .mitsuba_calls import mitsuba_answers
+from .query_sets import bsdflab_answers, draw_queries
+from .rough_conditioning import pair_values, rough_reasons, rough_sensitivity
+from .visible_normals import bsdflab_uniforms
+
+ROUGH_TYPES = ("roughconductor", "roughdielectric")
+CROSS_QUANTITIES = ("weight@bsdflab_wo", "pdf@bsdflab_wo", "weight@mitsuba_wo", "pdf@mitsuba_wo")
+ROUGH_QUANTITIES = QUANTITIES + CROSS_QUANTITIES
+WARP_NOTE = ("visible-normal warps differ (bsdflab: polar disk; Mitsuba: concentric disk, "
+             "first axis flipped): samples compared with bsdflab's uniforms mapped to "
+             "Mitsuba's disk point; each code's own samples cross-evaluated by the other")
+
+
+def _ratio(value: np.ndarray, pdf: np.ndarray) -> np.ndarray:
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(pdf[:, None] > 0, value / pdf[:, None], 0.0)
+
+
+def compare_rough(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | None = 550.0,
+                  target: float | None = None) -> Comparison:
+    """Compare a bsdflab rough interface with Mitsuba 3 on ``n_pairs`` random queries
+    (arguments as mitsuba_bsdf.compare_bsdf); the record's quantities are
+    ROUGH_QUANTITIES (module doc)."""
+    d, wl, target, model_difference = _setup(bsdf, n_pairs, wavelength, target)
+    if d["type"] not in ROUGH_TYPES:
+        raise ValueError(f"compare_rough compares {', '.join(ROUGH_TYPES)}, got {d['type']!r}")
+    b, plugin = from_dict(d), to_mitsuba(d, wl)
+    channels = None if wl is None else [wl]
+    q = draw_queries(int(n_pairs), seed, _critical(d))
+    mapped = replace(q, u2=bsdflab_uniforms(q.u2))
+
+    ours = bsdflab_answers(b, mapped, channels)   # eval / pdf of (wi, wo); mapped samples
+    theirs = mitsuba_answers(plugin, q)
+    own = b.sample(q.wi, q.u1, q.u2, wavelengths=channels)  # bsdflab's own warp
+    own_wo = own.wo.astype(np.float32).astype(np.float64)
+    at_own = mitsuba_answers(plugin, replace(q, wo=own_wo))
+
+    wo_sets = (q.wo, own_wo, theirs["wo"])
+    sens = rough_sensitivity(d, mapped, wo_sets, ours, channels)
+    at_theirs = pair_values(b, q.wi, theirs["wo"], channels)
+    at_own_32 = pair_values(b, q.wi, own_wo, channels)  # what float32 rounding of wo does
+
+    same_lobe = ours["lobe"] == theirs["lobe"]
+    err = errors_between(ours, theirs, same_lobe & (ours["lobe"] != 0))
+    own_ok, theirs_ok = own.lobe != 0, theirs["lobe"] != 0
+    cross = {
+        "weight@bsdflab_wo": (own_ok, rel_error(own.weight, _ratio(at_own["eval"], at_own["pdf"]))),
+        "pdf@bsdflab_wo": (own_ok, rel_error(own.pdf, at_own["pdf"])),
+        "weight@mitsuba_wo": (theirs_ok, rel_error(at_theirs.ratio, theirs["weight"])),
+        "pdf@mitsuba_wo": (theirs_ok, rel_error(at_theirs.pdf, theirs["sample_pdf"])),
+    }
+    err.update({key: np.where(ok, e, 0.0) for key, (ok, e) in cross.items()})
+
+    s = {**{key: sens.pairs[0][key] for key in ("eval", "pdf")}, **sens.sample,
+         "weight@bsdflab_wo": sens.pairs[1]["ratio"] + rel_error(at_own_32.ratio, own.weight),
+         "pdf@bsdflab_wo": sens.pairs[1]["pdf"] + rel_error(at_own_32.pdf, own.pdf),
+         "weight@mitsuba_wo": sens.pairs[2]["ratio"], "pdf@mitsuba_wo": sens.pairs[2]["pdf"]}
+    validity_mismatch = (((ours["lobe"] != 0) != theirs_ok) | (own_ok & ~(at_own["pdf"] > 0))
+                         | (theirs_ok & ~(at_theirs.pdf > 0)))
+    all_wo = wo_sets + (ours["wo"],)
+    return _summarise(
+        repr(b), wl, err, s, sens.flips,
+        lambda idx: rough_reasons(d, q.wi, all_wo, idx, sens.flips),
+        same_lobe=same_lobe, sampled=same_lobe & (ours["lobe"] != 0),
+        validity_mismatch=validity_mismatch, target=target, model_difference=model_difference,
+        notes=_notes(d) + (WARP_NOTE,), quantities=ROUGH_QUANTITIES)
+
+
+def rough_cases() -> list[tuple[str, BSDF, float | None]]:
+    """(id, BSDF, wavelength in nm) of the rough materials reported on."""
+    from bsdflab.bsdfs import RoughConductor, RoughDielectric
+
+    cases = []
+    for alpha in (0.05, 0.3, 0.8):
+        a = f"{alpha:g}"
+        cases += [
+            (f"roughconductor-Au-a{a}", RoughConductor(alpha, material="Au"), 550.0),
+            (f"roughconductor-Cu-a{a}", RoughConductor(alpha, material="Cu"), 650.0),
+            (f"roughconductor-custom-a{a}", RoughConductor(alpha, eta=1.7, k=2.3, ext_ior=1.33), 550.0),
+            (f"roughdielectric-glass-a{a}", RoughDielectric(alpha, 1.5, 1.0), 550.0),
+            (f"roughdielectric-int-lt-ext-a{a}", RoughDielectric(alpha, 1.0, 1.33), 550.0),
+        ]
+    cases += [
+        ("roughconductor-mirror-a0.3", RoughConductor(0.3), 550.0),
+        ("roughconductor-Cu-two-sided-a0.3", RoughConductor(0.3, material="Cu", two_sided=True), 550.0),
+        ("roughdielectric-diamond-a0.3", RoughDielectric(0.3, 2.419, 1.000277), 550.0),
+    ]
+    return cases
