@@ -7,13 +7,14 @@ Quick use::
     s = bsdf.sample(np.array([[0.0, 0.6, 0.8]]))
     rgb = bl.Diffuse(0.5).eval([0, 0, 1], [0, 0.6, 0.8])      # (1, 3) linear sRGB
 """
-from . import optics, spectra
+from . import optics, presets, spectra
 from .bsdfs import (BSDF, BSDFSample, Conductor, Dielectric, Diffuse, RoughConductor,
                     RoughDielectric, from_dict)
+from .layered import Layered, PhaseFunction, Slab
 from .lobes import Lobe
 from .spectra import DEFAULT_WAVELENGTHS, Spectrum, spectrum_to_rgb
 
 __version__ = "0.1.0"
 
 __all__ = ["BSDF", "BSDFSample", "Conductor", "DEFAULT_WAVELENGTHS", "Dielectric", "Diffuse",
-           "Lobe", "RoughConductor", "RoughDielectric", "Spectrum", "from_dict", "optics", "spectra", "spectrum_to_rgb", "__version__"]
+           "Layered", "Lobe", "PhaseFunction", "RoughConductor", "Slab", "RoughDielectric", "Spectrum", "from_dict", "optics", "spectra", "spectrum_to_rgb", "__version__"]

@@ -37,23 +37,28 @@ RARE_LOBE = 0.1             # a dielectric lobe probability below this is "rare"
 SAMPLED_LOW_COS = 0.5       # a diffuse sample below this is "towards the horizon"
 
 
-def _perturbed(d: dict, q, sign_ior: float, sign_dir: tuple, sign_u: float):
+def _perturbed(d: dict, q, sign_ior: float, sign_dir, sign_u: float):
     d = dict(d)
     if sign_ior:
         d["ext_ior"] = d["ext_ior"] * (1 + sign_ior * INPUT_PERTURBATION)
-    scale = 1 + np.asarray(sign_dir, dtype=float) * INPUT_PERTURBATION
+    scale_wi, scale_wo = 1 + np.asarray(sign_dir, dtype=float) * INPUT_PERTURBATION
     shift = lambda u: np.clip(u + sign_u * INPUT_PERTURBATION, 0.0, 1.0)
-    return from_dict(d), type(q)(wi=q.wi * scale, wo=q.wo * scale, u1=shift(q.u1), u2=shift(q.u2))
+    return from_dict(d), type(q)(wi=q.wi * scale_wi, wo=q.wo * scale_wo, u1=shift(q.u1),
+                                 u2=shift(q.u2))
 
 
 def perturbations(d: dict, q, every_component: bool = False):
     """(BSDF, queries) for each sign combination of the input perturbations: ext_ior (where
-    float32 rounds the index ratio), the uniforms, and the directions' z components -- or,
-    with ``every_component``, each of x, y and z independently (the same pattern for wi
-    and wo)."""
+    float32 rounds the index ratio), the uniforms, and the directions' z components, the
+    same for wi and wo -- or, with ``every_component``, each of x, y and z independently,
+    for wo the same as for wi or the opposite (a half vector wi + eta wo, which can
+    cancel, moves only when they differ)."""
     signs_ior = (-1.0, 1.0) if _ior_is_rounded(d) else (0.0,)
-    signs_dir = (list(itertools.product((-1.0, 1.0), repeat=3)) if every_component
-                 else [(0.0, 0.0, -1.0), (0.0, 0.0, 1.0)])
+    if every_component:
+        signs_dir = [(s, t * np.array(s)) for s in itertools.product((-1.0, 1.0), repeat=3)
+                     for t in (-1.0, 1.0)]
+    else:
+        signs_dir = [((0.0, 0.0, s), (0.0, 0.0, s)) for s in (-1.0, 1.0)]
     for s_ior, s_dir, s_u in itertools.product(signs_ior, signs_dir, (-1.0, 1.0)):
         yield _perturbed(d, q, s_ior, s_dir, s_u)
 

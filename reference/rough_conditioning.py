@@ -122,9 +122,11 @@ def rough_sensitivity(d: dict, q: Queries, wo_sets, base_sample: dict, channels)
                             flips=sample_flips | np.any(split(flips), axis=0))
 
 
-def rough_reasons(d: dict, wi: np.ndarray, wo_sets, idx, flips) -> list[str]:
+def rough_reasons(d: dict, wi: np.ndarray, wo_sets, idx, flips, steep) -> list[str]:
     """Why float32 cannot resolve each query in ``idx``, judged over all its pairs
-    (wi, wo) for the wo arrays in ``wo_sets`` (compared pairs and sampled directions)."""
+    (wi, wo) for the wo arrays in ``wo_sets`` (compared pairs and sampled directions);
+    steep: the sample's weight or pdf moves by more than the target between the two
+    codes' directions."""
     grazing = np.min([np.abs(wi[:, 2])] + [np.abs(wo[:, 2]) for wo in wo_sets], axis=0)
     near_critical = np.zeros(len(wi), dtype=bool)
     near_one = np.zeros(len(wi), dtype=bool)
@@ -144,6 +146,9 @@ def rough_reasons(d: dict, wi: np.ndarray, wo_sets, idx, flips) -> list[str]:
         elif grazing[j] < GRAZING_COS:
             out.append(f"grazing wi, wo or sampled wo (|cos theta| < {GRAZING_COS:g}: "
                        "G1 and the half vector lose digits)")
+        elif steep[j]:
+            out.append("steep lobe at the sample (the codes' float32-close directions "
+                       "differ in weight or pdf by more than the target)")
         elif near_one[j]:
             out.append(f"light grazing a microfacet (transmission with F > {FRESNEL_NEAR_ONE:g}: "
                        "1 - F loses digits)")

@@ -20,6 +20,8 @@ def add_material_options(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--k", type=float, default=None, help="conductor: extinction coefficient")
     g.add_argument("--int-ior", type=float, default=1.5046, help="dielectric: interior index")
     g.add_argument("--ext-ior", type=float, default=1.000277, help="exterior index")
+    g.add_argument("--preset", default=None, metavar="NAME",
+                   help="a named preset (bsdflab.presets.PRESETS, e.g. xenopeltis); overrides --material")
     g.add_argument("--json", default=None, metavar="DICT",
                    help="the material as a JSON dict (BSDF.to_dict form); overrides the rest")
 
@@ -31,6 +33,10 @@ def material_from_args(args: argparse.Namespace) -> BSDF:
         except json.JSONDecodeError as e:
             raise ValueError(f"--json is not valid JSON: {e}") from None
         return from_dict(d)
+    if args.preset is not None:
+        from ..presets import preset
+
+        return preset(args.preset)
     if args.material == "diffuse":
         r = args.reflectance[0] if len(args.reflectance) == 1 else args.reflectance
         if len(args.reflectance) not in (1, 3):

@@ -160,6 +160,11 @@ void LayeredBSDF::one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, 
     BSDFSample s = E.sample(wi, rng.uniform(), rng.uniform(), rng.uniform(), kTransmission, q, wgt);
     if (!s.lobe) return;
     for (int c = 0; c < C; ++c) beta[c] = wgt[c];
+    // Roulette compares the throughput with its value after entering, so a small entry
+    // factor (grazing Fresnel transmission) does not make every walk die early.
+    double beta_entry = 0;
+    for (int c = 0; c < C; ++c) beta_entry = std::max(beta_entry, beta[c]);
+    if (!(beta_entry > 0)) return;
     Vec3 w = s.wo;
     double zx = entry == exit ? 0.0 : slabs_[j].thickness; // depth below the exit side
     if (entry != exit) exit_through(j, w, zx, s.pdf, s.lobe & kDelta);
@@ -228,7 +233,7 @@ void LayeredBSDF::one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, 
     roulette:
         if (depth >= kRouletteDepth) {
             double m = 0;
-            for (int c = 0; c < C; ++c) m = std::max(m, beta[c]);
+            for (int c = 0; c < C; ++c) m = std::max(m, beta[c] / beta_entry);
             if (!(m > 0)) return;
             if (m < 1) {
                 if (rng.uniform() >= m) return;
@@ -324,6 +329,8 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
         return s;
     }
     beta = w;
+    const double beta_entry = *std::max_element(beta.begin(), beta.end());
+    if (!(beta_entry > 0)) return {};
     int j = entry == 0 ? 0 : K - 1;
     Vec3 dir = s.wo;
     double zd = 0.0; // depth below the top of slab j
@@ -364,7 +371,7 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
             zd = down ? S.thickness : 0.0;
         }
         if (depth >= kRouletteDepth) {
-            double m = *std::max_element(beta.begin(), beta.end());
+            double m = *std::max_element(beta.begin(), beta.end()) / beta_entry;
             if (!(m > 0)) return {};
             if (m < 1) {
                 if (rng.uniform() >= m) return {};

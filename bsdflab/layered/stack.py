@@ -1,0 +1,146 @@
+"""`Layered`: a stack of interfaces, slabs and a base, evaluated by Position-Free Monte
+Carlo in the C++ core (core/include/bsdflab/layered.h documents the estimator).
+
+Stack order, top to bottom: interfaces[0], slabs[0], interfaces[1], slabs[1], ...,
+slabs[-1], base. Interfaces are dielectric models (smooth or rough, with or without a thin
+film); the base is any BSDF (Diffuse, Conductor, RoughConductor, or a Dielectric /
+RoughDielectric to a medium below, which makes the stack transmissive). Indices must
+chain: interface j's int_ior is the index of slab j and must equal the ext_ior of the
+next interface (or of a base that has one).
+
+eval() is a Monte Carlo estimate: `samples` random walks per direction pair, seeded from
+(seed, wi, wo), so the same call gives the same answer. `eval_with_error` also returns
+the standard error. The top interface's delta reflection (a smooth top) is not part of
+eval: `delta_reflectance` gives it exactly, and `sample` returns it as a delta lobe.
+`pdf` is a deterministic approximation for multiple importance sampling (the walk's exact
+density is not available); `sample`'s weight is the walk's unbiased throughput.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _core
+from .. import _validate as check
+from ..bsdfs.base import BSDF, from_dict
+from ..bsdfs.dielectric import Dielectric
+from ..bsdfs.rough import RoughDielectric
+from ..lobes import Lobe
+from .slab import Slab
+
+INTERFACE_TYPES = (Dielectric, RoughDielectric)
+MAX_SLABS = 16
+IOR_TOLERANCE = 1e-9
+
+
+def _model(value, name: str) -> BSDF:
+    if isinstance(value, BSDF):
+        return value
+    if isinstance(value, dict):
+        return from_dict(value)
+    raise ValueError(f"{name} must be a BSDF or a BSDF dict, got {value!r}")
+
+
+class Layered(BSDF):
+    """A layered BSDF by Position-Free Monte Carlo (Guo, Hasan & Zhao 2018).
+
+    Parameters
+    ----------
+    interfaces : list of Dielectric / RoughDielectric (or dicts), top first, >= 1
+    slabs : list of Slab (or dicts), one below each interface
+    base : BSDF or dict
+        What lies below the last slab.
+    samples : int >= 1
+        Random walks per eval() of one direction pair. Default 256.
+    seed : int >= 0
+        Seed of the walks (combined with the directions). Default 0.
+    max_depth : int >= 1
+        Scattering events per walk before it is cut (Russian roulette ends most walks
+        much earlier). Default 256.
+    """
+
+    type_name = "layered"
+
+    def __init__(self, interfaces, slabs, base, samples: int = 256, seed: int = 0,
+                 max_depth: int = 256):
+        super().__init__()
+        if not isinstance(interfaces, (list, tuple)) or not interfaces:
+            raise ValueError("interfaces must be a non-empty list (top first)")
+        if not isinstance(slabs, (list, tuple)) or len(slabs) != len(interfaces):
+            raise ValueError(f"slabs must be a list with one slab per interface "
+                             f"({len(interfaces)}), got {slabs!r}")
+        if len(slabs) > MAX_SLABS:
+            raise ValueError(f"at most {MAX_SLABS} slabs are supported, got {len(slabs)}")
+        self.interfaces = tuple(_model(m, f"interfaces[{i}]") for i, m in enumerate(interfaces))
+        for i, m in enumerate(self.interfaces):
+            if not isinstance(m, INTERFACE_TYPES):
+                raise ValueError(f"interfaces[{i}] must be a dielectric or roughdielectric, "
+                                 f"got {m.type_name!r}")
+        self.slabs = tuple(Slab.coerce(s, i) for i, s in enumerate(slabs))
+        self.base = _model(base, "base")
+        if isinstance(self.base, Layered):
+            raise ValueError("base must not itself be layered: list its layers in this stack")
+        self.samples = _positive_int("samples", samples)
+        self.seed = check.seed(seed)
+        self.max_depth = _positive_int("max_depth", max_depth)
+        self._check_indices()
+
+    def _check_indices(self) -> None:
+        below = [getattr(m, "ext_ior", None) for m in self.interfaces[1:]]
+        below.append(getattr(self.base, "ext_ior", None))
+        for j, (upper, lower) in enumerate(zip(self.interfaces, below)):
+            if lower is not None and abs(upper.int_ior - lower) > IOR_TOLERANCE * upper.int_ior:
+                who = f"interfaces[{j + 1}]" if j + 1 < len(self.interfaces) else "base"
+                raise ValueError(f"slab {j} has index {upper.int_ior} (interfaces[{j}].int_ior) "
+                                 f"but {who}.ext_ior is {lower}: they must be equal")
+
+    # -- core -----------------------------------------------------------------------------
+    def _build(self, wavelengths: np.ndarray, nee: bool = True):
+        wl = np.asarray(wavelengths, dtype=np.float64)
+        boundaries = [m._core(wl) for m in (*self.interfaces, self.base)]
+        return _core.LayeredBSDF(
+            list(wl), boundaries, [s.thickness_um for s in self.slabs],
+            [list(s.sigma_a_at(wl)) for s in self.slabs], [s.sigma_s for s in self.slabs],
+            [s.phase.core_kind for s in self.slabs], [s.phase.core_parameter for s in self.slabs],
+            self.samples, self.seed, self.max_depth, nee)
+
+    def naive(self, wavelengths) -> Any:
+        """The core estimator without next-event connections (for benchmarks only)."""
+        return self._build(np.asarray(wavelengths, dtype=np.float64), nee=False)
+
+    # -- estimator extras -------------------------------------------------------------
+    def eval_with_error(self, wi, wo, wavelengths=None, samples: int | None = None,
+                        seed: int | None = None, lobes: Lobe | int = Lobe.ALL, thickness=None):
+        """(value, standard error), each (N, C). For colour output the error is the bound
+        sum_l |W_cl| sigma_l (channels are correlated: the same walks serve all)."""
+        a, b = check.direction_pair(wi, wo)
+        wl, to_rgb = self._channels(wavelengths)
+        t = check.per_row("thickness", thickness, len(a), lo=0.0)
+        n = self.samples if samples is None else _positive_int("samples", samples)
+        s = self.seed if seed is None else check.seed(seed)
+        value, err = self._core(wl).eval_with_error(a, b, check.lobe_mask(lobes), t, n, s)
+        if to_rgb is not None:
+            return value @ to_rgb.T, err @ np.abs(to_rgb).T
+        return value, err
+
+    def delta_reflectance(self, wi, wavelengths=None, thickness=None) -> np.ndarray:
+        """Reflectance of the top interface's delta lobe toward the mirror direction, (N, C)."""
+        a = check.directions("wi", wi)
+        wl, to_rgb = self._channels(wavelengths)
+        t = check.per_row("thickness", thickness, len(a), lo=0.0)
+        r = self._core(wl).delta_reflectance(a, t)
+        return r @ to_rgb.T if to_rgb is not None else r
+
+    # -- serialisation ----------------------------------------------------------------
+    def _params(self) -> dict[str, Any]:
+        return {"interfaces": [m.to_dict() for m in self.interfaces],
+                "slabs": [s.to_dict() for s in self.slabs], "base": self.base.to_dict(),
+                "samples": self.samples, "seed": self.seed, "max_depth": self.max_depth}
+
+
+def _positive_int(name: str, value) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+    return int(value)
+

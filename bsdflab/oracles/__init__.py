@@ -1,0 +1,8 @@
+"""Deterministic reference models ("oracles") for validating bsdflab's stochastic BSDFs.
+
+Each oracle evaluates a configuration exactly (to quadrature precision) with optics that
+are independent of the code it checks (the ``tmm`` package, not bsdflab's C++ core).
+"""
+from .coated_diffuse import CoatedDiffuseOracle
+
+__all__ = ["CoatedDiffuseOracle"]
