@@ -48,7 +48,7 @@ case "$cmd" in
     demo)
         setup
         mkdir -p out
-        "$VENV/bin/bsdflab" lobe --material conductor --metal Au --theta-i 30 --out out/lobe.png "$@"
+        "$VENV/bin/bsdflab" lobe --preset xenopeltis --theta-i 30 --out out/lobe.png "$@"
         ;;
     test)
         setup

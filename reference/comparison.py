@@ -13,7 +13,7 @@ they are found and bounded is in conditioning.py.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -72,8 +72,8 @@ class Comparison:
     reference: str                      # e.g. "Mitsuba 3.9.1 (llvm_ad_rgb)"
     wavelength: float | None            # nm; None: bsdflab's sRGB output was compared
     n_pairs: int
-    n_well_conditioned: int
-    max_error: dict[str, float]         # per quantity, over the well-conditioned pairs
+    n_well_conditioned: int             # pairs well-conditioned in every quantity
+    max_error: dict[str, float]         # per quantity, over the pairs where it is well-conditioned
     n_sampled: int                      # samples valid in both codes with the same lobe
     n_lobe_mismatch: int                # lobe types differ, not explained by float32
     n_validity_mismatch: int            # one code sampled, the other did not (unexplained)
@@ -83,6 +83,7 @@ class Comparison:
     model_difference: str = ""          # an expected, documented non-float32 difference
     notes: tuple[str, ...] = ()
     quantities: tuple[str, ...] = QUANTITIES  # the keys of max_error, in report order
+    n_well: dict[str, int] = field(default_factory=dict)  # per quantity: its well-conditioned pairs
 
     @property
     def eval_error(self) -> float:
@@ -110,12 +111,14 @@ class Comparison:
 
     def report(self) -> str:
         wl = "sRGB" if self.wavelength is None else f"{self.wavelength:g} nm"
-        errs = "  ".join(f"{q} {self.max_error[q]:.1e}" for q in self.quantities)
+        errs = "  ".join(f"{q} {self.max_error[q]:.1e}"
+                         + (f" ({self.n_well[q]})" if q in self.n_well else "")
+                         for q in self.quantities)
         lines = [
             f"{self.label} @ {wl} vs {self.reference}",
-            f"  {self.n_pairs} pairs, {self.n_well_conditioned} well-conditioned in float32 "
-            f"(target {self.target:.2g}, relative error floor {REL_FLOOR:g})",
-            f"  max relative error, well-conditioned: {errs}",
+            f"  {self.n_pairs} pairs, {self.n_well_conditioned} well-conditioned in float32 in "
+            f"every quantity (target {self.target:.2g}, relative error floor {REL_FLOOR:g})",
+            f"  max relative error where well-conditioned (pairs): {errs}",
             f"  samples compared {self.n_sampled}; lobe-type mismatches {self.n_lobe_mismatch}, "
             f"validity mismatches {self.n_validity_mismatch}, errors over target {self.n_over_target}",
         ]

@@ -205,8 +205,8 @@ def _summarise(label: str, wl, err: dict, sens: dict, flips: np.ndarray, why, *,
     roundings; why(idx): the reason of each ill-conditioned pair in idx; same_lobe,
     sampled, validity_mismatch: per pair, the samples' lobes agree / both codes sampled
     the same lobe / exactly one code has a valid answer."""
-    ill = flips | np.any([sens[k] > ILL_CONDITIONED for k in quantities], axis=0)
-    well = ~ill
+    well_k = {k: ~flips & (sens[k] <= ILL_CONDITIONED) for k in quantities}
+    ill = ~np.all([well_k[k] for k in quantities], axis=0)
     bound = {k: target + sens[k] for k in quantities}
 
     groups = []
@@ -222,12 +222,13 @@ def _summarise(label: str, wl, err: dict, sens: dict, flips: np.ndarray, why, *,
 
     return Comparison(
         label=label, reference=f"Mitsuba {mitsuba().__version__} ({variant()})",
-        wavelength=wl, n_pairs=len(flips), n_well_conditioned=int(well.sum()),
-        max_error={k: float(err[k][well].max(initial=0.0)) for k in quantities},
+        wavelength=wl, n_pairs=len(flips), n_well_conditioned=int(np.sum(~ill)),
+        max_error={k: float(err[k][well_k[k]].max(initial=0.0)) for k in quantities},
+        n_well={k: int(well_k[k].sum()) for k in quantities},
         n_sampled=int(np.sum(sampled)),
         n_lobe_mismatch=int(np.sum(~same_lobe & ~flips & ~validity_mismatch)),
         n_validity_mismatch=int(np.sum(validity_mismatch & ~flips)),
-        n_over_target=int(np.sum(well & np.any([err[k] > target for k in quantities], axis=0))),
+        n_over_target=int(np.sum(np.any([well_k[k] & (err[k] > target) for k in quantities], axis=0))),
         ill_conditioned=tuple(groups), target=target, model_difference=model_difference,
         notes=notes, quantities=quantities)
 

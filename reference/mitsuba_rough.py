@@ -30,12 +30,12 @@ import numpy as np
 from bsdflab.bsdfs import BSDF, from_dict
 
 from .comparison import QUANTITIES, Comparison, errors_between, rel_error
-from .conditioning import ILL_CONDITIONED
+from .conditioning import ILL_CONDITIONED, INPUT_PERTURBATION
 from .mitsuba_bsdf import _critical, _notes, _setup, _summarise, to_mitsuba
 from .mitsuba_calls import mitsuba_answers
 from .query_sets import bsdflab_answers, draw_queries
 from .rough_conditioning import pair_values, rough_reasons, rough_sensitivity
-from .visible_normals import bsdflab_uniforms
+from .visible_normals import bsdflab_uniforms, warp_frame_shift
 
 ROUGH_TYPES = ("roughconductor", "roughdielectric")
 CROSS_QUANTITIES = ("weight@bsdflab_wo", "pdf@bsdflab_wo", "weight@mitsuba_wo", "pdf@mitsuba_wo")
@@ -61,7 +61,7 @@ def compare_rough(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | 
     b, plugin = from_dict(d), to_mitsuba(d, wl)
     channels = None if wl is None else [wl]
     q = draw_queries(int(n_pairs), seed, _critical(d))
-    mapped = replace(q, u2=bsdflab_uniforms(q.u2))
+    mapped = replace(q, u2=bsdflab_uniforms(q.u2, q.wi, d["alpha"]))
 
     ours = bsdflab_answers(b, mapped, channels)   # eval / pdf of (wi, wo); mapped samples
     theirs = mitsuba_answers(plugin, q)
@@ -97,6 +97,8 @@ def compare_rough(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | 
     # is bsdflab's own change between its direction and Mitsuba's; the direction itself is
     # held to its own bound.
     sampled = same_lobe & (ours["lobe"] != 0)
+    s["direction"] = s["direction"] + warp_frame_shift(
+        d, q.wi, mapped.u1, mapped.u2, ours["wo"], ours["lobe"], INPUT_PERTURBATION, channels)
     moved = {"weight": rel_error(ours["weight"], at_theirs.ratio),
              "sample_pdf": rel_error(ours["sample_pdf"], at_theirs.pdf)}
     for key, v in moved.items():

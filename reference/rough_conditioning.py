@@ -147,11 +147,13 @@ def rough_reasons(d: dict, wi: np.ndarray, wo_sets, idx, flips, steep) -> list[s
             out.append(f"grazing wi, wo or sampled wo (|cos theta| < {GRAZING_COS:g}: "
                        "G1 and the half vector lose digits)")
         elif steep[j]:
-            out.append("steep lobe at the sample (the codes' float32-close directions "
+            out.append("sample on a steep lobe (the codes' float32-close sampled directions "
                        "differ in weight or pdf by more than the target)")
         elif near_one[j]:
             out.append(f"light grazing a microfacet (transmission with F > {FRESNEL_NEAR_ONE:g}: "
                        "1 - F loses digits)")
         else:
-            out.append("other")
+            out.append("steep D(m) or G1 (a value moves by more than the target when the "
+                       "directions move by 8 float32 ulps, e.g. near a narrow lobe's peak, or "
+                       "Mitsuba's warp frame rounds; see visible_normals.py)")
     return out

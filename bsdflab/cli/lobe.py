@@ -30,7 +30,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--samples must be > 0")
     bsdf = material_from_args(args)
     summary = lobe_figure(bsdf, np.radians(theta), args.out, samples=args.samples, seed=args.seed)
-    print(f"material      {bsdf!r}")
+    name = args.preset or bsdf.to_dict()["type"]
+    print(f"material      {name}")
     print(f"theta_i       {theta:g} deg")
     for name, rgb in summary.items():
         print(f"{name:<13} R {rgb[0]:.4f}  G {rgb[1]:.4f}  B {rgb[2]:.4f}")

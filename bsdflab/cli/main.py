@@ -5,9 +5,9 @@ import argparse
 import sys
 
 from .. import __version__
-from . import info, lobe
+from . import info, lobe, thinfilm
 
-COMMANDS = (lobe, info)
+COMMANDS = (lobe, thinfilm, info)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -15,17 +15,18 @@ Gauss-Legendre quadrature converge geometrically):
 * total internal reflection (n_e != n_s only), seen from the denser medium: phi in
   [0, pi/2] with c_dense = c_crit cos(phi); the rarer medium's cosine is then
   i sqrt((n_d/n_r)^2 - 1) sin(phi), so R_dense(phi) is analytic where R(c_dense) has a
-  square-root kink at the critical angle. R_dense = 1 for a bare interface or a lossless film, < 1
-  under an absorbing film (the evanescent wave is absorbed in it).
+  square-root kink at the critical angle. R_dense = 1 for a bare interface or a lossless
+  film, < 1 under an absorbing film (the evanescent wave is absorbed in it).
 
 Bare interface: tmm's vectorisable Fresnel helpers (interface_r/t, R_from_r, T_from_t)
-are evaluated directly (exact). Coated interface: tmm.coh_tmm, scalar per angle, sampled
-at Chebyshev points and interpolated (``_chebyshev.Chebyshev``, absolute error <= 1e-13
-plus tmm's own error). tmm turns every angle into n sin(theta) and back through arcsin, so
-the cosine it uses in the rarer medium carries an absolute error ~1e-16 / |c_rare|: its
-R and T are off by up to ~3e-16 / |c_rare| within a few degrees of grazing in the rarer
-medium (measured against the exact bare-interface formulas). The interpolation allows for
-that (``TMM_NOISE``); integrals weight it by the cosine, where it is negligible.
+are evaluated directly at our cosines (exact). Coated interface: tmm.coh_tmm, scalar per
+angle, sampled at Chebyshev points and interpolated (``_chebyshev.Chebyshev``, absolute
+error <= 1e-13). tmm turns the angle into n sin(theta) and back through arcsin, so the
+cosine it really uses in the rarer medium differs from the requested one by ~1e-16 /
+|c_rare| (2e-12 in R and T at 0.01 degrees from grazing). Its results are exact for the
+cosines it used, which it returns (``th_list``): the samples are placed there, and T is
+recomputed from t with those angles (``tmm.T_from_t``; coh_tmm divides by the requested
+cosine). Measured against the exact bare formulas this leaves ~1e-16.
 """
 from __future__ import annotations
 
@@ -35,7 +36,6 @@ import tmm
 from ._chebyshev import Chebyshev
 
 POLARISATIONS = ("s", "p")
-TMM_NOISE = 1e-15  # bound on tmm's absolute error times |cos| in the rarer medium (3x measured)
 
 
 class InterfaceAtWavelength:
@@ -56,15 +56,17 @@ class InterfaceAtWavelength:
         self.n_rare, self.n_dense = sorted((self.n_ext, self.n_slab))
         self.ext_is_rare = self.n_ext <= self.n_slab
         # cosine of the critical angle in the denser medium (0 when index-matched)
-        self.c_crit = float(np.sqrt(1.0 - (self.n_rare / self.n_dense) ** 2))
+        r = self.n_rare / self.n_dense
+        self.c_crit = float(np.sqrt((1.0 - r) * (1.0 + r)))
         self.has_tir = self.n_ext != self.n_slab
         if layers:
-            stack = _Stack(self.n_ext, self.n_slab, layers, wavelength_nm)
-            self._trans = Chebyshev(lambda p: stack.transmitting(*self.pair(p)), 0.0, 1.0,
-                                    noise=lambda p: TMM_NOISE / p)
-            self._tir = (Chebyshev(lambda phi: stack.tir(self.ext_is_rare, self._dense(phi)),
-                                   0.0, np.pi / 2, noise=self._tir_noise)
-                         if self.has_tir else None)
+            stack = _Stack(self, layers, wavelength_nm)
+            down = Chebyshev(lambda p: stack.transmitting(p, from_ext=True), 0.0, 1.0)
+            up = Chebyshev(lambda p: stack.transmitting(p, from_ext=False), 0.0, 1.0)
+            self._fits = (down, up)
+            # columns R_ext, R_slab, T_ext, T_slab from (R, T) seen from each side
+            self._trans = lambda p: np.concatenate([down(p), up(p)], axis=1)[:, [0, 2, 1, 3]]
+            self._tir = Chebyshev(stack.tir, 0.0, np.pi / 2) if self.has_tir else None
         else:
             self._trans = lambda p: _bare(self.n_ext, self.n_slab, *self.pair(p))
             self._tir = lambda phi: np.ones((len(phi), 1))
@@ -73,15 +75,9 @@ class InterfaceAtWavelength:
     def pair(self, p) -> tuple[np.ndarray, np.ndarray]:
         """(c_e, c_s) on the transmitting branch for rarer-medium cosines p."""
         p = np.asarray(p, dtype=np.float64)
-        other = np.sqrt(1.0 - (self.n_rare / self.n_dense) ** 2 * (1.0 - p * p))
+        # 1 - r^2 (1 - p^2) written without cancellation
+        other = np.sqrt(self.c_crit ** 2 + (self.n_rare / self.n_dense * p) ** 2)
         return (p, other) if self.ext_is_rare else (other, p)
-
-    def _dense(self, phi) -> np.ndarray:
-        return self.c_crit * np.cos(phi)
-
-    def _tir_noise(self, phi) -> np.ndarray:
-        # |c_rare| = sqrt((n_d/n_r)^2 - 1) sin(phi) on this branch
-        return TMM_NOISE / (np.sqrt((self.n_dense / self.n_rare) ** 2 - 1.0) * np.sin(phi))
 
     def rare_cosine(self, c_ext) -> tuple[np.ndarray, np.ndarray]:
         """For exterior cosines in (0, 1]: (p, transmits). Where light from outside is
@@ -89,8 +85,9 @@ class InterfaceAtWavelength:
         c = np.asarray(c_ext, dtype=np.float64)
         if self.ext_is_rare:
             return c, np.ones(c.shape, dtype=bool)
-        s2 = 1.0 - (self.n_ext / self.n_slab) ** 2 * (1.0 - c * c)
-        ok = s2 > 0.0
+        # c_s^2 = 1 - (n_e/n_s)^2 (1 - c^2) = (n_e/n_s)^2 (c - c_crit)(c + c_crit)
+        ok = c > self.c_crit
+        s2 = (self.n_ext / self.n_slab) ** 2 * (c - self.c_crit) * (c + self.c_crit)
         return np.sqrt(np.where(ok, s2, 0.0)), ok
 
     # -- powers ----------------------------------------------------------------------------
@@ -138,29 +135,46 @@ def _bare(n_e, n_s, c_e, c_s) -> np.ndarray:
 
 
 class _Stack:
-    """tmm.coh_tmm for the coated interface, one angle per call."""
+    """tmm.coh_tmm for the coated interface, one angle per call, as samplers for
+    ``Chebyshev``: each returns the branch parameter tmm really used and (R, T)."""
 
-    def __init__(self, n_e, n_s, layers, wavelength_nm):
-        self.down = [complex(n_e), *(complex(n) for n, _ in layers), complex(n_s)]
+    def __init__(self, at: InterfaceAtWavelength, layers, wavelength_nm):
+        self.at = at
+        self.down = [complex(at.n_ext), *(complex(n) for n, _ in layers), complex(at.n_slab)]
         self.d_down = [np.inf, *(float(d) for _, d in layers), np.inf]
         self.wl = float(wavelength_nm)
 
     def _solve(self, pol, from_ext, cos0):
+        """(R, T, cosines tmm used in the incident and exit media)."""
         n, d = (self.down, self.d_down) if from_ext else (self.down[::-1], self.d_down[::-1])
-        return tmm.coh_tmm(pol, n, d, float(np.arccos(cos0)), self.wl)
+        res = tmm.coh_tmm(pol, n, d, float(np.arccos(cos0)), self.wl)
+        th = res["th_list"]
+        # T from t with the angles tmm used for t (coh_tmm divides by the requested cos)
+        t = tmm.T_from_t(pol, res["t"], n[0], n[-1], th[0], th[-1])
+        return res["R"], t, np.cos(th[0]), np.cos(th[-1])
 
-    def transmitting(self, c_e, c_s) -> np.ndarray:
-        out = np.zeros((len(c_e), 4))
-        for i, (ce, cs) in enumerate(zip(c_e, c_s)):
+    def transmitting(self, p, *, from_ext: bool):
+        """Rarer-medium cosines p (M,) -> (p actually used (M,), (M, 2) R and T) for light
+        arriving from the exterior (from_ext) or from the slab."""
+        c_e, c_s = self.at.pair(p)
+        used, out = np.empty(len(p)), np.zeros((len(p), 2))
+        rare_is_incident = from_ext == self.at.ext_is_rare
+        for i, c in enumerate(c_e if from_ext else c_s):
             for pol in POLARISATIONS:
-                down, up = self._solve(pol, True, ce), self._solve(pol, False, cs)
-                out[i] += 0.5 * np.array([down["R"], up["R"], down["T"], up["T"]])
-        return out
+                r, t, c_in, c_exit = self._solve(pol, from_ext, c)
+                out[i] += 0.5 * np.array([r, t])
+            used[i] = (c_in if rare_is_incident else c_exit).real
+        return used, out
 
-    def tir(self, ext_is_rare, c_dense) -> np.ndarray:
-        """Reflectance from the denser medium (the slab when ext_is_rare) at c_dense."""
-        out = np.zeros((len(c_dense), 1))
-        for i, c in enumerate(c_dense):
-            out[i, 0] = 0.5 * sum(self._solve(pol, not ext_is_rare, c)["R"]
-                                  for pol in POLARISATIONS)
-        return out
+    def tir(self, phi):
+        """phi (M,) -> (phi actually used, (M, 1) reflectance from the denser medium)."""
+        k = np.sqrt((self.at.n_dense / self.at.n_rare) ** 2 - 1.0)  # |c_rare| = k sin(phi)
+        used, out = np.empty(len(phi)), np.zeros((len(phi), 1))
+        for i, c in enumerate(self.at.c_crit * np.cos(phi)):
+            for pol in POLARISATIONS:
+                r, _, c_in, c_exit = self._solve(pol, not self.at.ext_is_rare, c)
+                out[i, 0] += 0.5 * r
+            # sin(phi) = |c_rare| / k, cos(phi) = c_dense / c_crit; atan2 stays well
+            # conditioned at both ends, where one of the two cosines is ill-determined
+            used[i] = np.arctan2(abs(c_exit.imag) / k, c_in.real / self.at.c_crit)
+        return used, out

@@ -37,8 +37,8 @@ def lobe_figure(bsdf: BSDF, theta_i: float, path: str, samples: int = 200_000,
     import matplotlib.pyplot as plt
 
     wi = _in_plane(np.array([-theta_i]))[0]  # light from the -x side
-    fig = plt.figure(figsize=(11, 4.6), constrained_layout=True)
-    ax = fig.add_subplot(1, 2, 1, projection="polar")
+    fig = plt.figure(figsize=(15, 4.6), constrained_layout=True)
+    ax = fig.add_subplot(1, 3, 1, projection="polar")
     ax.set_theta_zero_location("N")
     ax.set_theta_direction(-1)
     ax.set_thetamin(-180)
@@ -73,8 +73,10 @@ def lobe_figure(bsdf: BSDF, theta_i: float, path: str, samples: int = 200_000,
     if smooth:
         ax.legend(loc="lower left", fontsize=8)
 
+    _hemisphere_panel(fig.add_subplot(1, 3, 2), bsdf, wi)
+
     # Albedo vs incidence angle, per lobe kind, with the colour as a swatch strip.
-    ax2 = fig.add_subplot(1, 2, 2)
+    ax2 = fig.add_subplot(1, 3, 3)
     angles = np.radians(np.linspace(0, 89, 46))
     n = max(2000, samples // 50)
     parts = [(Lobe.REFLECTION, "reflected"), (Lobe.TRANSMISSION, "transmitted")]
@@ -99,6 +101,33 @@ def lobe_figure(bsdf: BSDF, theta_i: float, path: str, samples: int = 200_000,
     _save_atomically(fig, path)
     plt.close(fig)
     return summary
+
+
+HEMISPHERE_RES = 48
+HEMISPHERE_WALKS = 64  # walks per pixel for stochastic (layered) models
+
+
+def _hemisphere_panel(ax, bsdf: BSDF, wi: np.ndarray) -> None:
+    """f cos(theta_o) over the upper hemisphere (orthographic view from above) in sRGB,
+    normalised to its maximum for display."""
+    x = np.linspace(-1, 1, HEMISPHERE_RES)
+    X, Y = np.meshgrid(x, -x)
+    inside = X**2 + Y**2 < 1
+    wo = np.stack([X[inside], Y[inside], np.sqrt(1 - X[inside]**2 - Y[inside]**2)], axis=1)
+    if hasattr(bsdf, "eval_with_error"):
+        values = bsdf.eval_with_error(wi, wo, samples=HEMISPHERE_WALKS)[0]
+    else:
+        values = bsdf.eval(wi, wo)
+    image = np.ones((HEMISPHERE_RES, HEMISPHERE_RES, 3))
+    peak = max(float(values.max()), 1e-12)
+    image[inside] = _display(values / peak)
+    ax.imshow(image, extent=(-1, 1, -1, 1))
+    ax.plot(*np.array([np.cos(t := np.linspace(0, 2 * np.pi, 200)), np.sin(t)]), color="0.5", lw=0.8)
+    ax.plot([wi[0]], [wi[1]], marker="x", color="w", ms=8)
+    ax.annotate("wi", (wi[0], wi[1]), textcoords="offset points", xytext=(4, 4), fontsize=8, color="w")
+    ax.set_title(f"f cos(theta_o) over the hemisphere, sRGB (peak {peak:.3g})", fontsize=10)
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
 
 
 def _save_atomically(fig, path: str) -> None:

@@ -2,6 +2,8 @@
 from .colour_weights import ColourSpace, rgb_to_spectrum, spectrum_to_rgb, srgb_weights
 from .grid import DEFAULT_STEP_NM, DEFAULT_WAVELENGTHS, wavelength_grid
 from .spectrum import Spectrum
+from .three_wavelength import THREE_WAVELENGTHS_NM, three_wavelength_rgb
 
 __all__ = ["ColourSpace", "DEFAULT_STEP_NM", "DEFAULT_WAVELENGTHS", "Spectrum",
-           "rgb_to_spectrum", "spectrum_to_rgb", "srgb_weights", "wavelength_grid"]
+           "THREE_WAVELENGTHS_NM", "rgb_to_spectrum", "spectrum_to_rgb", "srgb_weights",
+           "three_wavelength_rgb", "wavelength_grid"]

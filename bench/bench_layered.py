@@ -1,0 +1,76 @@
+"""PFMC layered BSDF: cost of a 1 % estimate, and NEE+MIS efficiency vs a naive walk.
+
+For the xenopeltis preset (RGB output, 81 wavelengths per walk) over a set of direction
+pairs, measures in one run, on every core:
+  * walks/s of the full estimator (next-event connections + MIS) and of the naive walk
+    (no connections: a walk contributes only when it scatters toward the rough top and the
+    top's BTDF is evaluated toward wo),
+  * the relative variance per walk of each (from the estimator's own standard error),
+  * efficiency = 1 / (variance x time), and the ratio NEE+MIS / naive,
+  * the time per direction pair to reach 1 % relative standard error.
+Run: python3 bench/bench_layered.py [--pairs 32] [--samples 2000]
+"""
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+import bsdflab as bl
+from bsdflab import _core
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
+from bsdflab.testing import random_unit_vectors
+
+
+def luminance_rel_variance(value, err, wl):
+    """Per-walk relative variance of the luminance (Y) estimate, one per pair."""
+    W = srgb_weights(wl)
+    y = np.array([0.2126, 0.7152, 0.0722]) @ W          # spectrum -> luminance weights
+    mean = value @ y
+    se = err @ np.abs(y)                                  # correlated channels: upper bound
+    return mean, se
+
+
+def run(core, wi, wo, samples, seed=1):
+    t0 = time.perf_counter()
+    value, err = core.eval_with_error(wi, wo, int(bl.Lobe.ALL), None, samples, seed)
+    return value, err, time.perf_counter() - t0
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--pairs", type=int, default=32)
+    ap.add_argument("--samples", type=int, default=2000)
+    args = ap.parse_args()
+
+    model = bl.presets.xenopeltis()
+    wl = DEFAULT_WAVELENGTHS
+    full = model._core(wl)
+    naive = model.naive(wl)
+    wi = random_unit_vectors(args.pairs, seed=1, hemisphere="upper")
+    wo = random_unit_vectors(args.pairs, seed=2, hemisphere="upper")
+    run(full, wi[:2], wo[:2], 16)  # warm up (thread start, caches)
+
+    print(f"xenopeltis preset, {args.pairs} direction pairs, {args.samples} walks each, "
+          f"{len(wl)} wavelengths, {_core.worker_count()} threads")
+    rows = {}
+    for name, core in (("NEE+MIS", full), ("naive", naive)):
+        value, err, dt = run(core, wi, wo, args.samples)
+        mean, se = luminance_rel_variance(value, err, wl)
+        ok = mean > 0
+        rel_var_per_walk = (se[ok] / mean[ok]) ** 2 * args.samples   # variance of one walk / mean^2
+        t_walk = dt / (args.pairs * args.samples)
+        # walks needed for 1 % relative standard error, and the time for them per pair
+        walks_1pct = rel_var_per_walk / 1e-4
+        rows[name] = dict(t_walk=t_walk, var=np.median(rel_var_per_walk),
+                          t_1pct=np.median(walks_1pct) * t_walk,
+                          eff=1.0 / (np.median(rel_var_per_walk) * t_walk))
+        r = rows[name]
+        print(f"  {name:8s} {1e6 * t_walk:7.2f} us/walk   rel. variance/walk {r['var']:9.3g}   "
+              f"time to 1 % per pair {1e3 * r['t_1pct']:8.2f} ms   efficiency {r['eff']:9.3g} /s")
+    print(f"efficiency ratio NEE+MIS / naive: {rows['NEE+MIS']['eff'] / rows['naive']['eff']:.1f}x")
+
+
+if __name__ == "__main__":
+    main()
