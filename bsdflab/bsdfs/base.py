@@ -71,14 +71,16 @@ class BSDF:
         values = self._core(wl).eval(a, b, check.lobe_mask(lobes), t)
         return values @ to_rgb.T if to_rgb is not None else values
 
-    def pdf(self, wi, wo, lobes: Lobe | int = Lobe.ALL, thickness=None) -> np.ndarray:
+    def pdf(self, wi, wo, lobes: Lobe | int = Lobe.ALL, thickness=None, wavelengths=None) -> np.ndarray:
         """Solid-angle density of ``sample`` returning wo, shape (N,).
 
-        Where the choice between lobes depends on wavelength (thin films), the density is
-        that of the default colour grid's channel mean, which is what ``sample`` uses."""
+        Where the choice between lobes depends on wavelength (thin films), ``sample`` picks
+        with the mean over its channels: pass the same ``wavelengths`` here (None = the
+        default colour grid, as for ``sample``) to get the matching density."""
         a, b = check.direction_pair(wi, wo)
         t = check.per_row("thickness", thickness, len(a), lo=0.0)
-        return self._core(DEFAULT_WAVELENGTHS).pdf(a, b, check.lobe_mask(lobes), t)
+        wl, _ = self._channels(wavelengths)
+        return self._core(wl).pdf(a, b, check.lobe_mask(lobes), t)
 
     def sample(self, wi, u1=None, u2=None, *, seed: int = 0, wavelengths=None,
                lobes: Lobe | int = Lobe.ALL, thickness=None) -> BSDFSample:

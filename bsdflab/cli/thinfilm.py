@@ -43,34 +43,32 @@ def film_from_args(args: argparse.Namespace):
 
     ext = real_scalar("--ext-ior", args.ext_ior, 0.0, lo_open=True)
     substrate = real_scalar("--substrate-ior", args.substrate_ior, 0.0, lo_open=True)
+    media = f"on {_n(substrate, KERATIN_IOR_550, 'keratin')}, from {_n(ext, AIR_IOR, 'air')}"
     if args.preset_stack:
         if args.film_ior is not None or args.thickness is not None:
             raise ValueError("--film-ior and --thickness describe one film; --preset-stack "
                              "uses the iridophore stack's own layers")
         spec = iridophore_stack()
         platelet, gap = spec[0], spec[1]
-        title = (f"Iridophore stack: {len(spec[::2])} platelets ({_n(platelet['material'])}, "
-                 f"{platelet['thickness_nm']:g} nm) with gaps ({_n(gap['material'])}, "
-                 f"{gap['thickness_nm']:g} nm), on {_n(substrate)}, from {_n(ext)}")
+        title = (f"Iridophore stack: {len(spec[::2])} platelets "
+                 f"({_n(platelet['material'], GUANINE_IOR, 'guanine')}, "
+                 f"{platelet['thickness_nm']:g} nm) with gaps "
+                 f"({_n(gap['material'], CYTOPLASM_IOR, 'cytoplasm')}, "
+                 f"{gap['thickness_nm']:g} nm), {media}")
         layers = [Layer(layer["material"], layer["thickness_nm"]) for layer in spec]
         return FilmStack(ext, layers, substrate), title, "total stack thickness"
     n_film = real_scalar("--film-ior", GUANINE_IOR if args.film_ior is None else args.film_ior,
                          0.0, lo_open=True)
     d = real_scalar("--thickness",
                     FILM_THICKNESS_NM if args.thickness is None else args.thickness, 0.0)
-    title = (f"Thin film: {_n(n_film)}, {d:g} nm thick, on {_n(substrate)}, "
-             f"from {_n(ext)} (unpolarised light)")
+    title = (f"Thin film: {_n(n_film, GUANINE_IOR, 'guanine')}, {d:g} nm thick, {media} "
+             "(unpolarised light)")
     return (ext, n_film, d, substrate), title, "film thickness"
 
 
-_NAMED_INDICES = {GUANINE_IOR: "guanine", KERATIN_IOR_550: "keratin", AIR_IOR: "air",
-                  CYTOPLASM_IOR: "cytoplasm"}
-
-
-def _n(index: float) -> str:
-    """An index as given, without float noise, named when it is a preset's ("air n 1.000277")."""
-    name = _NAMED_INDICES.get(index)
-    return f"{name + ' ' if name else ''}n {index:.7g}"
+def _n(index: float, preset: float | None = None, name: str = "") -> str:
+    """An index without float noise, named when it is that preset's ("air n 1.000277")."""
+    return f"{name + ' ' if index == preset else ''}n {index:.7g}"
 
 
 def thickness_range_from_args(args: argparse.Namespace) -> tuple[float, float]:

@@ -76,7 +76,8 @@ def colour_wavelengths(max_optical_thickness_nm: float) -> np.ndarray:
     if max_optical_thickness_nm > MAX_OPTICAL_THICKNESS_NM:
         raise ValueError(f"the optical thickness n*d reaches {max_optical_thickness_nm:.0f} nm, "
                          f"above the {MAX_OPTICAL_THICKNESS_NM:.0f} nm this figure resolves "
-                         "(such films reflect nearly white); reduce --thickness-range")
+                         "(such films reflect nearly white); reduce --thickness-range "
+                         "(or the film's index or thickness)")
     start, end = DEFAULT_RANGE_NM
     period = start**2 / (2.0 * max(max_optical_thickness_nm, 1e-9))
     step = min(DEFAULT_STEP_NM, period / SAMPLES_PER_FRINGE)

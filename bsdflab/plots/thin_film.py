@@ -7,12 +7,12 @@ Panels
     wavelengths the seed samples marked.
 (b) The reflected colour over angle of incidence x thickness: each pixel is the linear
     sRGB (CIE 1931 2 degree, D65) of the reflectance spectrum, shown through
-    `display_srgb` with one exposure k for the whole figure (the 99th percentile of
+    `display_srgb` with one gain k >= 1 for the whole figure (the 99th percentile of
     max(R, G, B) at <= 60 degrees maps to 1; brighter pixels are scaled down keeping
-    their hue). A reflectance of 1/k would show as white.
+    their hue). A flat reflectance of 1/k shows as white.
 (c) The colour vs angle at the film's thickness, spectral above three-wavelength.
 (d) The colour vs thickness at normal incidence, spectral above three-wavelength: where
-    fringes crowd the visible range, the spectral colour fades towards grey-white while
+    fringes crowd the visible range, the spectral colour fades towards grey while
     the three samples keep cycling through saturated colours.
 """
 from __future__ import annotations

@@ -10,9 +10,9 @@ Why it aliases
 --------------
 A film of index n1 and thickness d reflects with fringes whose period in wavelength is
 about lambda^2 / (2 n1 d cos theta_1): ~210 nm at 550 nm for 400 nm of guanine
-(n1 = 1.83), but ~70 nm for 1200 nm. The eye (the CIE colour-matching functions) averages the spectrum
-over each channel's ~100 nm wide band, so once several fringes fall inside a band they
-cancel and a thick film looks pale or white. Three point samples cannot see that: each
+(n1 = 1.83), but ~70 nm for 1200 nm. The eye (the CIE colour-matching functions)
+averages the spectrum over each channel's ~100 nm wide band, so once several fringes
+fall inside a band they cancel and a thick film looks pale or grey. Three point samples cannot see that: each
 lands on a peak or a trough by chance, so the "RGB" keeps cycling through saturated
 colours with thickness and angle, at a rate set by the sample spacing rather than by the
 optics -- the colour is aliased. Even for a thin film the three samples miss the
