@@ -66,47 +66,52 @@ def compare_rough(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | 
     ours = bsdflab_answers(b, mapped, channels)   # eval / pdf of (wi, wo); mapped samples
     theirs = mitsuba_answers(plugin, q)
     own = b.sample(q.wi, q.u1, q.u2, wavelengths=channels)  # bsdflab's own warp
-    own_ok, theirs_ok = own.lobe != 0, theirs["lobe"] != 0
-    # Each code's sampled directions, as float32; the pair's wo where there is no sample.
-    own_wo = np.where(own_ok[:, None], own.wo.astype(np.float32).astype(np.float64), q.wo)
-    theirs_wo = np.where(theirs_ok[:, None], theirs["wo"], q.wo)
-    at_own = mitsuba_answers(plugin, replace(q, wo=own_wo))
-
-    wo_sets = (q.wo, own_wo, theirs_wo)
-    sens = rough_sensitivity(d, mapped, wo_sets, ours, channels)
-    at_theirs = pair_values(b, q.wi, theirs_wo, channels)
-    at_own_32 = pair_values(b, q.wi, own_wo, channels)  # what float32 rounding of wo does
+    ok = {"ours": ours["lobe"] != 0, "theirs": theirs["lobe"] != 0, "own": own.lobe != 0}
+    # Sampled directions; the pair's wo where there is no sample (results there unused).
+    fill = lambda valid, wo: np.where(valid[:, None], wo, q.wo)
+    wo = {"ours": fill(ok["ours"], ours["wo"]), "theirs": fill(ok["theirs"], theirs["wo"]),
+          "own": fill(ok["own"], own.wo),
+          "own32": fill(ok["own"], own.wo.astype(np.float32).astype(np.float64))}
+    at_own = mitsuba_answers(plugin, replace(q, wo=wo["own32"]))
+    at = {k: pair_values(b, q.wi, v, channels) for k, v in wo.items()}  # bsdflab's eval / pdf
+    sens = rough_sensitivity(d, mapped, (q.wo, wo["own32"], wo["theirs"]), ours, channels)
 
     same_lobe = ours["lobe"] == theirs["lobe"]
-    err = errors_between(ours, theirs, same_lobe & (ours["lobe"] != 0))
+    sampled = same_lobe & ok["ours"]
+    err = errors_between(ours, theirs, sampled)
     cross = {
-        "weight@bsdflab_wo": (own_ok, rel_error(own.weight, _ratio(at_own["eval"], at_own["pdf"]))),
-        "pdf@bsdflab_wo": (own_ok, rel_error(own.pdf, at_own["pdf"])),
-        "weight@mitsuba_wo": (theirs_ok, rel_error(at_theirs.ratio, theirs["weight"])),
-        "pdf@mitsuba_wo": (theirs_ok, rel_error(at_theirs.pdf, theirs["sample_pdf"])),
+        "weight@bsdflab_wo": (ok["own"], rel_error(own.weight, _ratio(at_own["eval"], at_own["pdf"]))),
+        "pdf@bsdflab_wo": (ok["own"], rel_error(own.pdf, at_own["pdf"])),
+        "weight@mitsuba_wo": (ok["theirs"], rel_error(at["theirs"].ratio, theirs["weight"])),
+        "pdf@mitsuba_wo": (ok["theirs"], rel_error(at["theirs"].pdf, theirs["sample_pdf"])),
     }
-    err.update({key: np.where(ok, e, 0.0) for key, (ok, e) in cross.items()})
+    err.update({key: np.where(valid, e, 0.0) for key, (valid, e) in cross.items()})
 
-    s = {**{key: sens.pairs[0][key] for key in ("eval", "pdf")}, **sens.sample,
-         "weight@bsdflab_wo": sens.pairs[1]["ratio"] + rel_error(at_own_32.ratio, own.weight),
-         "pdf@bsdflab_wo": sens.pairs[1]["pdf"] + rel_error(at_own_32.pdf, own.pdf),
-         "weight@mitsuba_wo": sens.pairs[2]["ratio"], "pdf@mitsuba_wo": sens.pairs[2]["pdf"]}
+    # Bounds. Terms that compare bsdflab with itself compare eval / pdf at two directions,
+    # never its sample with its eval / pdf, so that they cannot hide a sampling error.
+    # Mitsuba sees bsdflab's own samples rounded to float32:
+    rounded = {"ratio": rel_error(at["own32"].ratio, at["own"].ratio),
+               "pdf": rel_error(at["own32"].pdf, at["own"].pdf)}
     # The mapped samples' directions differ within float32, also through Mitsuba's warp
-    # frame (visible_normals.warp_frame_shift); the direction is held to that. On a steep
-    # lobe this moves weight and pdf: by bsdflab's own change between its direction and
-    # Mitsuba's, plus the rounding of evaluating at Mitsuba's float32 direction.
-    sampled = same_lobe & (ours["lobe"] != 0)
+    # frame (visible_normals.warp_frame_shift); on a steep lobe that moves weight and pdf
+    # by bsdflab's own change between the two directions, and evaluating at Mitsuba's
+    # float32 direction rounds.
+    moved = {"ratio": np.where(sampled, rel_error(at["ours"].ratio, at["theirs"].ratio), 0.0),
+             "pdf": np.where(sampled, rel_error(at["ours"].pdf, at["theirs"].pdf), 0.0)}
+    there = sens.pairs[2]
+    s = {"eval": sens.pairs[0]["eval"], "pdf": sens.pairs[0]["pdf"], **sens.sample,
+         "weight@bsdflab_wo": sens.pairs[1]["ratio"] + rounded["ratio"],
+         "pdf@bsdflab_wo": sens.pairs[1]["pdf"] + rounded["pdf"],
+         "weight@mitsuba_wo": there["ratio"], "pdf@mitsuba_wo": there["pdf"]}
+    s["weight"] = s["weight"] + moved["ratio"] + np.where(sampled, there["ratio"], 0.0)
+    s["sample_pdf"] = s["sample_pdf"] + moved["pdf"] + np.where(sampled, there["pdf"], 0.0)
     s["direction"] = s["direction"] + warp_frame_shift(
         d, q.wi, mapped.u1, mapped.u2, ours["wo"], ours["lobe"], INPUT_PERTURBATION, channels)
-    moved = {"weight": rel_error(ours["weight"], at_theirs.ratio),
-             "sample_pdf": rel_error(ours["sample_pdf"], at_theirs.pdf)}
-    for key, v, there in (("weight", moved["weight"], sens.pairs[2]["ratio"]),
-                          ("sample_pdf", moved["sample_pdf"], sens.pairs[2]["pdf"])):
-        s[key] = s[key] + np.where(sampled, v + there, 0.0)
-    validity_mismatch = (((ours["lobe"] != 0) != theirs_ok) | (own_ok & ~(at_own["pdf"] > 0))
-                         | (theirs_ok & ~(at_theirs.pdf > 0)))
-    steep = sampled & np.any([v > ILL_CONDITIONED for v in moved.values()], axis=0)
-    all_wo = wo_sets + (np.where((ours["lobe"] != 0)[:, None], ours["wo"], q.wo),)
+
+    validity_mismatch = ((ok["ours"] != ok["theirs"]) | (ok["own"] & ~(at_own["pdf"] > 0))
+                         | (ok["theirs"] & ~(at["theirs"].pdf > 0)))
+    steep = np.any([v > ILL_CONDITIONED for v in moved.values()], axis=0)
+    all_wo = (q.wo, wo["own32"], wo["theirs"], wo["ours"])
     return _summarise(
         repr(b), wl, err, s, sens.flips,
         lambda idx: rough_reasons(d, q.wi, all_wo, idx, sens.flips, steep),

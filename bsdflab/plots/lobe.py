@@ -1,12 +1,10 @@
 """The lobe figure: in-plane scattering lobe plus albedo vs incidence angle."""
 from __future__ import annotations
 
-import os
-import tempfile
-
 import numpy as np
 
 from ..bsdfs import BSDF
+from ..files import write_atomically
 from ..lobes import Lobe
 
 
@@ -98,7 +96,7 @@ def lobe_figure(bsdf: BSDF, theta_i: float, path: str, samples: int = 200_000,
     for lobe, name in ((Lobe.REFLECTION, "albedo_R"), (Lobe.TRANSMISSION, "albedo_T")):
         if bsdf.lobes & lobe:
             summary[name] = _albedo(bsdf, wi, lobe, samples, seed)
-    _save_atomically(fig, path)
+    save_figure(fig, path)
     plt.close(fig)
     return summary
 
@@ -130,16 +128,6 @@ def _hemisphere_panel(ax, bsdf: BSDF, wi: np.ndarray) -> None:
     ax.set_ylabel("y")
 
 
-def _save_atomically(fig, path: str) -> None:
-    """Write to a temporary file beside `path`, then rename: never a half-written file."""
-    directory = os.path.dirname(os.path.abspath(path))
-    os.makedirs(directory, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=directory, suffix=".png.tmp")
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=110, format="png")
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+def save_figure(fig, path: str) -> None:
+    """Write a matplotlib figure as PNG, atomically."""
+    write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"), suffix=".png.tmp")

@@ -23,7 +23,7 @@ from ..spectra import THREE_WAVELENGTHS_NM
 from .film_colour import (delta_e_2000, display_exposure, display_srgb, film_thickness_nm,
                           optical_thickness_nm, colour_wavelengths, reflectance, spectral_rgb,
                           three_wavelength_colour)
-from .lobe import _save_atomically
+from .lobe import save_figure
 
 SPECTRUM_ANGLES_DEG = (0.0, 30.0, 60.0, 75.0)
 IMAGE_ANGLES_DEG = np.linspace(0.0, 89.0, 90)  # 1 deg; bilinear display fills in
@@ -87,7 +87,7 @@ def thin_film_figure(film, path: str, thickness_range_nm=(0.0, 1200.0), title: s
 
     spectral = spectral_rgb(film, 0.0, None, wavelengths)
     three = three_wavelength_colour(film, 0.0)
-    _save_atomically(fig, path)
+    save_figure(fig, path)
     plt.close(fig)
     return {"three_wavelength": three, "spectral": spectral,
             "delta_e": float(delta_e_2000(spectral, three)), "exposure": exposure,
