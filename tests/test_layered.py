@@ -177,6 +177,8 @@ def test_09_repeatable_and_seeded():
     (lambda: bl.Slab(phase={"type": "hg", "g": 1.0}), "g must be < 1"),
     (lambda: bl.Slab(phase={"type": "hg", "g": -1.0}), "g must be > -1"),
     (lambda: bl.Slab(phase={"type": "rayleigh"}), "phase type"),
+    (lambda: bl.Slab.from_albedo(1.0, albedo=1.2, sigma_t=1.0), "albedo must be <= 1"),
+    (lambda: bl.Slab.from_albedo(1.0, albedo=-0.1, sigma_t=1.0), "albedo must be >= 0"),
     (lambda: bl.Layered([bl.Dielectric(1.5, 1.0)], [bl.Slab()], bl.Diffuse(), samples=0), "samples"),
     (lambda: bl.Layered([bl.Dielectric(1.5, 1.0)], [bl.Slab()], bl.Conductor(material="Au", ext_ior=1.0)),
      "ext_ior"),
@@ -184,6 +186,11 @@ def test_09_repeatable_and_seeded():
 def test_10_bad_input(make, match):
     with pytest.raises(ValueError, match=match):
         make()
+
+
+def test_12_albedo_form_of_a_slab():
+    s = bl.Slab.from_albedo(2.0, albedo=0.8, sigma_t=0.5, phase={"type": "vmf", "kappa": 3.0})
+    assert s.sigma_s == pytest.approx(0.4) and s.sigma_a.at([500.0])[0] == pytest.approx(0.1)
 
 
 def test_11_never_nan_and_terminates():

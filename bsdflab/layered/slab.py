@@ -89,6 +89,14 @@ class Slab:
         object.__setattr__(self, "sigma_s", real_scalar("sigma_s", self.sigma_s, 0.0, 1e6))
         object.__setattr__(self, "phase", PhaseFunction.coerce(self.phase))
 
+    @classmethod
+    def from_albedo(cls, thickness_um: float, albedo: float, sigma_t: float, phase=None) -> "Slab":
+        """A grey slab given its single-scattering albedo in [0, 1] and extinction
+        coefficient sigma_t (1/um): sigma_s = albedo sigma_t, sigma_a = (1 - albedo) sigma_t."""
+        a = real_scalar("albedo", albedo, 0.0, 1.0)
+        t = real_scalar("sigma_t", sigma_t, 0.0, 1e6)
+        return cls(thickness_um, sigma_a=(1.0 - a) * t, sigma_s=a * t, phase=phase)
+
     def sigma_a_at(self, wavelengths) -> np.ndarray:
         return self.sigma_a.at(wavelengths)
 
