@@ -133,3 +133,18 @@ class Comparison:
         lines.extend(f"  note: {n}" for n in self.notes)
         lines.append(f"  {'PASS' if self.passed else 'FAIL'}")
         return "\n".join(lines)
+
+
+def assert_agrees(c: Comparison) -> None:
+    """Raise AssertionError, with the report, unless ``c`` passed: every quantity's error
+    on its well-conditioned pairs within the target, every ill-conditioned group within
+    its float32 bound, and every pair accounted for (none dropped)."""
+    problems = [] if c.passed else ["not passed"]
+    problems += [f"{q} {c.max_error[q]:.1e} over the target" for q in c.quantities
+                 if c.max_error[q] > c.target]
+    problems += [f"'{g.reason}': error/bound {g.max_error_over_bound:.2f}"
+                 for g in c.ill_conditioned if g.max_error_over_bound > 1.0]
+    if c.n_well_conditioned + sum(g.count for g in c.ill_conditioned) != c.n_pairs:
+        problems.append("pairs dropped")
+    if problems:
+        raise AssertionError("; ".join(problems) + "\n" + c.report())

@@ -85,7 +85,8 @@ class RoughSensitivity:
     flips: np.ndarray                   # a sample's lobe or a pair's validity flips
 
 
-def rough_sensitivity(d: dict, q: Queries, wo_sets, base_sample: dict, channels) -> RoughSensitivity:
+def rough_sensitivity(d: dict, q: Queries, wo_sets, base_sample: dict,
+                      channels) -> RoughSensitivity:
     """Sensitivities of bsdflab's eval / pdf / ratio at the pairs (q.wi, wo) for each wo
     array in ``wo_sets``, and of its sample for (q.wi, q.u1, q.u2) (``base_sample``: the
     unperturbed one, as query_sets.bsdflab_answers gives it)."""
@@ -117,7 +118,7 @@ def rough_sensitivity(d: dict, q: Queries, wo_sets, base_sample: dict, channels)
     refracted = base_sample["lobe"] == int(Lobe.GLOSSY_TRANSMISSION)
     sample["sample_pdf"] += np.where(refracted, complement_rounding(d, q.wi, base_sample["wo"]), 0)
     split = lambda a: [a[j * n:(j + 1) * n] for j in range(k)]
-    pairs = [dict(zip(PAIR_QUANTITIES, v)) for v in zip(*(split(pair[key]) for key in PAIR_QUANTITIES))]
+    pairs = [{key: split(pair[key])[j] for key in PAIR_QUANTITIES} for j in range(k)]
     return RoughSensitivity(pairs=pairs, sample=sample,
                             flips=sample_flips | np.any(split(flips), axis=0))
 
@@ -138,8 +139,9 @@ def rough_reasons(d: dict, wi: np.ndarray, wo_sets, idx, flips, steep) -> list[s
     out = []
     for j in idx:
         if near_critical[j]:
-            out.append(f"near a microfacet's critical angle (|cos^2 theta_t| < {NEAR_CRITICAL_COS2:g} "
-                       "at the half vector: Fresnel's sqrt(cos^2 theta_t) and 1 - F cancel)")
+            out.append(f"near a microfacet's critical angle (|cos^2 theta_t| < "
+                       f"{NEAR_CRITICAL_COS2:g} at the half vector: Fresnel's "
+                       "sqrt(cos^2 theta_t) and 1 - F cancel)")
         elif flips[j]:
             out.append("lobe tie or edge of the support (u1 within float32 rounding of F "
                        "picks the lobe, or a pair is valid on one side of a rounding only)")
@@ -150,8 +152,8 @@ def rough_reasons(d: dict, wi: np.ndarray, wo_sets, idx, flips, steep) -> list[s
             out.append("sample on a steep lobe (the codes' float32-close sampled directions "
                        "differ in weight or pdf by more than the target)")
         elif near_one[j]:
-            out.append(f"light grazing a microfacet (transmission with F > {FRESNEL_NEAR_ONE:g}: "
-                       "1 - F loses digits)")
+            out.append(f"light grazing a microfacet (transmission with F > "
+                       f"{FRESNEL_NEAR_ONE:g}: 1 - F loses digits)")
         else:
             out.append("steep D(m) or G1 (a value moves by more than the target when the "
                        "directions move by 8 float32 ulps, e.g. near a narrow lobe's peak, or "

@@ -18,6 +18,10 @@ disk point in bsdflab's frame, hence the same microfacet normal and sample, up t
 rounding. One exception: where the stretched wi is within float32 reach of the normal
 (sin^2 theta <= 4 epsilon, i.e. alpha tan theta_i <~ 5e-4), Mitsuba's frame takes
 azimuth 0 instead of wi's; the mapping then rotates the disk point by wi's azimuth.
+
+``warp_frame_shift`` bounds how far Mitsuba's own float32 rounding inside its warp (sin
+theta of the stretched wi taken from its cosine) moves a sample; input perturbations of
+bsdflab, which has no such step, cannot show it.
 """
 from __future__ import annotations
 
@@ -40,18 +44,26 @@ def mitsuba_disk_points(u2: np.ndarray) -> np.ndarray:
     return np.array([list(warp(mi.Point2f(*row.tolist()))) for row in u], dtype=np.float64)
 
 
-def bsdflab_uniforms(u2: np.ndarray, wi: np.ndarray, alpha: float) -> np.ndarray:
+def _flip(d: dict, wi: np.ndarray) -> np.ndarray:
+    """Per row, the factors that turn wi into the upper-hemisphere direction the warp is
+    given: a dielectric negates wi from below, a two-sided conductor mirrors its z."""
+    below = (wi[:, 2] < 0)[:, None]
+    return np.where(below, [-1.0, -1.0, -1.0] if d["type"] == "roughdielectric"
+                    else [1.0, 1.0, -1.0], 1.0)
+
+
+def bsdflab_uniforms(d: dict, u2: np.ndarray, wi: np.ndarray) -> np.ndarray:
     """bsdflab's direction uniforms (N, 2) that select the visible normal Mitsuba's warp
-    selects for u2 (N, 2), incident directions wi (N, 3) and GGX roughness alpha."""
+    selects for u2 (N, 2) and incident directions wi (N, 3), for the rough BSDF dict d."""
     x, y = mitsuba_disk_points(u2).T
     # Mitsuba's frame azimuth is that of the stretched wi, except where its float32
-    # sin^2 theta is below 4 epsilon: there it takes azimuth 0 (Frame3f::sincos_phi).
-    w32 = np.asarray(wi, dtype=np.float32) * np.where(wi[:, 2] < 0, -1, 1).astype(np.float32)[:, None]
-    st = w32 * np.float32(alpha) * np.array([1, 1, 0], dtype=np.float32)
-    st[:, 2] = w32[:, 2]
+    # sin^2 theta is at most 4 epsilon: there it takes azimuth 0 (Frame3f::sincos_phi).
+    up = wi * _flip(d, wi)
+    w32 = up.astype(np.float32)
+    st = w32 * np.array([d["alpha"], d["alpha"], 1.0], dtype=np.float32)
     st = st / np.sqrt(np.sum(st * st, axis=1, dtype=np.float32))[:, None]
     fixed = st[:, 0] * st[:, 0] + st[:, 1] * st[:, 1] <= np.float32(4 * 2.0**-24)
-    phi = np.where(fixed, np.arctan2(wi[:, 1], wi[:, 0]), 0.0)  # bsdflab's azimuth there
+    phi = np.where(fixed, np.arctan2(up[:, 1], up[:, 0]), 0.0)  # bsdflab's azimuth there
     c, s = np.cos(phi), np.sin(phi)
     p1, p2 = -x * c + y * s, x * s + y * c   # (-x, y) where the frames agree
     turn = np.mod(np.arctan2(p2, p1) / (2 * np.pi), 1.0)
@@ -93,9 +105,8 @@ def warp_frame_shift(d: dict, wi: np.ndarray, u1: np.ndarray, u2: np.ndarray, wo
     """
     from bsdflab.bsdfs import from_dict
 
-    alpha, bsdf = d["alpha"], from_dict(d)
-    side = np.where(wi[:, 2] < 0, -1.0, 1.0)[:, None]
-    stretched = _unit(wi * side * np.array([alpha, alpha, 1.0]))
+    alpha, bsdf, flip = d["alpha"], from_dict(d), _flip(d, wi)
+    stretched = _unit(wi * flip * np.array([alpha, alpha, 1.0]))
     sin2 = stretched[:, 0] ** 2 + stretched[:, 1] ** 2
     azimuth = _unit(np.where(sin2[:, None] > 0, stretched * [1.0, 1.0, 0.0], [1.0, 0.0, 0.0]))
     transmitted = lobe == int(Lobe.GLOSSY_TRANSMISSION)
@@ -103,7 +114,7 @@ def warp_frame_shift(d: dict, wi: np.ndarray, u1: np.ndarray, u2: np.ndarray, wo
     for sign in (-1.0, 1.0):
         sin2_p = np.clip(sin2 + sign * perturbation, 0.0, 1.0)
         tilted = azimuth * np.sqrt(sin2_p)[:, None] + [0.0, 0.0, 1.0] * np.sqrt(1 - sin2_p)[:, None]
-        wi_p = _unit(tilted * [1 / alpha, 1 / alpha, 1.0]) * side
+        wi_p = _unit(tilted * [1 / alpha, 1 / alpha, 1.0]) * flip
         s = bsdf.sample(wi_p, u1, u2, wavelengths=channels)
         m = _unit(wi_p + s.wo * np.where(transmitted, s.eta, 1.0)[:, None])  # the half vector
         moved = _scatter(d, wi, m * np.where(m[:, 2] < 0, -1.0, 1.0)[:, None], transmitted)

@@ -5,9 +5,9 @@ import argparse
 import sys
 
 from .. import __version__
-from . import info, lobe, thinfilm
+from . import info, lobe, table, thinfilm
 
-COMMANDS = (lobe, thinfilm, info)
+COMMANDS = (lobe, thinfilm, table, info)
 
 
 def build_parser() -> argparse.ArgumentParser:

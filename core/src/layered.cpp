@@ -56,9 +56,13 @@ LayeredBSDF::LayeredBSDF(std::vector<double> wavelengths,
     for (const auto &b : boundaries_)
         if (!b || b->channels() != channels())
             throw std::invalid_argument("every boundary must have one channel per wavelength");
-    for (const Slab &s : slabs_)
+    for (Slab &s : slabs_) {
         if (static_cast<int>(s.sigma_a.size()) != channels())
             throw std::invalid_argument("every slab needs sigma_a per wavelength");
+        double mean = 0;
+        for (double a : s.sigma_a) mean += a + s.sigma_s;
+        s.sigma_bar = channels() > 0 ? mean / channels() : 0.0;
+    }
     if (options_.samples < 1 || options_.max_depth < 1)
         throw std::invalid_argument("samples and max_depth must be >= 1");
 }
@@ -67,6 +71,24 @@ uint32_t LayeredBSDF::lobes() const {
     uint32_t l = kGlossyReflection | (boundaries_.front()->lobes() & kDeltaReflection);
     if (boundaries_.back()->lobes() & kTransmission) l |= kGlossyTransmission;
     return l;
+}
+
+double LayeredBSDF::fly(const Slab &S, double room, double cz, PCG32 &rng, double *beta) const {
+    const int C = channels();
+    const double length = room / cz;
+    if (!(S.sigma_s > 0)) { // pure absorption: attenuate deterministically
+        for (int c = 0; c < C; ++c) beta[c] *= std::exp(-S.sigma_a[c] * length);
+        return -1.0;
+    }
+    const double sb = S.sigma_bar;
+    double t = -std::log(1.0 - rng.uniform()) / sb;
+    if (t < length) { // collision, always a scattering event, weighted by its true density
+        for (int c = 0; c < C; ++c)
+            beta[c] *= S.sigma_s / sb * std::exp(-(S.sigma_a[c] + S.sigma_s - sb) * t);
+        return t;
+    }
+    for (int c = 0; c < C; ++c) beta[c] *= std::exp(-(S.sigma_a[c] + S.sigma_s - sb) * length);
+    return -1.0;
 }
 
 void LayeredBSDF::transmittance(int j, double distance, double *tr) const {
@@ -176,22 +198,17 @@ void LayeredBSDF::one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, 
         if (!(cz > 1e-9)) return;
         const double room = up ? zx : S.thickness - zx;
 
-        if (S.sigma_s > 0) { // free flight with the grey sigma_s; absorption as a weight
-            double t = -std::log(1.0 - rng.uniform()) / S.sigma_s;
-            if (t * cz < room) {
-                for (int c = 0; c < C; ++c) beta[c] *= std::exp(-S.sigma_a[c] * t);
-                zx += up ? -t * cz : t * cz;
-                double to_exit_pdf = ch.ok[j] ? S.phase.eval(w, -ch.u[j]) : 0.0;
-                for (int c = 0; c < C; ++c) tmp[c] = to_exit_pdf;
-                connect(j, tmp, zx, to_exit_pdf);
-                Vec3 w2 = S.phase.sample(w, rng.uniform(), rng.uniform());
-                if (toward_exit(w2)) exit_through(j, w2, zx, S.phase.eval(w, w2), false);
-                w = w2;
-                goto roulette;
-            }
+        const double t = fly(S, room, cz, rng, beta);
+        if (t >= 0) { // scattering event at depth zx (measured from the exit side)
+            zx += up ? -t * cz : t * cz;
+            double to_exit_pdf = ch.ok[j] ? S.phase.eval(w, -ch.u[j]) : 0.0;
+            for (int c = 0; c < C; ++c) tmp[c] = to_exit_pdf;
+            connect(j, tmp, zx, to_exit_pdf);
+            Vec3 w2 = S.phase.sample(w, rng.uniform(), rng.uniform());
+            if (toward_exit(w2)) exit_through(j, w2, zx, S.phase.eval(w, w2), false);
+            w = w2;
+            goto roulette;
         }
-        // Straight to the boundary (the no-collision probability cancels sigma_s in Tr).
-        for (int c = 0; c < C; ++c) beta[c] *= std::exp(-S.sigma_a[c] * room / cz);
         {
             const int b = up ? xb(j) : (exit == 0 ? j + 1 : j);
             const BSDF &V = *boundaries_[b];
@@ -243,11 +260,12 @@ void LayeredBSDF::one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, 
     }
 }
 
-void LayeredBSDF::eval_with_error(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                                  int samples, uint64_t seed, double *out, double *err) const {
+void LayeredBSDF::eval_projected(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                                 int samples, uint64_t seed, const double *P, int rows,
+                                 bool include_direct, double *out, double *err) const {
     const int C = channels(), K = static_cast<int>(slabs_.size());
-    zero(out);
-    zero(err);
+    const int R = P ? rows : C;
+    for (int r = 0; r < R; ++r) out[r] = err[r] = 0.0;
     if (!usable_direction(wi) || !usable_direction(wo) || samples < 1) return;
     const bool base_transmits = boundaries_.back()->lobes() & kTransmission;
     if (wi.z < 0 && !base_transmits) return;
@@ -256,26 +274,42 @@ void LayeredBSDF::eval_with_error(const Vec3 &wi, const Vec3 &wo, uint32_t lobes
     if (!(lobes & (reflect ? kReflection : kTransmission) & ~kDelta)) return;
     const int entry = wi.z > 0 ? 0 : K, exit = wo.z > 0 ? 0 : K;
 
+    // Projects a per-channel vector v into rows (identity without P).
+    auto project = [&](const double *v, double *dst) {
+        if (!P) { std::copy(v, v + C, dst); return; }
+        for (int r = 0; r < R; ++r) {
+            double acc = 0;
+            for (int c = 0; c < C; ++c) acc += P[r * C + c] * v[c];
+            dst[r] = acc;
+        }
+    };
     PCG32 rng(hash_directions(seed, wi, wo));
-    std::vector<double> contrib(C), mean(C, 0.0), m2(C, 0.0);
+    std::vector<double> contrib(C), x(R), mean(R, 0.0), m2(R, 0.0);
     const double cos_o = std::abs(wo.z);
     for (int n = 1; n <= samples; ++n) {
         std::fill(contrib.begin(), contrib.end(), 0.0);
         one_walk(wi, wo, entry, exit, q, rng, contrib.data());
-        for (int c = 0; c < C; ++c) { // Welford: running mean and sum of squared deviations
-            double x = std::isfinite(contrib[c]) ? contrib[c] * cos_o : 0.0;
-            double d = x - mean[c];
-            mean[c] += d / n;
-            m2[c] += d * (x - mean[c]);
+        for (int c = 0; c < C; ++c) contrib[c] = std::isfinite(contrib[c]) ? contrib[c] * cos_o : 0.0;
+        project(contrib.data(), x.data());
+        for (int r = 0; r < R; ++r) { // Welford: running mean and sum of squared deviations
+            double d = x[r] - mean[r];
+            mean[r] += d / n;
+            m2[r] += d * (x[r] - mean[r]);
         }
     }
     // The entry boundary's own (non-delta) reflection is known exactly.
-    std::vector<double> direct(C, 0.0);
-    if (entry == exit) boundaries_[entry]->eval(wi, wo, kReflection, q, direct.data());
-    for (int c = 0; c < C; ++c) {
-        out[c] = mean[c] + direct[c];
-        err[c] = samples > 1 ? std::sqrt(m2[c] / (double(samples) * (samples - 1))) : 0.0;
+    std::vector<double> direct(C, 0.0), direct_p(R, 0.0);
+    if (include_direct && entry == exit) boundaries_[entry]->eval(wi, wo, kReflection, q, direct.data());
+    project(direct.data(), direct_p.data());
+    for (int r = 0; r < R; ++r) {
+        out[r] = mean[r] + direct_p[r];
+        err[r] = samples > 1 ? std::sqrt(m2[r] / (double(samples) * (samples - 1))) : 0.0;
     }
+}
+
+void LayeredBSDF::eval_with_error(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                                  int samples, uint64_t seed, double *out, double *err) const {
+    eval_projected(wi, wo, lobes, q, samples, seed, nullptr, 0, true, out, err);
 }
 
 void LayeredBSDF::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
@@ -340,16 +374,12 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
         const double cz = std::abs(dir.z);
         if (!(cz > 1e-9)) return {};
         const double room = down ? S.thickness - zd : zd;
-        if (S.sigma_s > 0) {
-            double t = -std::log(1.0 - rng.uniform()) / S.sigma_s;
-            if (t * cz < room) {
-                for (int c = 0; c < C; ++c) beta[c] *= std::exp(-S.sigma_a[c] * t);
-                zd += down ? t * cz : -t * cz;
-                dir = S.phase.sample(dir, rng.uniform(), rng.uniform());
-                continue;
-            }
+        const double t = fly(S, room, cz, rng, beta.data());
+        if (t >= 0) {
+            zd += down ? t * cz : -t * cz;
+            dir = S.phase.sample(dir, rng.uniform(), rng.uniform());
+            continue;
         }
-        for (int c = 0; c < C; ++c) beta[c] *= std::exp(-S.sigma_a[c] * room / cz);
         const int b = down ? j + 1 : j;
         s = boundaries_[b]->sample(-dir, rng.uniform(), rng.uniform(), rng.uniform(), kAll, q, w.data());
         if (!s.lobe) return {};

@@ -1,5 +1,6 @@
 #include "bsdflab/parallel.h"
 #include <algorithm>
+#include <atomic>
 #include <cstdlib>
 #include <exception>
 #include <mutex>
@@ -42,6 +43,14 @@ void parallel_for(std::size_t n, std::size_t grain,
     }
     for (auto &t : threads) t.join();
     if (error) std::rethrow_exception(error);
+}
+
+void parallel_for_each(std::size_t n, const std::function<void(std::size_t)> &body) {
+    std::atomic<std::size_t> next{0};
+    std::size_t workers = std::min<std::size_t>(worker_count(), n);
+    parallel_for(workers, 1, [&](std::size_t, std::size_t) {
+        for (std::size_t i = next++; i < n; i = next++) body(i);
+    });
 }
 
 } // namespace bsdflab

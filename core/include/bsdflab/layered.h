@@ -36,6 +36,10 @@ struct Slab {
     std::vector<double> sigma_a;  // 1/um, per channel
     double sigma_s = 0.0;         // 1/um, grey
     PhaseFunction phase;
+    // Free flights are sampled with the channel-mean extinction; each channel's true
+    // extinction enters as a weight (spectral tracking), so absorbing slabs scatter where
+    // light actually reaches rather than where sigma_s alone would put collisions.
+    double sigma_bar = 0.0;
 };
 
 struct LayeredOptions {
@@ -59,6 +63,12 @@ public:
     // eval() with an explicit effort and seed, also writing the standard error per channel.
     void eval_with_error(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
                          int samples, uint64_t seed, double *out, double *stderr_out) const;
+    // The same estimate projected by P (rows x channels, row-major) before the statistics,
+    // so errors of derived quantities (RGB, luminance) are exact; `include_direct` false
+    // leaves out the top boundary's own (deterministic) reflection.
+    void eval_projected(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, int samples,
+                        uint64_t seed, const double *P, int rows, bool include_direct, double *out,
+                        double *stderr_out) const;
     // Reflectance of the top boundary's delta lobe toward the mirror direction.
     void delta_reflectance(const Vec3 &wi, const Query &q, double *out) const;
     const LayeredOptions &options() const { return options_; }
@@ -70,6 +80,10 @@ private:
     void one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, const Query &q,
                   PCG32 &rng, double *contrib) const;
     void transmittance(int slab, double distance, double *tr) const;
+    // Advances a flight of at most `room` depth in slab j along a direction of |z| = cz:
+    // returns the travelled distance along the ray if it ends in a scattering event
+    // (throughput updated), or a negative number if it reaches the boundary.
+    double fly(const Slab &S, double room, double cz, PCG32 &rng, double *beta) const;
 
     std::vector<std::shared_ptr<const BSDF>> boundaries_;
     std::vector<Slab> slabs_;

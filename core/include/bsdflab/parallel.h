@@ -13,4 +13,8 @@ unsigned worker_count();
 void parallel_for(std::size_t n, std::size_t grain,
                   const std::function<void(std::size_t, std::size_t)> &body);
 
+// Calls body(i) for every i in [0, n), handing out indices one at a time to whichever
+// thread is free: for loops whose iterations vary a lot in cost (adaptive estimates).
+void parallel_for_each(std::size_t n, const std::function<void(std::size_t)> &body);
+
 } // namespace bsdflab

@@ -1,0 +1,106 @@
+"""`bsdflab table`: inspect and plot BSDF table files (OpenEXR, docs/table_format.md)."""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+
+import numpy as np
+
+
+def register(sub) -> None:
+    p = sub.add_parser("table", help="inspect and plot BSDF table files (.exr)",
+                       description="Inspect and plot tabulated BSDFs stored as OpenEXR table "
+                                   "files (format: docs/table_format.md). Every file is verified "
+                                   "(format version, shapes, content hash) before use.")
+    actions = p.add_subparsers(dest="action", metavar="ACTION", required=True)
+
+    info = actions.add_parser("info", help="print a table file's metadata and accuracy",
+                              description="Print the model, grid, lobes, channels, units, samples "
+                                          "per cell, target and achieved relative error, and the "
+                                          "writer's version of a table file, after verifying it.")
+    info.add_argument("file", metavar="FILE", help="table file (.exr)")
+
+    plot = actions.add_parser("plot", help="plot a table's in-plane slices and error map (PNG)",
+                              description="Plot f(theta_o) in the plane of incidence (phi = 0 and "
+                                          "phi = 180 deg) at a few theta_i per channel with +-2 "
+                                          "standard-error bands, and the relative standard error "
+                                          "over theta_o x phi at one theta_i.")
+    plot.add_argument("file", metavar="FILE", help="table file (.exr)")
+    plot.add_argument("--out", default="table.png", help="output PNG path (default table.png)")
+    plot.add_argument("--thickness-index", type=int, default=0,
+                      help="which film-thickness node to plot, for tables with several (default 0)")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    return {"info": run_info, "plot": run_plot}[args.action](args)
+
+
+def run_plot(args: argparse.Namespace) -> int:
+    from ..plots.table import table_figure
+    from ..tables.file_format import read_table
+
+    table = read_table(args.file)
+    if not 0 <= args.thickness_index < table.n_thickness:
+        raise ValueError(f"--thickness-index must be in [0, {table.n_thickness - 1}] for this table, "
+                         f"got {args.thickness_index}")
+    table_figure(table, args.out, thickness_index=args.thickness_index,
+                 source=f"{os.path.basename(args.file)}: ")
+    print(f"wrote         {args.out}")
+    return 0
+
+
+def run_info(args: argparse.Namespace) -> int:
+    from ..tables.file_format import read_attributes, read_table
+    from ..tables.summary import relative_error_summary
+
+    table = read_table(args.file)  # verifies everything, the hash included
+    attributes = read_attributes(args.file)
+    g = table.grid
+    meta = dict(table.meta)
+    preset = meta.pop("preset", None)
+    step = np.degrees(0.5 * np.pi / np.array([g.n_theta_i, g.n_theta_o]))
+    err = relative_error_summary(table)
+    samples = table.samples
+    lines = [
+        ("file", args.file),
+        ("model", str(table.model.get("type", "?")) + (f" (preset {preset})" if preset else "")),
+        ("grid", f"theta_i {g.n_theta_i} x theta_o {g.n_theta_o} cell centres "
+                 f"({step[0]:.4g} / {step[1]:.4g} deg steps over 0-90), "
+                 f"phi {g.n_phi} nodes over 0-180 deg ({180 / (g.n_phi - 1):.4g} deg steps)"),
+        ("thickness", ", ".join(f"{t:g}" for t in g.thickness_nm) + " nm" if g.thickness_nm
+         else "the model's own (no thickness axis)"),
+        ("lobes", ", ".join(table.lobes)),
+        ("channels", _channels(table, attributes)),
+        ("split direct", "yes: the top interface's reflection is evaluated exactly at lookup"
+         if table.split_direct else "no: the table holds the whole non-delta BSDF"),
+        ("units", ", ".join(f"{k} {v}" for k, v in json.loads(attributes["bsdflab.units"]).items())),
+        ("samples", f"min {samples.min()}  median {np.median(samples):g}  max {samples.max()}"
+                    "  (walks per cell)"),
+        ("target error", f"{table.rel_error_target:g} (relative standard error of luminance)"),
+        ("achieved", f"RMS {err['rms']:.4g}  95th pct {err['p95']:.4g}  max {err['max']:.4g}  "
+                     f"over {err['cells']} cells with luminance > 1 % of the table max"),
+        ("written by", f"bsdflab {attributes.get('bsdflab.version', '?')}, "
+                       f"table format version {attributes.get('bsdflab.format_version', '?')}"),
+        ("content hash", f"OK ({attributes['bsdflab.content_hash'][:16]}...)"),
+    ]
+    lines += [(f"meta {k}", _compact(v)) for k, v in sorted(meta.items())]
+    width = max(13, *(len(label) + 1 for label, _ in lines))
+    for label, text in lines:
+        print(f"{label:<{width}} {text}")
+    return 0
+
+
+def _channels(table, attributes) -> str:
+    space = attributes.get("bsdflab.colour_space", "")
+    if not table.spectral:
+        return f"R, G, B ({space})"
+    names = table.channels
+    shown = ", ".join(names) if len(names) <= 8 else f"{names[0]}, {names[1]}, ..., {names[-1]}"
+    return f"{len(names)} wavelengths: {shown} ({space})"
+
+
+def _compact(value) -> str:
+    text = repr(value) if not isinstance(value, str) else value
+    return text if len(text) <= 100 else text[:97] + "..."

@@ -1,0 +1,94 @@
+"""`TableBSDF`: a BSDF read from a table, with the same eval / pdf / sample interface.
+
+Lookup is multilinear over (film thickness, theta_i, theta_o, phi) in the C++ core; for
+layered tables the top interface's reflection (glossy and delta) is added back exactly
+from the model stored in the table. Sampling and pdf are described in
+core/include/bsdflab/table_bsdf.h.
+"""
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+
+from .. import _core
+from ..bsdfs.base import BSDF, from_dict
+from ..spectra import DEFAULT_WAVELENGTHS, srgb_weights
+from .channels import LUMINANCE_RGB, channel_wavelengths
+from .data import TableData
+
+
+class TableBSDF(BSDF):
+    """A tabulated BSDF.
+
+    Parameters
+    ----------
+    table : TableData, str or path
+        The table, or the path of a table file (read and verified).
+    """
+
+    type_name = "table"
+
+    def __init__(self, table=None, path: str | None = None):
+        super().__init__()
+        if table is None and path is None:
+            raise ValueError("give a table (TableData) or the path of a table file")
+        if not isinstance(table, TableData):
+            from .file_format import read_table
+
+            path = os.fspath(table if table is not None else path)
+            table = read_table(path)
+        table.check()
+        self.table = table
+        self.path = path
+        self._wavelengths = channel_wavelengths(table.channels)
+
+    @property
+    def lobes(self):
+        from ..lobes import Lobe
+
+        return Lobe(self._core(self._channels(None)[0]).lobes)
+
+    # The table fixes the channels: RGB tables answer in RGB, spectral ones at their own
+    # wavelengths; asking for others is an error rather than a silent resampling.
+    def _channels(self, wavelengths):
+        own = self._wavelengths
+        if wavelengths is None:
+            return (np.arange(len(self.table.channels), dtype=float) if own is None else own), None
+        wl = np.atleast_1d(np.asarray(wavelengths, dtype=float))
+        if own is None or wl.shape != own.shape or not np.allclose(wl, own):
+            raise ValueError(f"this table stores channels {self.table.channels}; "
+                             f"wavelengths must be None or exactly those")
+        return own, None
+
+    def _build(self, channel_ids: np.ndarray):
+        t = self.table
+        g = t.grid
+        direct, P = None, []
+        if t.split_direct:
+            top = from_dict(t.model["interfaces"][0])
+            if self._wavelengths is None:
+                direct = top._core(DEFAULT_WAVELENGTHS)
+                P = srgb_weights(DEFAULT_WAVELENGTHS).ravel()
+            else:
+                direct = top._core(self._wavelengths)
+                P = np.eye(len(self._wavelengths)).ravel()
+        lum = LUMINANCE_RGB if self._wavelengths is None else np.full(len(t.channels), 1 / len(t.channels))
+        return _core.TabulatedBSDF(list(channel_ids), len(t.lobes), g.n_theta_i, g.n_theta_o, g.n_phi,
+                                   list(g.thickness_nm), t.values.ravel().tolist(), list(lum), direct,
+                                   list(P), _default_thickness(t.model))
+
+    def _params(self) -> dict[str, Any]:
+        if self.path is None:
+            raise ValueError("an in-memory table has no dict form: write it to a file first")
+        return {"path": self.path}
+
+
+def _default_thickness(model: dict) -> float:
+    """Total film thickness of the top interface (nm), or -1 without a film."""
+    try:
+        film = model["interfaces"][0].get("film") or []
+        return float(sum(layer["thickness_nm"] for layer in film)) if film else -1.0
+    except (KeyError, IndexError, TypeError, AttributeError):
+        return -1.0

@@ -1,0 +1,62 @@
+// A BSDF read from a table (see table_grid.h for the axes): multilinear interpolation of
+// f over (thickness, theta_i, theta_o, phi), times |cos theta_o|; optionally plus an exact
+// "direct" BSDF (a layered model's top interface: its glossy and delta reflection), whose
+// channels are projected by P to the table's channels.
+//
+// Sampling is a one-sample mixture of (a) the direct model's delta reflection, (b) its
+// glossy reflection and (c) the table: per (thickness node, theta_i node) a discrete CDF
+// over patches (lobe, theta_o cell, phi cell) weighted by luminance x solid angle (with a
+// small floor so every patch where interpolation can be non-zero is reachable), then
+// uniform in (cos theta_o, phi) within the patch; theta_i and thickness nodes are picked
+// with their interpolation weights. pdf() is the exact density of that mixture.
+// Tables describe light arriving from above (wi.z > 0); from below everything is zero.
+#pragma once
+#include <memory>
+#include <vector>
+#include "bsdf.h"
+#include "table_grid.h"
+
+namespace bsdflab {
+
+class TabulatedBSDF final : public BSDF {
+public:
+    // values: f per cell and channel, [cell * C + c] (cell order of TableGrid::cell_index);
+    // luminance: per channel weights for the sampling CDFs.
+    TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, std::vector<float> values,
+                  std::vector<double> luminance, std::shared_ptr<const BSDF> direct,
+                  std::vector<double> P, double default_thickness);
+    uint32_t lobes() const override;
+    void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+              double *out) const override;
+    double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const override;
+    BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
+                      const Query &q, double *weight) const override;
+
+private:
+    struct Weights { int i0, i1; double w1; }; // linear interpolation between two nodes
+    Weights thickness_weights(const Query &q) const;
+    Weights angle_weights(double theta, int n) const;
+    Weights phi_weights(double phi) const;
+    void table_eval(const Vec3 &wi, const Vec3 &wo, const Query &q, double *out) const;
+    double table_pdf(const Vec3 &wi, const Vec3 &wo, const Query &q) const;
+    double table_albedo(const Vec3 &wi, const Query &q) const;
+    void direct_eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const;
+    void mixture(const Vec3 &wi, const Query &q, double &p_delta, double &p_direct,
+                 double *delta_weight) const;
+    // Patch geometry of (theta_o cell k, phi cell m).
+    void patch_bounds(int k, int m, double &cos_hi, double &cos_lo, double &phi_lo, double &phi_hi) const;
+    std::size_t patches() const { return std::size_t(grid_.n_lobes) * grid_.n_theta_o * grid_.n_phi; }
+
+    TableGrid grid_;
+    std::vector<float> values_;
+    std::vector<double> luminance_;
+    std::shared_ptr<const BSDF> direct_;
+    std::vector<double> P_; // (C x direct channels) row-major, or empty
+    double default_thickness_;
+    // Per (thickness node, theta_i node): patch CDF (patches() + 1 entries), patch
+    // probabilities, and the table albedo (luminance) at that node.
+    std::vector<double> cdf_, prob_, albedo_;
+    std::vector<double> direct_albedo_; // per theta_i node, glossy reflection luminance
+};
+
+} // namespace bsdflab

@@ -1,0 +1,311 @@
+#include "bsdflab/table_bsdf.h"
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include "bsdflab/frame.h"
+#include "bsdflab/rng.h"
+#include "bsdflab/sampling.h"
+
+namespace bsdflab {
+
+namespace {
+constexpr double kPatchFloor = 1e-3;   // fraction of the mean patch weight every patch gets
+constexpr int kDirectAlbedoSamples = 2048;
+
+double wrap_phi(const Vec3 &wi, const Vec3 &wo) {
+    double d = std::abs(std::atan2(wo.y, wo.x) - std::atan2(wi.y, wi.x));
+    return d > kPi ? 2.0 * kPi - d : d;
+}
+} // namespace
+
+TabulatedBSDF::TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, std::vector<float> values,
+                             std::vector<double> luminance, std::shared_ptr<const BSDF> direct,
+                             std::vector<double> P, double default_thickness)
+    : BSDF(std::move(channel_ids)), grid_(std::move(grid)), values_(std::move(values)),
+      luminance_(std::move(luminance)), direct_(std::move(direct)), P_(std::move(P)),
+      default_thickness_(default_thickness) {
+    const int C = channels();
+    if (grid_.thickness.empty()) grid_.thickness = {-1.0};
+    if (values_.size() != grid_.cells() * C) throw std::invalid_argument("table values do not match the grid");
+    if (static_cast<int>(luminance_.size()) != C) throw std::invalid_argument("luminance needs one weight per channel");
+    if (direct_ && P_.size() != std::size_t(C) * direct_->channels())
+        throw std::invalid_argument("P must map the direct model's channels to the table's");
+
+    // Sampling CDFs per (thickness node, theta_i node).
+    const std::size_t NP = patches();
+    const int NT = grid_.n_thickness(), NI = grid_.n_theta_i;
+    cdf_.assign(std::size_t(NT) * NI * (NP + 1), 0.0);
+    prob_.assign(std::size_t(NT) * NI * NP, 0.0);
+    albedo_.assign(std::size_t(NT) * NI, 0.0);
+    std::vector<double> w(NP);
+    for (int t = 0; t < NT; ++t)
+        for (int ti = 0; ti < NI; ++ti) {
+            double total = 0;
+            for (int lobe = 0; lobe < grid_.n_lobes; ++lobe)
+                for (int k = 0; k < grid_.n_theta_o; ++k)
+                    for (int m = 0; m < grid_.n_phi; ++m) {
+                        double ch, cl, pl, ph;
+                        patch_bounds(k, m, ch, cl, pl, ph);
+                        double solid = (ch - cl) * 2.0 * (ph - pl);
+                        const float *v = &values_[grid_.cell_index(lobe, t, ti, k, m) * C];
+                        double lum = 0;
+                        for (int c = 0; c < C; ++c) lum += luminance_[c] * v[c];
+                        double cos_mid = std::cos(grid_.theta_o(k));
+                        std::size_t p = (std::size_t(lobe) * grid_.n_theta_o + k) * grid_.n_phi + m;
+                        w[p] = std::max(lum, 0.0) * cos_mid * solid; // f cos dOmega
+                        total += w[p];
+                    }
+            albedo_[std::size_t(t) * NI + ti] = total;
+            double mean = total / NP;
+            double floor = mean > 0 ? kPatchFloor * mean : 1.0;
+            double *cdf = &cdf_[(std::size_t(t) * NI + ti) * (NP + 1)];
+            double *prob = &prob_[(std::size_t(t) * NI + ti) * NP];
+            double acc = 0;
+            for (std::size_t p = 0; p < NP; ++p) acc += w[p] + floor;
+            cdf[0] = 0;
+            for (std::size_t p = 0; p < NP; ++p) {
+                prob[p] = (w[p] + floor) / acc;
+                cdf[p + 1] = cdf[p] + prob[p];
+            }
+            cdf[NP] = 1.0;
+        }
+
+    // Glossy albedo of the direct model per theta_i node (mixture weights only).
+    direct_albedo_.assign(NI, 0.0);
+    if (direct_ && (direct_->lobes() & (kGlossyReflection | kDiffuseReflection))) {
+        std::vector<double> wd(direct_->channels());
+        Query q;
+        q.film_thickness_nm = default_thickness_;
+        PCG32 rng(0x5eed);
+        for (int ti = 0; ti < NI; ++ti) {
+            double a = grid_.theta_i(ti), sum = 0;
+            Vec3 wi{std::sin(a), 0.0, std::cos(a)};
+            for (int n = 0; n < kDirectAlbedoSamples; ++n) {
+                BSDFSample s = direct_->sample(wi, rng.uniform(), rng.uniform(), rng.uniform(),
+                                               kGlossyReflection | kDiffuseReflection, q, wd.data());
+                if (!s.lobe) continue;
+                for (int c = 0; c < C; ++c) {
+                    double proj = 0;
+                    for (int d = 0; d < direct_->channels(); ++d) proj += P_[c * direct_->channels() + d] * wd[d];
+                    sum += luminance_[c] * proj;
+                }
+            }
+            direct_albedo_[ti] = std::max(sum / kDirectAlbedoSamples, 0.0);
+        }
+    }
+}
+
+uint32_t TabulatedBSDF::lobes() const {
+    uint32_t l = kGlossyReflection | (grid_.n_lobes > 1 ? kGlossyTransmission : 0u);
+    if (direct_) l |= direct_->lobes() & (kReflection);
+    return l;
+}
+
+void TabulatedBSDF::patch_bounds(int k, int m, double &cos_hi, double &cos_lo, double &phi_lo,
+                                 double &phi_hi) const {
+    double step = 0.5 * kPi / grid_.n_theta_o;
+    cos_hi = std::cos(k * step);
+    cos_lo = std::cos((k + 1) * step);
+    double dp = grid_.n_phi > 1 ? kPi / (grid_.n_phi - 1) : kPi;
+    phi_lo = std::max(0.0, grid_.phi(m) - 0.5 * dp);
+    phi_hi = std::min(kPi, grid_.phi(m) + 0.5 * dp);
+}
+
+TabulatedBSDF::Weights TabulatedBSDF::angle_weights(double theta, int n) const {
+    double x = theta / (0.5 * kPi / n) - 0.5;
+    x = std::clamp(x, 0.0, double(n - 1));
+    int i0 = std::min(static_cast<int>(x), n - 1);
+    int i1 = std::min(i0 + 1, n - 1);
+    return {i0, i1, x - i0};
+}
+
+TabulatedBSDF::Weights TabulatedBSDF::phi_weights(double phi) const {
+    if (grid_.n_phi < 2) return {0, 0, 0.0};
+    double x = std::clamp(phi / (kPi / (grid_.n_phi - 1)), 0.0, double(grid_.n_phi - 1));
+    int i0 = std::min(static_cast<int>(x), grid_.n_phi - 1);
+    return {i0, std::min(i0 + 1, grid_.n_phi - 1), x - i0};
+}
+
+TabulatedBSDF::Weights TabulatedBSDF::thickness_weights(const Query &q) const {
+    const auto &T = grid_.thickness;
+    if (T.size() < 2) return {0, 0, 0.0};
+    double t = q.film_thickness_nm >= 0 ? q.film_thickness_nm : default_thickness_;
+    if (!(t > T.front())) return {0, 0, 0.0};
+    if (!(t < T.back())) return {int(T.size()) - 1, int(T.size()) - 1, 0.0};
+    int i1 = static_cast<int>(std::upper_bound(T.begin(), T.end(), t) - T.begin());
+    int i0 = i1 - 1;
+    return {i0, i1, (t - T[i0]) / (T[i1] - T[i0])};
+}
+
+void TabulatedBSDF::table_eval(const Vec3 &wi, const Vec3 &wo, const Query &q, double *out) const {
+    const int C = channels();
+    for (int c = 0; c < C; ++c) out[c] = 0.0;
+    int lobe = wo.z > 0 ? 0 : 1;
+    if (lobe >= grid_.n_lobes) return;
+    Weights wt = thickness_weights(q);
+    Weights wa = angle_weights(std::acos(std::clamp(wi.z, -1.0, 1.0)), grid_.n_theta_i);
+    Weights wb = angle_weights(std::acos(std::clamp(std::abs(wo.z), 0.0, 1.0)), grid_.n_theta_o);
+    Weights wp = phi_weights(wrap_phi(wi, wo));
+    for (int a = 0; a < 2; ++a)
+        for (int b = 0; b < 2; ++b)
+            for (int d = 0; d < 2; ++d)
+                for (int e = 0; e < 2; ++e) {
+                    double w = (a ? wt.w1 : 1 - wt.w1) * (b ? wa.w1 : 1 - wa.w1) *
+                               (d ? wb.w1 : 1 - wb.w1) * (e ? wp.w1 : 1 - wp.w1);
+                    if (w == 0) continue;
+                    std::size_t cell = grid_.cell_index(lobe, a ? wt.i1 : wt.i0, b ? wa.i1 : wa.i0,
+                                                        d ? wb.i1 : wb.i0, e ? wp.i1 : wp.i0);
+                    const float *v = &values_[cell * C];
+                    for (int c = 0; c < C; ++c) out[c] += w * v[c];
+                }
+    double cos_o = std::abs(wo.z);
+    for (int c = 0; c < C; ++c) out[c] *= cos_o;
+}
+
+void TabulatedBSDF::direct_eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                                double *out) const {
+    const int C = channels(), D = direct_->channels();
+    std::vector<double> v(D);
+    direct_->eval(wi, wo, lobes & kReflection, q, v.data());
+    for (int c = 0; c < C; ++c) {
+        double acc = 0;
+        for (int d = 0; d < D; ++d) acc += P_[c * D + d] * v[d];
+        out[c] += acc;
+    }
+}
+
+void TabulatedBSDF::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                         double *out) const {
+    zero(out);
+    if (!usable_direction(wi) || !usable_direction(wo) || wi.z <= 0) return;
+    uint32_t lobe = wo.z > 0 ? kGlossyReflection : kGlossyTransmission;
+    if (lobes & lobe) table_eval(wi, wo, q, out);
+    if (direct_ && wo.z > 0 && (lobes & kReflection)) direct_eval(wi, wo, lobes, q, out);
+}
+
+double TabulatedBSDF::table_albedo(const Vec3 &wi, const Query &q) const {
+    Weights wt = thickness_weights(q);
+    Weights wa = angle_weights(std::acos(std::clamp(wi.z, -1.0, 1.0)), grid_.n_theta_i);
+    const int NI = grid_.n_theta_i;
+    auto A = [&](int t, int ti) { return albedo_[std::size_t(t) * NI + ti]; };
+    return (1 - wt.w1) * ((1 - wa.w1) * A(wt.i0, wa.i0) + wa.w1 * A(wt.i0, wa.i1)) +
+           wt.w1 * ((1 - wa.w1) * A(wt.i1, wa.i0) + wa.w1 * A(wt.i1, wa.i1));
+}
+
+double TabulatedBSDF::table_pdf(const Vec3 &wi, const Vec3 &wo, const Query &q) const {
+    int lobe = wo.z > 0 ? 0 : 1;
+    if (lobe >= grid_.n_lobes) return 0.0;
+    double theta_o = std::acos(std::clamp(std::abs(wo.z), 0.0, 1.0));
+    int k = std::min(static_cast<int>(theta_o / (0.5 * kPi / grid_.n_theta_o)), grid_.n_theta_o - 1);
+    double phi = wrap_phi(wi, wo);
+    double dp = grid_.n_phi > 1 ? kPi / (grid_.n_phi - 1) : kPi;
+    int m = grid_.n_phi > 1 ? std::min(static_cast<int>(phi / dp + 0.5), grid_.n_phi - 1) : 0;
+    double ch, cl, pl, ph;
+    patch_bounds(k, m, ch, cl, pl, ph);
+    double area = (ch - cl) * 2.0 * (ph - pl);
+    if (!(area > 0)) return 0.0;
+    std::size_t p = (std::size_t(lobe) * grid_.n_theta_o + k) * grid_.n_phi + m;
+    Weights wt = thickness_weights(q);
+    Weights wa = angle_weights(std::acos(std::clamp(wi.z, -1.0, 1.0)), grid_.n_theta_i);
+    const std::size_t NP = patches();
+    const int NI = grid_.n_theta_i;
+    auto P = [&](int t, int ti) { return prob_[(std::size_t(t) * NI + ti) * NP + p]; };
+    double prob = (1 - wt.w1) * ((1 - wa.w1) * P(wt.i0, wa.i0) + wa.w1 * P(wt.i0, wa.i1)) +
+                  wt.w1 * ((1 - wa.w1) * P(wt.i1, wa.i0) + wa.w1 * P(wt.i1, wa.i1));
+    return prob / area;
+}
+
+void TabulatedBSDF::mixture(const Vec3 &wi, const Query &q, double &p_delta, double &p_direct,
+                            double *delta_weight) const {
+    const int C = channels();
+    double a_delta = 0, a_direct = 0;
+    if (delta_weight) for (int c = 0; c < C; ++c) delta_weight[c] = 0.0;
+    if (direct_) {
+        if (direct_->lobes() & kDeltaReflection) {
+            std::vector<double> r(direct_->channels());
+            BSDFSample s = direct_->sample(wi, 0.5, 0.5, 0.5, kDeltaReflection, q, r.data());
+            if (s.lobe) {
+                const int D = direct_->channels();
+                for (int c = 0; c < C; ++c) {
+                    double acc = 0;
+                    for (int d = 0; d < D; ++d) acc += P_[c * D + d] * r[d];
+                    if (delta_weight) delta_weight[c] = acc;
+                    a_delta += luminance_[c] * acc;
+                }
+            }
+        }
+        Weights wa = angle_weights(std::acos(std::clamp(wi.z, -1.0, 1.0)), grid_.n_theta_i);
+        a_direct = (1 - wa.w1) * direct_albedo_[wa.i0] + wa.w1 * direct_albedo_[wa.i1];
+    }
+    double a_table = table_albedo(wi, q);
+    double total = std::max(a_delta, 0.0) + a_direct + a_table;
+    if (!(total > 0)) { p_delta = 0; p_direct = 0; return; }
+    p_delta = std::max(a_delta, 0.0) / total;
+    p_direct = a_direct / total;
+}
+
+double TabulatedBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const {
+    if (!usable_direction(wi) || !usable_direction(wo) || wi.z <= 0) return 0.0;
+    double p_delta, p_direct;
+    mixture(wi, q, p_delta, p_direct, nullptr);
+    double p = (1.0 - p_delta - p_direct) * table_pdf(wi, wo, q);
+    if (direct_ && p_direct > 0 && wo.z > 0)
+        p += p_direct * direct_->pdf(wi, wo, kGlossyReflection | kDiffuseReflection, q);
+    (void)lobes;
+    return p;
+}
+
+BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
+                                 const Query &q, double *weight) const {
+    zero(weight);
+    if (!usable_direction(wi) || wi.z <= 0) return {};
+    const int C = channels();
+    std::vector<double> delta_w(C);
+    double p_delta, p_direct;
+    mixture(wi, q, p_delta, p_direct, delta_w.data());
+    PCG32 rng(hash_directions(0x7ab1e, wi, Vec3{u1, u2x, u2y}));
+    BSDFSample s;
+    if (u1 < p_delta) { // the exact delta reflection of the top interface
+        if (!(lobes & kDeltaReflection)) return {};
+        s.wo = reflect(wi);
+        s.pdf = p_delta;
+        s.lobe = kDeltaReflection;
+        for (int c = 0; c < C; ++c) weight[c] = delta_w[c] / p_delta;
+        return s;
+    }
+    if (u1 < p_delta + p_direct) {
+        std::vector<double> wd(direct_->channels());
+        BSDFSample d = direct_->sample(wi, rng.uniform(), u2x, u2y, kGlossyReflection | kDiffuseReflection, q, wd.data());
+        if (!d.lobe) return {};
+        s.wo = d.wo;
+    } else {
+        // Table: theta_i and thickness nodes by their interpolation weights, then a patch.
+        Weights wt = thickness_weights(q);
+        Weights wa = angle_weights(std::acos(std::clamp(wi.z, -1.0, 1.0)), grid_.n_theta_i);
+        int t = rng.uniform() < wt.w1 ? wt.i1 : wt.i0;
+        int ti = rng.uniform() < wa.w1 ? wa.i1 : wa.i0;
+        const std::size_t NP = patches();
+        const double *cdf = &cdf_[(std::size_t(t) * grid_.n_theta_i + ti) * (NP + 1)];
+        double u = rng.uniform();
+        std::size_t p = std::min<std::size_t>(std::upper_bound(cdf, cdf + NP + 1, u) - cdf - 1, NP - 1);
+        int m = static_cast<int>(p % grid_.n_phi);
+        int k = static_cast<int>((p / grid_.n_phi) % grid_.n_theta_o);
+        int lobe = static_cast<int>(p / (std::size_t(grid_.n_phi) * grid_.n_theta_o));
+        double ch, cl, pl, ph;
+        patch_bounds(k, m, ch, cl, pl, ph);
+        double cz = cl + u2x * (ch - cl);
+        double phi = pl + u2y * (ph - pl);
+        if (rng.uniform() < 0.5) phi = -phi;
+        double sz = std::sqrt(std::max(0.0, 1.0 - cz * cz));
+        double base = std::atan2(wi.y, wi.x) + phi;
+        s.wo = {sz * std::cos(base), sz * std::sin(base), lobe == 0 ? cz : -cz};
+    }
+    s.pdf = pdf(wi, s.wo, lobes, q);
+    if (!(s.pdf > 0)) return {};
+    eval(wi, s.wo, lobes & ~kDelta, q, weight);
+    for (int c = 0; c < C; ++c) weight[c] /= s.pdf;
+    s.lobe = s.wo.z > 0 ? kGlossyReflection : kGlossyTransmission;
+    return s;
+}
+
+} // namespace bsdflab
