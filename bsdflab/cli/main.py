@@ -5,9 +5,9 @@ import argparse
 import sys
 
 from .. import __version__
-from . import info, lobe, table, thinfilm
+from . import info, lobe, table, tabulate, thinfilm
 
-COMMANDS = (lobe, thinfilm, table, info)
+COMMANDS = (lobe, thinfilm, tabulate, table, info)
 
 
 def build_parser() -> argparse.ArgumentParser:

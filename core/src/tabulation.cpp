@@ -8,6 +8,7 @@
 
 namespace bsdflab {
 
+
 TabulationJob::TabulationJob(std::shared_ptr<const BSDF> model, TableGrid grid, std::vector<double> P,
                              int rows, TabulationSettings settings)
     : model_(std::move(model)), grid_(std::move(grid)), P_(std::move(P)), rows_(rows),
@@ -54,7 +55,7 @@ void TabulationJob::run() {
     std::vector<double> &lum = lum_value, &lum_err = lum_error;
 
     auto cell_seed = [&](std::size_t cell, uint64_t pass) {
-        return mix64(settings_.seed ^ mix64(cell * 2 + pass));
+        return mix64(settings_.seed ^ mix64(cell * 8 + pass));
     };
     // Pass 1: every cell at the base effort.
     parallel_for_each(cells, [&](std::size_t cell) {
@@ -78,7 +79,10 @@ void TabulationJob::run() {
     std::size_t per_lobe = cells / grid_.n_lobes;
     for (std::size_t cell = 0; cell < cells; ++cell) scale[cell / per_lobe] += std::abs(lum[cell]) / per_lobe;
 
-    // Pass 2: refine each cell to the target, pooling the new walks with the first ones.
+    // Refinement passes: each cell still above its target gets the walks its estimated
+    // variance asks for, pooled with the earlier ones. The variance estimate is itself
+    // noisy, so a couple of passes bring stragglers in.
+    for (int pass = 1; pass <= kRefinePasses && !cancelled_; ++pass)
     parallel_for_each(cells, [&](std::size_t cell) {
         std::vector<double> m(rows_), er(rows_);
         if (!cancelled_) {
@@ -90,7 +94,7 @@ void TabulationJob::run() {
                 int n_total = static_cast<int>(std::min<double>(settings_.max_samples, std::ceil(want * 1.1)));
                 int n2 = n_total - n1;
                 if (n2 > 0) {
-                    estimate(cell, n2, cell_seed(cell, 1), m.data(), er.data());
+                    estimate(cell, n2, cell_seed(cell, pass), m.data(), er.data());
                     // Chan et al.: combine two (mean, M2) summaries; M2 = se^2 n (n - 1).
                     for (int c = 0; c <= C; ++c) { // c == C: the luminance row
                         double &mean1 = c < C ? value[cell * C + c] : lum[cell];

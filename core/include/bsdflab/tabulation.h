@@ -32,7 +32,8 @@ public:
     void cancel() { cancelled_ = true; }
     bool cancelled() const { return cancelled_; }
     std::size_t done() const { return done_; }
-    std::size_t total() const { return 2 * grid_.cells(); }
+    static constexpr int kRefinePasses = 3;
+    std::size_t total() const { return (1 + kRefinePasses) * grid_.cells(); }
 
     const TableGrid &grid() const { return grid_; }
     int out_channels() const { return rows_ - 1; }

@@ -1,0 +1,70 @@
+"""`bsdflab tabulate`: measure a material into a table file (or fetch it from the cache)."""
+from __future__ import annotations
+
+import argparse
+
+from .materials import add_material_options, material_from_args
+
+
+def register(sub) -> None:
+    p = sub.add_parser("tabulate", help="tabulate a BSDF into an OpenEXR table file",
+                       description="Measure a material on a (theta_i, theta_o, phi[, film thickness]) "
+                                   "grid, adaptively to a target relative error, and write a "
+                                   "self-describing OpenEXR table (see docs/table_format.md).")
+    add_material_options(p)
+    p.add_argument("--out", default=None, help="output .exr path (default: only the cache)")
+    p.add_argument("--rel-error", type=float, default=0.01, help="target relative standard error per cell (default 0.01)")
+    p.add_argument("--theta-i", type=int, default=12, dest="n_theta_i", help="incidence nodes (default 12)")
+    p.add_argument("--theta-o", type=int, default=24, dest="n_theta_o", help="outgoing nodes (default 24)")
+    p.add_argument("--phi", type=int, default=13, dest="n_phi", help="azimuth nodes over [0, pi] (default 13)")
+    p.add_argument("--thickness", type=float, nargs="*", default=(), metavar="NM",
+                   help="film-thickness nodes in nm (default: the model's own thickness only)")
+    p.add_argument("--wavelengths", type=float, nargs="*", default=None, metavar="NM",
+                   help="store these wavelengths instead of linear sRGB")
+    p.add_argument("--min-samples", type=int, default=64, help="walks per cell in the first pass (default 64)")
+    p.add_argument("--max-samples", type=int, default=65536, help="cap on walks per cell (default 65536)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--no-cache", action="store_true", help="always tabulate; do not read or fill the cache")
+    p.add_argument("--cache-dir", default=None, help="cache folder (default: $BSDFLAB_CACHE_DIR or the user cache)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    import shutil
+
+    from ..tables import TableGrid, cached_table, tabulate, write_table
+
+    model = material_from_args(args)
+    grid = TableGrid(args.n_theta_i, args.n_theta_o, args.n_phi, tuple(args.thickness))
+    wavelengths = args.wavelengths if args.wavelengths else None
+    channels = "rgb" if wavelengths is None else [float(w) for w in wavelengths]
+
+    def make():
+        return tabulate(model, grid, rel_error=args.rel_error, wavelengths=wavelengths,
+                        min_samples=args.min_samples, max_samples=args.max_samples,
+                        seed=args.seed, progress=not args.quiet)
+
+    if args.no_cache:
+        if args.out is None:
+            raise ValueError("--no-cache needs --out")
+        table, path, hit = make(), None, False
+    else:
+        table, path, hit = cached_table(model.to_dict(), grid, args.rel_error, channels, make,
+                                        directory=args.cache_dir)
+    if args.out is not None:
+        if path is not None and hit:
+            from ..files import write_atomically
+
+            write_atomically(args.out, lambda tmp: shutil.copyfile(path, tmp), suffix=".tmp.exr")
+        else:
+            write_table(args.out, table)
+    m = table.meta
+    print(f"table         {args.out or path}")
+    print(f"from cache    {'yes' if hit else 'no'}" + (f" ({path})" if path else ""))
+    print(f"grid          {grid.n_theta_i} x {grid.n_theta_o} x {grid.n_phi}, lobes {', '.join(table.lobes)}, "
+          f"thickness nodes {list(grid.thickness_nm) or 'model default'}")
+    print(f"rel. error    target {table.rel_error_target:g}; achieved RMS {m.get('rel_error_rms', 0):.4g}, "
+          f"95 % {m.get('rel_error_p95', 0):.4g}, max {m.get('rel_error_max', 0):.4g}")
+    print(f"time          {m.get('seconds', 0):.1f} s on {m.get('threads', '?')} threads")
+    return 0
