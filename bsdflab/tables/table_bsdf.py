@@ -86,9 +86,11 @@ class TableBSDF(BSDF):
 
 
 def _default_thickness(model: dict) -> float:
-    """Total film thickness of the top interface (nm), or -1 without a film."""
+    """Total film thickness (nm) of the model's coating -- the top interface's for a layered
+    model, the model's own for a coated interface -- or -1 without a film."""
     try:
-        film = model["interfaces"][0].get("film") or []
+        coated = model["interfaces"][0] if "interfaces" in model else model
+        film = coated.get("film") or []
         return float(sum(layer["thickness_nm"] for layer in film)) if film else -1.0
     except (KeyError, IndexError, TypeError, AttributeError):
         return -1.0

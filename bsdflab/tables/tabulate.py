@@ -97,14 +97,22 @@ def achieved_error(lum: np.ndarray, lum_err: np.ndarray) -> dict[str, float]:
 
 def _run_with_progress(job, show: bool) -> None:
     """Run the job on a worker thread (the core releases the GIL) while the main thread
-    draws the progress bar; Ctrl-C cancels the job and re-raises."""
+    draws the progress bar; Ctrl-C cancels the job, waits for it to stop and re-raises.
+
+    The main thread waits on an Event, not on Thread.join: on CPython < 3.13 a Ctrl-C
+    inside join() can mark the still-running thread as finished (python/cpython#90882),
+    so a later join() returns at once and the interpreter exits under the running job,
+    which aborts the process (SIGABRT from the GIL hand-back at shutdown)."""
     error: list[BaseException] = []
+    finished = threading.Event()
 
     def work():
         try:
             job.run()
         except BaseException as e:  # surfaced on the main thread below
             error.append(e)
+        finally:
+            finished.set()
 
     worker = threading.Thread(target=work, name="bsdflab-tabulate", daemon=True)
     worker.start()
@@ -114,14 +122,18 @@ def _run_with_progress(job, show: bool) -> None:
 
         bar = tqdm(total=job.total, unit="cell", desc="tabulating", leave=False)
     try:
-        while worker.is_alive():
-            worker.join(0.2)
+        while not finished.wait(0.2):
             if bar is not None:
                 bar.n = job.done
                 bar.refresh()
     except KeyboardInterrupt:
         job.cancel()
-        worker.join()
+        while True:  # the job stops after its current cells; never leave it running
+            try:
+                finished.wait()
+                break
+            except KeyboardInterrupt:
+                continue
         raise
     finally:
         if bar is not None:

@@ -126,6 +126,15 @@ TabulatedBSDF::Weights TabulatedBSDF::phi_weights(double phi) const {
     return {i0, std::min(i0 + 1, grid_.n_phi - 1), x - i0};
 }
 
+// The exact part must describe the same film as the table part: without a thickness axis
+// the table holds the model's own film (-1) and with one node that node's, whatever the
+// query asks for; with several nodes the query's thickness (or the model's) is used.
+Query TabulatedBSDF::direct_query(const Query &q) const {
+    Query d = q;
+    if (grid_.thickness.size() == 1) d.film_thickness_nm = grid_.thickness[0];
+    return d;
+}
+
 TabulatedBSDF::Weights TabulatedBSDF::thickness_weights(const Query &q) const {
     const auto &T = grid_.thickness;
     if (T.size() < 2) return {0, 0, 0.0};
@@ -180,7 +189,7 @@ void TabulatedBSDF::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Q
     if (!usable_direction(wi) || !usable_direction(wo) || wi.z <= 0) return;
     uint32_t lobe = wo.z > 0 ? kGlossyReflection : kGlossyTransmission;
     if (lobes & lobe) table_eval(wi, wo, q, out);
-    if (direct_ && wo.z > 0 && (lobes & kReflection)) direct_eval(wi, wo, lobes, q, out);
+    if (direct_ && wo.z > 0 && (lobes & kReflection)) direct_eval(wi, wo, lobes, direct_query(q), out);
 }
 
 double TabulatedBSDF::table_albedo(const Vec3 &wi, const Query &q) const {
@@ -223,7 +232,7 @@ void TabulatedBSDF::mixture(const Vec3 &wi, const Query &q, double &p_delta, dou
     if (direct_) {
         if (direct_->lobes() & kDeltaReflection) {
             std::vector<double> r(direct_->channels());
-            BSDFSample s = direct_->sample(wi, 0.5, 0.5, 0.5, kDeltaReflection, q, r.data());
+            BSDFSample s = direct_->sample(wi, 0.5, 0.5, 0.5, kDeltaReflection, direct_query(q), r.data());
             if (s.lobe) {
                 const int D = direct_->channels();
                 for (int c = 0; c < C; ++c) {
@@ -250,7 +259,7 @@ double TabulatedBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const 
     mixture(wi, q, p_delta, p_direct, nullptr);
     double p = (1.0 - p_delta - p_direct) * table_pdf(wi, wo, q);
     if (direct_ && p_direct > 0 && wo.z > 0)
-        p += p_direct * direct_->pdf(wi, wo, kGlossyReflection | kDiffuseReflection, q);
+        p += p_direct * direct_->pdf(wi, wo, kGlossyReflection | kDiffuseReflection, direct_query(q));
     (void)lobes;
     return p;
 }
@@ -275,7 +284,8 @@ BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u
     }
     if (u1 < p_delta + p_direct) {
         std::vector<double> wd(direct_->channels());
-        BSDFSample d = direct_->sample(wi, rng.uniform(), u2x, u2y, kGlossyReflection | kDiffuseReflection, q, wd.data());
+        BSDFSample d = direct_->sample(wi, rng.uniform(), u2x, u2y, kGlossyReflection | kDiffuseReflection,
+                                       direct_query(q), wd.data());
         if (!d.lobe) return {};
         s.wo = d.wo;
     } else {

@@ -35,6 +35,7 @@ public:
 private:
     struct Weights { int i0, i1; double w1; }; // linear interpolation between two nodes
     Weights thickness_weights(const Query &q) const;
+    Query direct_query(const Query &q) const; // the film thickness the exact part sees
     Weights angle_weights(double theta, int n) const;
     Weights phi_weights(double phi) const;
     void table_eval(const Vec3 &wi, const Vec3 &wo, const Query &q, double *out) const;
