@@ -21,7 +21,7 @@ def register(sub) -> None:
                    help="film-thickness nodes in nm (default: the model's own thickness only)")
     p.add_argument("--wavelengths", type=float, nargs="*", default=None, metavar="NM",
                    help="store these wavelengths instead of linear sRGB")
-    p.add_argument("--min-samples", type=int, default=64, help="walks per cell in the first pass (default 64)")
+    p.add_argument("--min-samples", type=int, default=512, help="walks per cell in the first pass (default 512)")
     p.add_argument("--max-samples", type=int, default=65536, help="cap on walks per cell (default 65536)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--no-cache", action="store_true", help="always tabulate; do not read or fill the cache")
