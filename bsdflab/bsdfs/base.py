@@ -9,6 +9,7 @@ through colour-matching functions, never three-wavelength shortcuts.
 """
 from __future__ import annotations
 
+import abc
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -32,7 +33,7 @@ class BSDFSample:
     eta: np.ndarray     # (N,) relative index crossed, n_t / n_i (1 for reflection)
 
 
-class BSDF:
+class BSDF(abc.ABC):
     """Base class. Subclasses set ``type_name`` and implement ``_build`` and ``_params``."""
 
     type_name: ClassVar[str] = ""
@@ -46,13 +47,13 @@ class BSDF:
         self._cores: dict[tuple[float, ...], Any] = {}
 
     # -- to be provided by subclasses -------------------------------------------------
+    @abc.abstractmethod
     def _build(self, wavelengths: np.ndarray):
         """The C++ object for these wavelengths (nm)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def _params(self) -> dict[str, Any]:
         """Constructor arguments as plain JSON-compatible values."""
-        raise NotImplementedError
 
     # -- the interface ----------------------------------------------------------------
     @property
