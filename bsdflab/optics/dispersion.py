@@ -19,6 +19,8 @@ Tabulated(wavelengths_nm, n, k)
 """
 from __future__ import annotations
 
+import abc
+
 import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -33,16 +35,18 @@ def wavelengths_nm(value: Any, name: str = "wavelength_nm") -> np.ndarray:
     return real_array(name, value, 0.0, lo_open=True)
 
 
-class Dispersion:
+class Dispersion(abc.ABC):
     """Base of the dispersion models; see the module docstring."""
 
     model: ClassVar[str]
 
-    def index(self, wavelength_nm) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def index(self, wavelength_nm) -> np.ndarray:
+        """Complex index n + i k at the given wavelengths (nm)."""
 
-    def to_dict(self) -> dict[str, Any]:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def to_dict(self) -> dict[str, Any]:
+        """The model as a plain dict (inverse of dispersion_from_dict)."""
 
 
 @dataclass(frozen=True)
