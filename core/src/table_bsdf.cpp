@@ -5,6 +5,7 @@
 #include "bsdflab/frame.h"
 #include "bsdflab/rng.h"
 #include "bsdflab/sampling.h"
+#include "bsdflab/scratch.h"
 
 namespace bsdflab {
 
@@ -174,8 +175,8 @@ void TabulatedBSDF::table_eval(const Vec3 &wi, const Vec3 &wo, const Query &q, d
 void TabulatedBSDF::direct_eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
                                 double *out) const {
     const int C = channels(), D = direct_->channels();
-    std::vector<double> v(D);
-    direct_->eval(wi, wo, lobes & kReflection, q, v.data());
+    double *v = scratch(3, D); // slots 0-1 belong to the interfaces' own evaluation
+    direct_->eval(wi, wo, lobes & kReflection, q, v);
     for (int c = 0; c < C; ++c) {
         double acc = 0;
         for (int d = 0; d < D; ++d) acc += P_[c * D + d] * v[d];
@@ -231,8 +232,8 @@ void TabulatedBSDF::mixture(const Vec3 &wi, const Query &q, double &p_delta, dou
     if (delta_weight) for (int c = 0; c < C; ++c) delta_weight[c] = 0.0;
     if (direct_) {
         if (direct_->lobes() & kDeltaReflection) {
-            std::vector<double> r(direct_->channels());
-            BSDFSample s = direct_->sample(wi, 0.5, 0.5, 0.5, kDeltaReflection, direct_query(q), r.data());
+            double *r = scratch(2, direct_->channels());
+            BSDFSample s = direct_->sample(wi, 0.5, 0.5, 0.5, kDeltaReflection, direct_query(q), r);
             if (s.lobe) {
                 const int D = direct_->channels();
                 for (int c = 0; c < C; ++c) {
@@ -283,9 +284,9 @@ BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u
         return s;
     }
     if (u1 < p_delta + p_direct) {
-        std::vector<double> wd(direct_->channels());
+        double *wd = scratch(3, direct_->channels());
         BSDFSample d = direct_->sample(wi, rng.uniform(), u2x, u2y, kGlossyReflection | kDiffuseReflection,
-                                       direct_query(q), wd.data());
+                                       direct_query(q), wd);
         if (!d.lobe) return {};
         s.wo = d.wo;
     } else {
