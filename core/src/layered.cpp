@@ -32,7 +32,8 @@ bool any_positive(const double *v, int n) {
 // slab j, the light direction L_j just beyond slab j's exit-side boundary, the last-step
 // factor a_j = f_adjoint / pdf and the factor B_j of everything beyond that boundary.
 struct LayeredBSDF::Chain {
-    bool ok[kMaxSlabs] = {};
+    bool reached[kMaxSlabs] = {}; // L_j and B_j known (strategy B possible)
+    bool ok[kMaxSlabs] = {};      // u_j sampled too (strategy A possible)
     bool delta[kMaxSlabs] = {};
     double pdf[kMaxSlabs] = {};
     Vec3 u[kMaxSlabs], L[kMaxSlabs];
@@ -56,12 +57,9 @@ LayeredBSDF::LayeredBSDF(std::vector<double> wavelengths,
     for (const auto &b : boundaries_)
         if (!b || b->channels() != channels())
             throw std::invalid_argument("every boundary must have one channel per wavelength");
-    for (Slab &s : slabs_) {
+    for (const Slab &s : slabs_) {
         if (static_cast<int>(s.sigma_a.size()) != channels())
             throw std::invalid_argument("every slab needs sigma_a per wavelength");
-        double mean = 0;
-        for (double a : s.sigma_a) mean += a + s.sigma_s;
-        s.sigma_bar = channels() > 0 ? mean / channels() : 0.0;
     }
     if (options_.samples < 1 || options_.max_depth < 1)
         throw std::invalid_argument("samples and max_depth must be >= 1");
@@ -80,15 +78,28 @@ double LayeredBSDF::fly(const Slab &S, double room, double cz, PCG32 &rng, doubl
         for (int c = 0; c < C; ++c) beta[c] *= std::exp(-S.sigma_a[c] * length);
         return -1.0;
     }
-    const double sb = S.sigma_bar;
-    double t = -std::log(1.0 - rng.uniform()) / sb;
-    if (t < length) { // collision, always a scattering event, weighted by its true density
-        for (int c = 0; c < C; ++c)
-            beta[c] *= S.sigma_s / sb * std::exp(-(S.sigma_a[c] + S.sigma_s - sb) * t);
-        return t;
+    // Spectral MIS (one-sample, balance heuristic over channels): draw the flight with a
+    // randomly chosen channel's extinction; weight each channel by its true density over
+    // the channel-average density. Weights stay below C whatever the spectral contrast.
+    double *tr = scratch(2, C);
+    const int k = std::min(C - 1, static_cast<int>(rng.uniform() * C));
+    const double sk = S.sigma_a[k] + S.sigma_s;
+    const double t = -std::log(1.0 - rng.uniform()) / sk;
+    const bool collide = t < length;
+    const double d = collide ? t : length;
+    double avg = 0;
+    for (int c = 0; c < C; ++c) {
+        const double st = S.sigma_a[c] + S.sigma_s;
+        tr[c] = std::exp(-st * d);
+        avg += collide ? st * tr[c] : tr[c];
     }
-    for (int c = 0; c < C; ++c) beta[c] *= std::exp(-(S.sigma_a[c] + S.sigma_s - sb) * length);
-    return -1.0;
+    avg /= C;
+    if (!(avg > 0)) { // every channel extinct: the walk carries nothing
+        for (int c = 0; c < C; ++c) beta[c] = 0.0;
+        return -1.0;
+    }
+    for (int c = 0; c < C; ++c) beta[c] *= (collide ? S.sigma_s : 1.0) * tr[c] / avg;
+    return collide ? t : -1.0;
 }
 
 void LayeredBSDF::transmittance(int j, double distance, double *tr) const {
@@ -105,6 +116,9 @@ bool LayeredBSDF::build_chain(const Vec3 &wo, int exit, const Query &q, PCG32 &r
     for (int step = 0; step < K; ++step) {
         int j = exit == 0 ? step : K - 1 - step;
         int xb = exit == 0 ? j : j + 1;
+        ch.reached[j] = true;
+        ch.L[j] = L;
+        for (int c = 0; c < C; ++c) ch.B[j * C + c] = beyond[c];
         double u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
         BSDFSample s = boundaries_[xb]->sample(L, u1, u2, u3, kTransmission, q, w.data());
         if (!s.lobe || !any_positive(w.data(), C)) break;
@@ -114,12 +128,10 @@ bool LayeredBSDF::build_chain(const Vec3 &wo, int exit, const Query &q, PCG32 &r
         ch.delta[j] = s.lobe & kDelta;
         ch.pdf[j] = s.pdf;
         ch.u[j] = s.wo;
-        ch.L[j] = L;
         // Radiance-mode weight -> adjoint value f(u, L) / pdf by generalised reciprocity.
         transmittance(j, slabs_[j].thickness / cu, tr.data());
         for (int c = 0; c < C; ++c) {
             ch.a[j * C + c] = w[c] * s.eta * s.eta / cu;
-            ch.B[j * C + c] = beyond[c];
             beyond[c] *= tr[c] * ch.a[j * C + c] * cu;
         }
         L = -s.wo;
@@ -138,7 +150,7 @@ void LayeredBSDF::one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, 
     wk.tr.resize(C);
     wk.w.resize(C);
     double *beta = wk.beta.data(), *tmp = wk.tmp.data(), *tr = wk.tr.data(), *wgt = wk.w.data();
-    for (int j = 0; j < kMaxSlabs; ++j) ch.ok[j] = false;
+    for (int j = 0; j < kMaxSlabs; ++j) ch.ok[j] = ch.reached[j] = false;
     build_chain(wo, exit, q, rng, ch);
     const bool nee = options_.nee;
 
@@ -159,7 +171,7 @@ void LayeredBSDF::one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, 
     };
     // Strategy B: the walk has just sampled w toward slab j's rough exit-side boundary.
     auto exit_through = [&](int j, const Vec3 &w, double depth, double p_sampled, bool sampled_delta) {
-        if (!ch.ok[j] || !rough_exit(j)) return;
+        if (!ch.reached[j] || !rough_exit(j)) return;
         const BSDF &X = *boundaries_[xb(j)];
         const Vec3 &L = ch.L[j];
         X.eval(-w, L, kTransmission, q, tmp);
@@ -367,8 +379,16 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
     if (!(beta_entry > 0)) return {};
     int j = entry == 0 ? 0 : K - 1;
     Vec3 dir = s.wo;
-    double zd = 0.0; // depth below the top of slab j
+    double zd = entry == 0 ? 0.0 : slabs_[j].thickness; // depth below the top of slab j
     for (int depth = 0; depth < options_.max_depth; ++depth) {
+        if (depth >= kRouletteDepth) { // every event, scattering ones included
+            double m = *std::max_element(beta.begin(), beta.end()) / beta_entry;
+            if (!(m > 0)) return {};
+            if (m < 1) {
+                if (rng.uniform() >= m) return {};
+                for (double &v : beta) v /= m;
+            }
+        }
         const Slab &S = slabs_[j];
         const bool down = dir.z < 0;
         const double cz = std::abs(dir.z);
@@ -399,14 +419,6 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
             zd = down ? 0.0 : slabs_[j].thickness;
         } else {
             zd = down ? S.thickness : 0.0;
-        }
-        if (depth >= kRouletteDepth) {
-            double m = *std::max_element(beta.begin(), beta.end()) / beta_entry;
-            if (!(m > 0)) return {};
-            if (m < 1) {
-                if (rng.uniform() >= m) return {};
-                for (double &v : beta) v /= m;
-            }
         }
     }
     return {};

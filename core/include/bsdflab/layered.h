@@ -36,10 +36,6 @@ struct Slab {
     std::vector<double> sigma_a;  // 1/um, per channel
     double sigma_s = 0.0;         // 1/um, grey
     PhaseFunction phase;
-    // Free flights are sampled with the channel-mean extinction; each channel's true
-    // extinction enters as a weight (spectral tracking), so absorbing slabs scatter where
-    // light actually reaches rather than where sigma_s alone would put collisions.
-    double sigma_bar = 0.0;
 };
 
 struct LayeredOptions {
@@ -80,7 +76,9 @@ private:
     void one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, const Query &q,
                   PCG32 &rng, double *contrib) const;
     void transmittance(int slab, double distance, double *tr) const;
-    // Advances a flight of at most `room` depth in slab j along a direction of |z| = cz:
+    // Advances a flight of at most `room` depth in slab j along a direction of |z| = cz,
+    // sampled by spectral MIS over the channels' extinctions (so absorbing slabs scatter
+    // where light actually reaches, with weights bounded by the channel count):
     // returns the travelled distance along the ray if it ends in a scattering event
     // (throughput updated), or a negative number if it reaches the boundary.
     double fly(const Slab &S, double room, double cz, PCG32 &rng, double *beta) const;
