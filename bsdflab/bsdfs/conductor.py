@@ -5,8 +5,7 @@ import numpy as np
 
 from .. import _core
 from .base import BSDF
-from .interface_term import (ConductorParams, DEFAULT_EXT_IOR, ConductorInterior, ext_ior_param, film_to_list,
-                             make_term, parse_film)
+from .interface_term import DEFAULT_EXT_IOR, ConductorParams
 
 
 class Conductor(ConductorParams, BSDF):
@@ -40,17 +39,10 @@ class Conductor(ConductorParams, BSDF):
     def __init__(self, material: str | None = None, eta=None, k=None,
                  ext_ior: float = DEFAULT_EXT_IOR, two_sided: bool = False, film=None):
         super().__init__()
-        self.interior = ConductorInterior(material, eta, k)
-        self.ext_ior = ext_ior_param(ext_ior)
-        self.two_sided = bool(two_sided)
-        self.film = parse_film(film)
+        self._init_conductor(material, eta, k, ext_ior, two_sided, film)
 
     def _build(self, wavelengths: np.ndarray):
-        term = make_term(wavelengths, self.ext_ior, self.film, conductor=self.interior)
-        return _core.SmoothInterface(wavelengths, term, self.two_sided)
+        return _core.SmoothInterface(wavelengths, self._conductor_term(wavelengths), self.two_sided)
 
     def _params(self):
-        p = {**self.interior.params(), "ext_ior": self.ext_ior, "two_sided": self.two_sided}
-        if self.film:
-            p["film"] = film_to_list(self.film)
-        return p
+        return self._conductor_params()

@@ -73,9 +73,25 @@ class ConductorInterior:
 
 
 class ConductorParams:
-    """Read-only access to a conductor model's interior (``eta``, ``k``, ``material``)."""
+    """What smooth and rough conductors share: their parameters, their Fresnel term and
+    their dict form; plus read-only access to the interior (``eta``, ``k``, ``material``)."""
 
     interior: ConductorInterior
+
+    def _init_conductor(self, material, eta, k, ext_ior, two_sided, film) -> None:
+        self.interior = ConductorInterior(material, eta, k)
+        self.ext_ior = ext_ior_param(ext_ior)
+        self.two_sided = bool(two_sided)
+        self.film = parse_film(film)
+
+    def _conductor_term(self, wavelengths: np.ndarray):
+        return make_term(wavelengths, self.ext_ior, self.film, conductor=self.interior)
+
+    def _conductor_params(self) -> dict[str, Any]:
+        p = {**self.interior.params(), "ext_ior": self.ext_ior, "two_sided": self.two_sided}
+        if self.film:
+            p["film"] = film_to_list(self.film)
+        return p
 
     @property
     def material(self) -> str | None:

@@ -13,7 +13,7 @@ import numpy as np
 from .. import _core
 from .._validate import real_scalar
 from .base import BSDF
-from .interface_term import (ConductorParams, DEFAULT_EXT_IOR, DEFAULT_INT_IOR, ConductorInterior, ext_ior_param,
+from .interface_term import (DEFAULT_EXT_IOR, DEFAULT_INT_IOR, ConductorParams, ext_ior_param,
                              film_to_list, make_term, parse_film)
 
 
@@ -39,21 +39,14 @@ class RoughConductor(ConductorParams, BSDF):
                  ext_ior: float = DEFAULT_EXT_IOR, two_sided: bool = False, film=None):
         super().__init__()
         self.alpha = _alpha(alpha)
-        self.interior = ConductorInterior(material, eta, k)
-        self.ext_ior = ext_ior_param(ext_ior)
-        self.two_sided = bool(two_sided)
-        self.film = parse_film(film)
+        self._init_conductor(material, eta, k, ext_ior, two_sided, film)
 
     def _build(self, wavelengths: np.ndarray):
-        term = make_term(wavelengths, self.ext_ior, self.film, conductor=self.interior)
-        return _core.RoughInterface(wavelengths, term, self.alpha, self.two_sided)
+        return _core.RoughInterface(wavelengths, self._conductor_term(wavelengths), self.alpha,
+                                    self.two_sided)
 
     def _params(self):
-        p = {"alpha": self.alpha, **self.interior.params(), "ext_ior": self.ext_ior,
-             "two_sided": self.two_sided}
-        if self.film:
-            p["film"] = film_to_list(self.film)
-        return p
+        return {"alpha": self.alpha, **self._conductor_params()}
 
 
 class RoughDielectric(BSDF):
