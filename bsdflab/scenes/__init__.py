@@ -1,0 +1,1 @@
+"""Geometry builders, procedural scenes and scene files for bsdflab's path tracer."""
