@@ -103,6 +103,11 @@ class BSDF(abc.ABC):
             weight = weight @ to_rgb.T
         return BSDFSample(wo=wo, weight=weight, pdf=pdf, lobe=lobe, eta=eta)
 
+    def render_core(self):
+        """(C++ object, P) for the renderer: P (3, C) projects the object's channels to
+        linear sRGB, or is None when the object already answers in RGB."""
+        return self._core(DEFAULT_WAVELENGTHS), srgb_weights(DEFAULT_WAVELENGTHS)
+
     # -- serialisation ----------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         """A plain dict: {'type': ..., parameters...}; inverse of ``from_dict``."""

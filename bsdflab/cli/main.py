@@ -5,9 +5,9 @@ import argparse
 import sys
 
 from .. import __version__
-from . import info, lobe, table, tabulate, thinfilm
+from . import info, lobe, render, table, tabulate, thinfilm
 
-COMMANDS = (lobe, thinfilm, tabulate, table, info)
+COMMANDS = (render, lobe, thinfilm, tabulate, table, info)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -62,6 +62,16 @@ class TableBSDF(BSDF):
                              f"wavelengths must be None or exactly those")
         return own, None
 
+    def render_core(self):
+        if self._wavelengths is not None:
+            raise ValueError(f"the renderer needs an RGB table; this one stores wavelengths {self.table.channels}")
+        return self._core(self._channels(None)[0]), None
+
+    @property
+    def film_thickness_nm(self) -> float:
+        """The film thickness (nm) lookups default to, or -1 without a film."""
+        return default_film_thickness(self.table.model)
+
     def _build(self, channel_ids: np.ndarray):
         t = self.table
         g = t.grid
@@ -77,7 +87,7 @@ class TableBSDF(BSDF):
         lum = LUMINANCE_RGB if self._wavelengths is None else np.full(len(t.channels), 1 / len(t.channels))
         return _core.TabulatedBSDF(list(channel_ids), len(t.lobes), g.n_theta_i, g.n_theta_o, g.n_phi,
                                    list(g.thickness_nm), t.values.ravel().tolist(), list(lum), direct,
-                                   list(P), _default_thickness(t.model))
+                                   list(P), default_film_thickness(t.model))
 
     def _params(self) -> dict[str, Any]:
         if self.path is None:
@@ -85,7 +95,7 @@ class TableBSDF(BSDF):
         return {"path": self.path}
 
 
-def _default_thickness(model: dict) -> float:
+def default_film_thickness(model: dict) -> float:
     """Total film thickness (nm) of the model's coating -- the top interface's for a layered
     model, the model's own for a coated interface -- or -1 without a film."""
     try:

@@ -9,12 +9,12 @@ until the standard error of its luminance is below rel_error x max(|luminance|,
 """
 from __future__ import annotations
 
-import threading
 import time
 
 import numpy as np
 
 from .. import __version__, _core
+from .._jobs import run_with_progress
 from .. import _validate as check
 from ..bsdfs.base import BSDF
 from ..layered import Layered
@@ -69,7 +69,7 @@ def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = 0.01
                               grid.n_phi, list(grid.thickness_nm), list(rows.ravel()), rows.shape[0],
                               rel_error, ERROR_FLOOR, min_samples, max_samples, seed, split)
     start = time.perf_counter()
-    _run_with_progress(job, progress)
+    run_with_progress(job, progress, unit="cell", desc="tabulating")
     elapsed = time.perf_counter() - start
 
     shape = (len(lobes), max(1, len(grid.thickness_nm)), grid.n_theta_i, grid.n_theta_o, grid.n_phi)
@@ -96,53 +96,6 @@ def achieved_error(lum: np.ndarray, lum_err: np.ndarray) -> dict[str, float]:
     r = lum_err[mask] / lum[mask]
     return {"rel_error_rms": float(np.sqrt(np.mean(r**2))),
             "rel_error_p95": float(np.percentile(r, 95)), "rel_error_max": float(r.max())}
-
-
-def _run_with_progress(job, show: bool) -> None:
-    """Run the job on a worker thread (the core releases the GIL) while the main thread
-    draws the progress bar; Ctrl-C cancels the job, waits for it to stop and re-raises.
-
-    The main thread waits on an Event, not on Thread.join: on CPython < 3.13 a Ctrl-C
-    inside join() can mark the still-running thread as finished (python/cpython#90882),
-    so a later join() returns at once and the interpreter exits under the running job,
-    which aborts the process (SIGABRT from the GIL hand-back at shutdown)."""
-    error: list[BaseException] = []
-    finished = threading.Event()
-
-    def work():
-        try:
-            job.run()
-        except BaseException as e:  # surfaced on the main thread below
-            error.append(e)
-        finally:
-            finished.set()
-
-    worker = threading.Thread(target=work, name="bsdflab-tabulate", daemon=True)
-    worker.start()
-    bar = None
-    if show:
-        from tqdm import tqdm
-
-        bar = tqdm(total=job.total, unit="cell", desc="tabulating", leave=False)
-    try:
-        while not finished.wait(0.2):
-            if bar is not None:
-                bar.n = job.done
-                bar.refresh()
-    except KeyboardInterrupt:
-        job.cancel()
-        while True:  # the job stops after its current cells; never leave it running
-            try:
-                finished.wait()
-                break
-            except KeyboardInterrupt:
-                continue
-        raise
-    finally:
-        if bar is not None:
-            bar.close()
-    if error:
-        raise error[0]
 
 
 def _count(name: str, value) -> int:

@@ -7,6 +7,8 @@ void bind_bsdf(py::module_ &m);
 void bind_fresnel(py::module_ &m);
 void bind_interfaces(py::module_ &m);
 void bind_layered(py::module_ &m);
+void bind_render(py::module_ &m);
+void bind_scales(py::module_ &m);
 void bind_tables(py::module_ &m);
 void bind_thin_film(py::module_ &m);
 
@@ -17,6 +19,8 @@ PYBIND11_MODULE(_core, m) {
     bind_fresnel(m);
     bind_interfaces(m);
     bind_layered(m);
+    bind_render(m);
+    bind_scales(m);
     bind_tables(m);
     bind_thin_film(m);
 }

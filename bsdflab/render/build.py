@@ -1,0 +1,103 @@
+"""Turn a ``Scene`` into the C++ renderer's ``RenderScene``, resolving everything that can
+fail (unknown materials, unreadable meshes or maps, tables) before any rendering starts."""
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+import numpy as np
+
+from .. import _core
+from ..bsdfs.base import BSDF, from_dict
+from .environment import environment_image
+from .scene import Material, Scene
+
+log = logging.getLogger(__name__)
+TABULATED = "tabulated"
+
+
+def resolve_bsdf(d: dict[str, Any], progress: bool = False, cache_dir=None) -> BSDF:
+    """A BSDF from its dict; ``{"type": "tabulated", "model", "grid", "rel_error"}`` gives
+    the table of ``model`` from the cache, tabulating it first when it is not there."""
+    if d.get("type") != TABULATED:
+        return from_dict(d)
+    from ..tables import TableGrid, cached_table, tabulate
+    from ..tables.table_bsdf import TableBSDF
+
+    unknown = set(d) - {"type", "model", "grid", "rel_error", "min_samples"}
+    if unknown or "model" not in d:
+        raise ValueError("a tabulated BSDF needs 'model' and may have 'grid', 'rel_error', 'min_samples'"
+                         + (f"; unknown keys: {', '.join(sorted(unknown))}" if unknown else ""))
+    model = from_dict(d["model"])
+    grid = TableGrid.from_dict(d["grid"]) if "grid" in d else TableGrid()
+    rel_error = float(d.get("rel_error", 0.02))
+    min_samples = int(d.get("min_samples", 512))
+
+    def make():
+        return tabulate(model, grid, rel_error=rel_error, min_samples=min_samples, progress=progress)
+
+    table, path, hit = cached_table(model.to_dict(), grid, rel_error, ("R", "G", "B"), make, directory=cache_dir)
+    log.info("table %s %s", path, "reused from the cache" if hit else "tabulated")
+    return TableBSDF(table)
+
+
+def film_thickness(bsdf: BSDF) -> float:
+    """The film thickness (nm) a scale texture modulates, or -1 without a film."""
+    from ..tables.table_bsdf import TableBSDF, default_film_thickness
+
+    if isinstance(bsdf, TableBSDF):
+        return bsdf.film_thickness_nm
+    return default_film_thickness(bsdf.to_dict())
+
+
+def _projection(P) -> list[float]:
+    return [] if P is None else np.asarray(P, dtype=float).ravel().tolist()
+
+
+def _add_material(core_scene, material: Material, progress: bool, cache_dir) -> int:
+    from .textures import ScaleTexture
+
+    surface = resolve_bsdf(material.bsdf, progress, cache_dir)
+    core, P = surface.render_core()
+    gap_core, gap_P = None, None
+    if material.gap_bsdf is not None:
+        gap_core, gap_P = resolve_bsdf(material.gap_bsdf, progress, cache_dir).render_core()
+    scales = ScaleTexture.from_dict(material.scales).to_core() if material.scales is not None else None
+    return core_scene.add_material(core, _projection(P), gap_core, _projection(gap_P), scales,
+                                   film_thickness(surface))
+
+
+def build_render_scene(scene: Scene, base_dir: str | None = None, progress: bool = False, cache_dir=None):
+    """The committed ``_core.RenderScene`` for ``scene``; relative mesh and map paths are
+    resolved against ``base_dir``."""
+    from ..scenes.geometry import build_mesh
+
+    core_scene = _core.RenderScene()
+    material_ids = {}
+    for name, material in scene.materials.items():
+        try:
+            material_ids[name] = _add_material(core_scene, material, progress, cache_dir)
+        except ValueError as e:
+            raise ValueError(f"material {name!r}: {e}") from None
+    for shape in scene.shapes:
+        try:
+            mesh = build_mesh(shape.geometry, base_dir)
+        except ValueError as e:
+            raise ValueError(f"shape {shape.name!r}: {e}") from None
+        core_scene.add_mesh(np.asarray(mesh.positions, dtype=np.float32),
+                            np.asarray(mesh.indices, dtype=np.uint32),
+                            None if mesh.normals is None else np.asarray(mesh.normals, dtype=np.float32),
+                            None if mesh.uvs is None else np.asarray(mesh.uvs, dtype=np.float32),
+                            material_ids.get(shape.material, -1),
+                            list(shape.emission or (0.0, 0.0, 0.0)))
+    c = scene.camera
+    core_scene.set_camera(list(c.origin), list(c.target), list(c.up), c.fov_deg, c.width, c.height)
+    env = scene.environment
+    if env.type == "constant":
+        core_scene.set_environment_constant(list(env.radiance))
+    else:
+        image = environment_image(env, base_dir)
+        if image is not None:
+            core_scene.set_environment_map(image, env.scale)
+    core_scene.commit()
+    return core_scene

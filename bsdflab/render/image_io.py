@@ -1,0 +1,76 @@
+"""Image files: linear HDR OpenEXR in and out, tone-mapped sRGB PNG out; writes are atomic."""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from ..files import write_atomically
+
+
+def _rgb(image, name: str = "image") -> np.ndarray:
+    a = np.asarray(image, dtype=np.float32)
+    if a.ndim != 3 or a.shape[2] != 3 or a.shape[0] < 1 or a.shape[1] < 1:
+        raise ValueError(f"{name} must have shape (H, W, 3), got {a.shape}")
+    return a
+
+
+def write_exr(path: str | os.PathLike, image, attributes: dict[str, str] | None = None) -> None:
+    """Linear RGB (H, W, 3) as a float32 OpenEXR; ``attributes`` go into the header as
+    strings (render settings, timing)."""
+    import OpenEXR
+
+    a = _rgb(image)
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    header.update({f"bsdflab.{k}": str(v) for k, v in (attributes or {}).items()})
+    channels = {"RGB": np.ascontiguousarray(a)}
+    write_atomically(path, lambda tmp: OpenEXR.File(header, channels).write(tmp), suffix=".tmp.exr")
+
+
+def read_exr(path: str | os.PathLike) -> np.ndarray:
+    """The RGB pixels (H, W, 3) float32 of an OpenEXR file, or a clear ValueError."""
+    import OpenEXR
+
+    from ..tables._quiet import quiet_native_output
+
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise ValueError(f"image {path} does not exist")
+    with open(path, "rb") as f:
+        if f.read(4) != b"\x76\x2f\x31\x01":
+            raise ValueError(f"{path} is not an OpenEXR file")
+    with quiet_native_output() as noise:
+        try:
+            channels = OpenEXR.File(path, separate_channels=True).channels()
+            pixels = {k: np.asarray(c.pixels, dtype=np.float32) for k, c in channels.items()}
+        except Exception as e:  # the binding raises RuntimeError / ValueError on damage
+            failure = noise.first_line() or str(e)
+        else:
+            failure = None
+    if failure is not None:
+        raise ValueError(f"{path} is corrupt or unreadable: {failure}")
+    names = {k.split(".")[-1].upper(): k for k in pixels}
+    if not {"R", "G", "B"} <= set(names):
+        if len(pixels) == 1:  # a grey image
+            (only,) = pixels.values()
+            return np.repeat(only[..., None], 3, axis=2)
+        raise ValueError(f"{path} has no R, G, B channels (it has {', '.join(sorted(pixels))})")
+    return np.stack([pixels[names[c]] for c in "RGB"], axis=2)
+
+
+def tone_map(image, exposure: float = 0.0) -> np.ndarray:
+    """Linear RGB -> 8-bit sRGB: scale by 2^exposure, clip to [0, 1], sRGB transfer curve
+    (colour-science's IEC 61966-2-1 encoding)."""
+    import colour
+
+    a = np.clip(_rgb(image) * np.float32(2.0 ** exposure), 0.0, 1.0)
+    encoded = colour.cctf_encoding(a, function="sRGB")
+    return np.round(np.nan_to_num(encoded) * 255).astype(np.uint8)
+
+
+def write_png(path: str | os.PathLike, image, exposure: float = 0.0) -> None:
+    """Tone-mapped sRGB PNG of a linear RGB image (see ``tone_map``)."""
+    from PIL import Image
+
+    pixels = tone_map(image, exposure)
+    write_atomically(path, lambda tmp: Image.fromarray(pixels, "RGB").save(tmp, format="PNG"), suffix=".tmp.png")

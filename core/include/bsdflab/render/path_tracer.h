@@ -1,0 +1,73 @@
+// Unidirectional path tracing with next-event estimation, power-heuristic MIS and
+// Russian roulette, over image tiles on all cores.
+//
+// Conventions follow Mitsuba 3's `path` integrator so the two renderers estimate the same
+// image: max_depth counts path vertices from the camera (1 = emitters seen directly,
+// 2 = direct lighting, ...); from rr_depth on, a path survives with probability
+// min(max(throughput) * eta^2, 0.95). A pixel is the box-filtered mean over its area.
+//
+// Progressive: the job renders `spp` samples per pixel in passes of `pass_spp`; each pass
+// visits every tile once (tiles handed to whichever thread is free), so a pixel's sums are
+// only ever touched by one thread at a time and the image is the same for any thread
+// count. Each (pixel, pass) seeds its own PCG32 from (seed, pixel, pass).
+#pragma once
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <vector>
+#include "bsdflab/render/scene.h"
+
+namespace bsdflab {
+
+// Which estimator of direct light: both strategies with MIS (the renderer), or one alone
+// (each is unbiased by itself: tests compare them against closed forms and each other).
+enum class LightStrategy : int { kMIS = 0, kBSDFOnly = 1, kLightOnly = 2 };
+
+struct RenderSettings {
+    LightStrategy strategy = LightStrategy::kMIS;
+    int spp = 16;
+    int pass_spp = 4;
+    int max_depth = 8;
+    int rr_depth = 5;
+    uint64_t seed = 0;
+    int tile = 16;
+};
+
+class RenderJob {
+public:
+    RenderJob(std::shared_ptr<const RenderScene> scene, const RenderSettings &settings);
+
+    // Renders every pass not yet done (call once; returns early after cancel()).
+    void run();
+    void cancel() { cancelled_ = true; }
+    bool cancelled() const { return cancelled_; }
+    // Progress in (tile, pass) units.
+    std::size_t total() const { return tiles_x_ * tiles_y_ * passes_; }
+    std::size_t done() const { return done_; }
+    int spp_done() const { return spp_done_; }
+    std::size_t invalid_samples() const { return invalid_; }
+
+    int width() const { return scene_->camera().width(); }
+    int height() const { return scene_->camera().height(); }
+    // Per pixel and channel: the mean, and the variance of that mean (sample variance / n),
+    // over the passes completed so far. Call only while run() is not executing.
+    void image(double *mean, double *variance_of_mean) const;
+
+    // One camera sample's radiance (exposed for tests).
+    void radiance(double px, double py, uint64_t sample_seed, double rgb[3]) const;
+
+private:
+    void render_tile(std::size_t tile, int pass, int spp);
+
+    std::shared_ptr<const RenderScene> scene_;
+    RenderSettings s_;
+    std::size_t tiles_x_, tiles_y_, passes_;
+    std::vector<double> sum_, sum_sq_;     // completed passes
+    std::vector<double> pass_sum_, pass_sq_; // the pass in progress
+    std::atomic<std::size_t> done_{0}, invalid_{0};
+    std::atomic<bool> cancelled_{false};
+    int spp_done_ = 0;
+    int max_channels_ = 3;
+};
+
+} // namespace bsdflab

@@ -1,0 +1,114 @@
+// The renderer's scene: triangle meshes in an Embree BVH, their materials, emissive
+// triangles (area lights, picked by power), an environment and a camera.
+//
+// Shading follows Mitsuba 3 so images compare pixel for pixel: BSDFs are evaluated in the
+// shading frame (interpolated vertex normals, tangent from dp/du), normals are never
+// flipped towards the ray (one-sided BSDFs are black from behind), and an emitter
+// radiates from the side its shading normal points to.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+#include "bsdflab/bsdf.h"
+#include "bsdflab/render/camera.h"
+#include "bsdflab/render/distribution.h"
+#include "bsdflab/render/environment.h"
+#include "bsdflab/scale_texture.h"
+
+namespace bsdflab {
+
+// A BSDF as the renderer sees it: its own channels projected to linear sRGB by P (3 x C,
+// row-major); P empty means the BSDF already answers in RGB (C == 3).
+struct RenderBSDF {
+    std::shared_ptr<const BSDF> bsdf;
+    std::vector<double> P;
+    uint32_t lobes = 0;
+    void to_rgb(const double *channels, double rgb[3]) const;
+};
+
+struct Material {
+    RenderBSDF surface;
+    RenderBSDF gap;                             // used in scale gaps when has_gap
+    bool has_gap = false;
+    std::shared_ptr<const ScaleTexture> scales; // may be null
+    double film_thickness_nm = -1;              // base thickness the scales modulate; < 0: none
+};
+
+struct MeshInput {
+    std::vector<float> positions; // 3V
+    std::vector<float> normals;   // 3V or empty
+    std::vector<float> uvs;       // 2V or empty
+    std::vector<uint32_t> indices; // 3F
+    int material = -1;            // -1: black (emitters)
+    double emission[3] = {0, 0, 0};
+};
+
+// A surface point found by a ray.
+struct SurfaceHit {
+    double t = 0;
+    Vec3 p, ng, ns, dpdu; // ng: unit geometric normal (counter-clockwise front); ns: shading
+    double u = 0, v = 0;  // texture coordinates
+    int mesh = -1;
+    uint32_t prim = 0;
+};
+
+struct EmitterSample {
+    Vec3 wo;           // unit direction from the reference point to the light
+    double dist = 0;   // distance to the light point (inf for the environment)
+    double pdf = 0;    // solid-angle density, light selection included; 0 = failed
+    double radiance[3] = {0, 0, 0};
+};
+
+class RenderScene {
+public:
+    RenderScene();
+    ~RenderScene();
+    RenderScene(const RenderScene &) = delete;
+    RenderScene &operator=(const RenderScene &) = delete;
+
+    int add_material(Material m);
+    int add_mesh(MeshInput m);
+    void set_camera(const Camera &c) { camera_ = c; }
+    void set_environment(Environment e) { environment_ = std::move(e); }
+    // Builds the BVH and the light distribution; the scene is read-only afterwards.
+    void commit();
+
+    const Camera &camera() const { return camera_; }
+    const Environment &environment() const { return environment_; }
+    const Material *material_of(int mesh) const;
+    bool has_lights() const { return environment_.active() || !lights_.empty(); }
+    // The most channels any material's BSDF produces (sizes per-thread buffers).
+    int max_channels() const { return max_channels_; }
+
+    bool intersect(const Vec3 &o, const Vec3 &d, double tmax, SurfaceHit &hit) const;
+    bool occluded(const Vec3 &o, const Vec3 &d, double tmax) const;
+
+    // Radiance a surface emits at `hit` towards direction `w` (unit, away from the surface).
+    void emitted(const SurfaceHit &hit, const Vec3 &w, double rgb[3]) const;
+    // Light sampling from point `ref`: an area light or the environment.
+    EmitterSample sample_emitter(const Vec3 &ref, double u0, double u1, double u2) const;
+    // Density with which sample_emitter(ref) would have produced the emitter point `hit`.
+    double emitter_pdf(const Vec3 &ref, const SurfaceHit &hit) const;
+    // ... or the environment in direction d.
+    double environment_pdf(const Vec3 &d) const;
+
+private:
+    struct Mesh;
+    void fill_hit(int mesh, uint32_t prim, double b1, double b2, SurfaceHit &hit) const;
+    double env_selection() const;
+
+    struct Embree;
+    std::unique_ptr<Embree> embree_;
+    std::vector<Mesh> meshes_;
+    std::vector<Material> materials_;
+    Camera camera_;
+    Environment environment_;
+    // Emissive triangles: (mesh, prim) pairs picked by power = area x luminance.
+    std::vector<std::pair<int, uint32_t>> lights_;
+    Distribution1D light_choice_;
+    std::vector<std::vector<double>> light_prob_; // per mesh, per triangle (empty if not emissive)
+    int max_channels_ = 3;
+    bool committed_ = false;
+};
+
+} // namespace bsdflab

@@ -1,0 +1,168 @@
+// Bindings of the renderer: build a RenderScene from numpy arrays and core BSDFs, then run
+// a RenderJob (GIL released) that Python drives from a worker thread for progress/cancel.
+#include <pybind11/stl.h>
+#include "arrays.h"
+#include "bsdflab/render/path_tracer.h"
+
+namespace py = pybind11;
+using namespace bsdflab;
+using namespace bsdflab::py_helpers;
+using Farr = py::array_t<float, py::array::c_style | py::array::forcecast>;
+using Uarr = py::array_t<uint32_t, py::array::c_style | py::array::forcecast>;
+
+namespace {
+
+std::vector<float> rows_of(const py::object &obj, std::size_t cols, const char *name) {
+    if (obj.is_none()) return {};
+    Farr a = py::cast<Farr>(obj);
+    if (a.ndim() != 2 || std::size_t(a.shape(1)) != cols)
+        throw std::invalid_argument(std::string(name) + " must have shape (V, " + std::to_string(cols) + ")");
+    return std::vector<float>(a.data(), a.data() + a.size());
+}
+
+Vec3 vec3(const std::vector<double> &v, const char *name) {
+    if (v.size() != 3) throw std::invalid_argument(std::string(name) + " must have 3 components");
+    return {v[0], v[1], v[2]};
+}
+
+RenderBSDF render_bsdf(const std::shared_ptr<BSDF> &b, const std::vector<double> &P) {
+    RenderBSDF r;
+    r.bsdf = b;
+    r.P = P;
+    return r;
+}
+
+} // namespace
+
+void bind_render(py::module_ &m) {
+    py::class_<RenderScene, std::shared_ptr<RenderScene>>(m, "RenderScene")
+        .def(py::init<>())
+        .def("add_material",
+             [](RenderScene &s, const std::shared_ptr<BSDF> &surface, const std::vector<double> &P,
+                const std::shared_ptr<BSDF> &gap, const std::vector<double> &gap_P,
+                const std::shared_ptr<ScaleTexture> &scales, double film_thickness_nm) {
+                 Material mat;
+                 if (!surface) throw std::invalid_argument("material: a BSDF is required");
+                 mat.surface = render_bsdf(surface, P);
+                 if (gap) {
+                     mat.gap = render_bsdf(gap, gap_P);
+                     mat.has_gap = true;
+                 }
+                 mat.scales = scales;
+                 mat.film_thickness_nm = film_thickness_nm;
+                 return s.add_material(std::move(mat));
+             },
+             py::arg("surface"), py::arg("P"), py::arg("gap") = nullptr, py::arg("gap_P") = std::vector<double>(),
+             py::arg("scales") = nullptr, py::arg("film_thickness_nm") = -1.0,
+             "P: the (3 x C) row-major projection of the BSDF's channels to RGB, [] if it answers in RGB")
+        .def("add_mesh",
+             [](RenderScene &s, const py::object &positions, const py::object &indices, const py::object &normals,
+                const py::object &uvs, int material, const std::vector<double> &emission) {
+                 MeshInput in;
+                 in.positions = rows_of(positions, 3, "positions");
+                 Uarr idx = py::cast<Uarr>(indices);
+                 if (idx.ndim() != 2 || idx.shape(1) != 3) throw std::invalid_argument("indices must have shape (F, 3)");
+                 in.indices.assign(idx.data(), idx.data() + idx.size());
+                 in.normals = rows_of(normals, 3, "normals");
+                 in.uvs = rows_of(uvs, 2, "uvs");
+                 in.material = material;
+                 Vec3 e = vec3(emission, "emission");
+                 in.emission[0] = e.x;
+                 in.emission[1] = e.y;
+                 in.emission[2] = e.z;
+                 return s.add_mesh(std::move(in));
+             },
+             py::arg("positions"), py::arg("indices"), py::arg("normals") = py::none(), py::arg("uvs") = py::none(),
+             py::arg("material") = -1, py::arg("emission") = std::vector<double>{0, 0, 0})
+        .def("set_camera",
+             [](RenderScene &s, const std::vector<double> &origin, const std::vector<double> &target,
+                const std::vector<double> &up, double fov_deg, int width, int height) {
+                 s.set_camera(Camera(vec3(origin, "origin"), vec3(target, "target"), vec3(up, "up"), fov_deg, width,
+                                     height));
+             })
+        .def("set_environment_constant",
+             [](RenderScene &s, const std::vector<double> &rgb) {
+                 Vec3 c = vec3(rgb, "radiance");
+                 double v[3] = {c.x, c.y, c.z};
+                 s.set_environment(Environment::constant(v));
+             })
+        .def("set_environment_map",
+             [](RenderScene &s, const Farr &image, double scale) {
+                 if (image.ndim() != 3 || image.shape(2) != 3)
+                     throw std::invalid_argument("environment map must have shape (H, W, 3)");
+                 s.set_environment(Environment::latlong(int(image.shape(1)), int(image.shape(0)),
+                                                        std::vector<float>(image.data(), image.data() + image.size()),
+                                                        scale));
+             })
+        .def("commit", &RenderScene::commit, py::call_guard<py::gil_scoped_release>())
+        .def("environment_eval",
+             [](const RenderScene &s, const Darr &d) {
+                 require_rows3(d, "d");
+                 std::size_t n = d.shape(0);
+                 py::array_t<double> out({n, std::size_t(3)});
+                 for (std::size_t i = 0; i < n; ++i) s.environment().eval(row(d.data(), i), out.mutable_data() + 3 * i);
+                 return out;
+             },
+             "radiance from directions d (N, 3): for tests")
+        .def("environment_pdf",
+             [](const RenderScene &s, const Darr &d) {
+                 require_rows3(d, "d");
+                 std::size_t n = d.shape(0);
+                 py::array_t<double> out(n);
+                 for (std::size_t i = 0; i < n; ++i) out.mutable_data()[i] = s.environment().pdf(row(d.data(), i));
+                 return out;
+             })
+        .def("environment_sample",
+             [](const RenderScene &s, const Darr &u) {
+                 if (u.ndim() != 2 || u.shape(1) != 2) throw std::invalid_argument("u must have shape (N, 2)");
+                 std::size_t n = u.shape(0);
+                 py::array_t<double> dirs({n, std::size_t(3)}), pdf(n);
+                 for (std::size_t i = 0; i < n; ++i) {
+                     Vec3 d = s.environment().sample(u.data()[2 * i], u.data()[2 * i + 1], pdf.mutable_data()[i]);
+                     double *o = dirs.mutable_data() + 3 * i;
+                     o[0] = d.x;
+                     o[1] = d.y;
+                     o[2] = d.z;
+                 }
+                 return py::make_tuple(dirs, pdf);
+             });
+
+    py::class_<RenderJob, std::shared_ptr<RenderJob>>(m, "RenderJob")
+        .def(py::init([](std::shared_ptr<RenderScene> scene, int spp, int pass_spp, int max_depth, int rr_depth,
+                         uint64_t seed, int tile, int strategy) {
+                 if (strategy < 0 || strategy > 2) throw std::invalid_argument("strategy must be 0 (MIS), 1 (BSDF) or 2 (light)");
+                 RenderSettings s;
+                 s.strategy = LightStrategy(strategy);
+                 s.spp = spp;
+                 s.pass_spp = pass_spp;
+                 s.max_depth = max_depth;
+                 s.rr_depth = rr_depth;
+                 s.seed = seed;
+                 s.tile = tile;
+                 return std::make_shared<RenderJob>(std::move(scene), s);
+             }),
+             py::arg("scene"), py::arg("spp"), py::arg("pass_spp") = 4, py::arg("max_depth") = 8,
+             py::arg("rr_depth") = 5, py::arg("seed") = 0, py::arg("tile") = 16, py::arg("strategy") = 0)
+        .def("run", &RenderJob::run, py::call_guard<py::gil_scoped_release>())
+        .def("cancel", &RenderJob::cancel)
+        .def_property_readonly("cancelled", &RenderJob::cancelled)
+        .def_property_readonly("total", &RenderJob::total)
+        .def_property_readonly("done", &RenderJob::done)
+        .def_property_readonly("spp_done", &RenderJob::spp_done)
+        .def_property_readonly("invalid_samples", &RenderJob::invalid_samples)
+        .def("image",
+             [](const RenderJob &j) {
+                 std::size_t h = j.height(), w = j.width();
+                 py::array_t<double> mean({h, w, std::size_t(3)}), var({h, w, std::size_t(3)});
+                 j.image(mean.mutable_data(), var.mutable_data());
+                 return py::make_tuple(mean, var);
+             },
+             "(mean, variance of the mean), each (H, W, 3), over the completed passes")
+        .def("radiance",
+             [](const RenderJob &j, double px, double py, uint64_t seed) {
+                 double L[3];
+                 j.radiance(px, py, seed, L);
+                 return std::vector<double>{L[0], L[1], L[2]};
+             },
+             "one camera sample's radiance at film position (px, py): for tests");
+}

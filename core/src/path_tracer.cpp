@@ -1,0 +1,247 @@
+#include "bsdflab/render/path_tracer.h"
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include "bsdflab/parallel.h"
+#include "bsdflab/rng.h"
+
+namespace bsdflab {
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+struct ShadingFrame {
+    Vec3 s, t, n;
+    Vec3 to_local(const Vec3 &v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
+    Vec3 to_world(const Vec3 &v) const { return s * v.x + t * v.y + n * v.z; }
+};
+
+Vec3 normalized(const Vec3 &v) {
+    double l = length(v);
+    return l > 0 ? v * (1 / l) : Vec3{0, 0, 0};
+}
+
+// Orthonormal frame around n with s as close to `tangent` as possible.
+ShadingFrame frame_around(const Vec3 &n, const Vec3 &tangent) {
+    Vec3 s = tangent - n * dot(n, tangent);
+    double l = length(s);
+    if (!(l > 1e-9 * (length(tangent) + 1e-300))) {
+        // No usable tangent: any perpendicular (Duff et al. 2017's branchless basis).
+        double sign = std::copysign(1.0, n.z), a = -1 / (sign + n.z), b = n.x * n.y * a;
+        s = {1 + sign * n.x * n.x * a, sign * b, -sign * n.x};
+    } else {
+        s = s * (1 / l);
+    }
+    return {s, cross(n, s), n};
+}
+
+double power_heuristic(double a, double b) {
+    if (std::isinf(a)) return 1.0;
+    double a2 = a * a, b2 = b * b;
+    return a2 + b2 > 0 ? a2 / (a2 + b2) : 0.0;
+}
+
+// Ray origin just off the surface on the side `w` leaves to, scaled to float precision
+// at p (the BVH works in float).
+Vec3 offset_origin(const SurfaceHit &h, const Vec3 &w) {
+    double m = std::max({std::abs(h.p.x), std::abs(h.p.y), std::abs(h.p.z)});
+    double eps = 1e-5 * (1 + m);
+    return h.p + h.ng * (dot(w, h.ng) >= 0 ? eps : -eps);
+}
+
+double *channel_buffer(int n) {
+    thread_local std::vector<double> buffer;
+    if (int(buffer.size()) < n) buffer.resize(n);
+    return buffer.data();
+}
+
+bool any_positive(const double v[3]) { return v[0] > 0 || v[1] > 0 || v[2] > 0; }
+} // namespace
+
+RenderJob::RenderJob(std::shared_ptr<const RenderScene> scene, const RenderSettings &settings)
+    : scene_(std::move(scene)), s_(settings) {
+    if (!scene_) throw std::invalid_argument("render: no scene");
+    if (s_.spp < 1 || s_.pass_spp < 1) throw std::invalid_argument("render: spp must be >= 1");
+    if (s_.max_depth < 1 || s_.rr_depth < 1) throw std::invalid_argument("render: depths must be >= 1");
+    if (s_.tile < 1) throw std::invalid_argument("render: tile size must be >= 1");
+    tiles_x_ = (width() + s_.tile - 1) / s_.tile;
+    tiles_y_ = (height() + s_.tile - 1) / s_.tile;
+    passes_ = (s_.spp + s_.pass_spp - 1) / s_.pass_spp;
+    sum_.assign(std::size_t(width()) * height() * 3, 0.0);
+    sum_sq_.assign(sum_.size(), 0.0);
+    max_channels_ = scene_->max_channels();
+}
+
+void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]) const {
+    PCG32 rng(sample_seed);
+    const RenderScene &scene = *scene_;
+    const Environment &env = scene.environment();
+    L[0] = L[1] = L[2] = 0;
+    double beta[3] = {1, 1, 1}, eta = 1, prev_pdf = 0;
+    bool prev_delta = true;
+    Vec3 prev_p;
+    Vec3 o = scene.camera().origin(), d = scene.camera().direction(px, py);
+    double *buf = channel_buffer(max_channels_);
+    // Weight of emission found by a BSDF-sampled ray whose light could also have been
+    // sampled by next-event estimation with density `light_pdf`.
+    auto mis_hit = [this](double bsdf_pdf, double light_pdf) {
+        switch (s_.strategy) {
+        case LightStrategy::kBSDFOnly: return 1.0;
+        case LightStrategy::kLightOnly: return light_pdf > 0 ? 0.0 : 1.0;
+        default: return power_heuristic(bsdf_pdf, light_pdf);
+        }
+    };
+
+    for (int depth = 1;; ++depth) { // depth: index of the vertex this ray finds
+        SurfaceHit hit;
+        if (!scene.intersect(o, d, kInf, hit)) {
+            if (env.active()) {
+                double Le[3];
+                env.eval(d, Le);
+                double w = prev_delta ? 1.0 : mis_hit(prev_pdf, scene.environment_pdf(d));
+                for (int c = 0; c < 3; ++c) L[c] += beta[c] * w * Le[c];
+            }
+            break;
+        }
+        double Le[3];
+        scene.emitted(hit, -d, Le);
+        if (any_positive(Le)) {
+            double w = prev_delta ? 1.0 : mis_hit(prev_pdf, scene.emitter_pdf(prev_p, hit));
+            for (int c = 0; c < 3; ++c) L[c] += beta[c] * w * Le[c];
+        }
+        if (depth >= s_.max_depth) break;
+        const Material *mat = scene.material_of(hit.mesh);
+        if (!mat) break;
+
+        // Shading: the scale texture may swap in the gap BSDF, tilt the normal (bump) and
+        // change the film thickness of this scale.
+        const RenderBSDF *rb = &mat->surface;
+        Query q;
+        ShadingFrame frame = frame_around(hit.ns, hit.dpdu);
+        if (mat->scales) {
+            ScaleSample ss = mat->scales->lookup(hit.u, hit.v);
+            if (ss.gap) {
+                if (mat->has_gap) rb = &mat->gap;
+            } else {
+                Vec3 nb = normalized(frame.n - frame.s * ss.slope_u - frame.t * ss.slope_v);
+                if (length(nb) > 0) frame = frame_around(nb, frame.s);
+                if (mat->film_thickness_nm > 0) q.film_thickness_nm = mat->film_thickness_nm * ss.thickness_factor;
+            }
+        }
+        const BSDF &bsdf = *rb->bsdf;
+        const Vec3 wi = frame.to_local(-d);
+
+        // Next-event estimation (BSDFs with a non-delta lobe only).
+        if ((rb->lobes & ~uint32_t(kDelta)) && scene.has_lights() && s_.strategy != LightStrategy::kBSDFOnly) {
+            double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+            EmitterSample es = scene.sample_emitter(hit.p, u0, u1, u2);
+            if (es.pdf > 0 && any_positive(es.radiance)) {
+                Vec3 wo = frame.to_local(es.wo);
+                double f[3];
+                bsdf.eval(wi, wo, kAll, q, buf);
+                rb->to_rgb(buf, f);
+                if (f[0] != 0 || f[1] != 0 || f[2] != 0) {
+                    Vec3 origin = offset_origin(hit, es.wo);
+                    double tmax = std::isinf(es.dist) ? kInf : length(hit.p + es.wo * es.dist - origin) * (1 - 1e-5);
+                    if (!scene.occluded(origin, es.wo, tmax)) {
+                        double w = (s_.strategy == LightStrategy::kMIS ? power_heuristic(es.pdf, bsdf.pdf(wi, wo, kAll, q))
+                                                                        : 1.0) / es.pdf;
+                        for (int c = 0; c < 3; ++c) L[c] += beta[c] * f[c] * es.radiance[c] * w;
+                    }
+                }
+            }
+        }
+
+        // Continue the path by sampling the BSDF.
+        double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+        BSDFSample bs = bsdf.sample(wi, u0, u1, u2, kAll, q, buf);
+        if (bs.lobe == 0) break;
+        double wrgb[3];
+        rb->to_rgb(buf, wrgb);
+        for (int c = 0; c < 3; ++c) beta[c] *= wrgb[c];
+        double beta_max = std::max({beta[0], beta[1], beta[2]});
+        if (!(beta_max > 0) || !std::isfinite(beta_max)) break;
+        prev_delta = (bs.lobe & kDelta) != 0;
+        prev_pdf = bs.pdf;
+        prev_p = hit.p;
+        if (bs.lobe & kTransmission) eta *= bs.eta;
+        Vec3 dw = normalized(frame.to_world(bs.wo));
+        if (depth >= s_.rr_depth) {
+            double survive = std::min(beta_max * eta * eta, 0.95);
+            if (!(rng.uniform() < survive)) break;
+            for (double &b : beta) b /= survive;
+        }
+        o = offset_origin(hit, dw);
+        d = dw;
+    }
+}
+
+void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
+    const int W = width(), H = height();
+    const int x0 = int(tile % tiles_x_) * s_.tile, y0 = int(tile / tiles_x_) * s_.tile;
+    const int x1 = std::min(x0 + s_.tile, W), y1 = std::min(y0 + s_.tile, H);
+    std::size_t bad = 0;
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+            const std::size_t pixel = std::size_t(y) * W + x;
+            PCG32 pixel_rng(mix64(mix64(s_.seed) ^ pixel) ^ mix64(uint64_t(pass) + 0x51ed2705ULL));
+            double sum[3] = {0, 0, 0}, sq[3] = {0, 0, 0};
+            for (int k = 0; k < spp; ++k) {
+                uint64_t sample_seed = (uint64_t(pixel_rng.next()) << 32) | pixel_rng.next();
+                double px = x + pixel_rng.uniform(), py = y + pixel_rng.uniform();
+                double L[3];
+                radiance(px, py, sample_seed, L);
+                if (!(std::isfinite(L[0]) && std::isfinite(L[1]) && std::isfinite(L[2]))) {
+                    ++bad; // counted, and black: a NaN must not poison the pixel
+                    continue;
+                }
+                for (int c = 0; c < 3; ++c) {
+                    sum[c] += L[c];
+                    sq[c] += L[c] * L[c];
+                }
+            }
+            for (int c = 0; c < 3; ++c) {
+                pass_sum_[pixel * 3 + c] = sum[c];
+                pass_sq_[pixel * 3 + c] = sq[c];
+            }
+        }
+    invalid_ += bad;
+}
+
+void RenderJob::run() {
+    for (std::size_t pass = spp_done_ / s_.pass_spp; pass < passes_ && !cancelled_; ++pass) {
+        const int spp = std::min(s_.pass_spp, s_.spp - int(pass) * s_.pass_spp);
+        pass_sum_.assign(sum_.size(), 0.0);
+        pass_sq_.assign(sum_.size(), 0.0);
+        parallel_for_each(tiles_x_ * tiles_y_, [&](std::size_t tile) {
+            if (cancelled_) return;
+            render_tile(tile, int(pass), spp);
+            ++done_;
+        });
+        if (cancelled_) break; // an unfinished pass is dropped: the image stays consistent
+        for (std::size_t i = 0; i < sum_.size(); ++i) {
+            sum_[i] += pass_sum_[i];
+            sum_sq_[i] += pass_sq_[i];
+        }
+        spp_done_ += spp;
+    }
+    pass_sum_.clear();
+    pass_sq_.clear();
+}
+
+void RenderJob::image(double *mean, double *variance_of_mean) const {
+    const double n = spp_done_;
+    for (std::size_t i = 0; i < sum_.size(); ++i) {
+        double m = n > 0 ? sum_[i] / n : 0.0;
+        mean[i] = m;
+        if (n < 2) {
+            variance_of_mean[i] = kInf;
+        } else {
+            double s2 = std::max(0.0, (sum_sq_[i] - n * m * m) / (n - 1));
+            variance_of_mean[i] = s2 / n;
+        }
+    }
+}
+
+} // namespace bsdflab
