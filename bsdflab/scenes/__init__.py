@@ -1,1 +1,12 @@
-"""Geometry builders, procedural scenes and scene files for bsdflab's path tracer."""
+"""Geometry builders, procedural scenes and scene files for bsdflab's path tracer.
+
+``scene(name, **options)`` builds a registered scene (``SCENES``); ``build_mesh`` turns a
+shape's geometry spec into a triangle mesh; ``save_scene`` / ``load_scene`` read and write
+scene files (docs/scene_format.md).
+"""
+from .geometry import GEOMETRY_TYPES, Mesh, build_mesh, mesh_area, validate_mesh
+from .registry import SCENES, scene
+from .scene_file import load_scene, save_scene
+
+__all__ = ["GEOMETRY_TYPES", "Mesh", "SCENES", "build_mesh", "load_scene", "mesh_area", "save_scene", "scene",
+           "validate_mesh"]

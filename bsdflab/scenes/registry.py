@@ -1,0 +1,30 @@
+"""The procedural scenes by name (the CLI and the HTTP API use these names)."""
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from ..render import Scene
+from .appearance_grid import appearance_grid_cell
+from .basic_materials import basic_materials
+from .furnace import furnace
+from .objects import sphere, torus
+from .snake import snake
+
+SCENES: dict[str, Callable[..., Scene]] = {
+    "snake": snake,
+    "sphere": sphere,
+    "torus": torus,
+    "appearance-grid": appearance_grid_cell,
+    "basic-materials": basic_materials,
+    "furnace": furnace,
+}
+
+
+def scene(name: str, **kwargs) -> Scene:
+    """The scene called ``name`` built with ``kwargs`` (width, height and its own options)."""
+    if name not in SCENES:
+        raise ValueError(f"unknown scene {name!r}; known scenes: {', '.join(SCENES)}")
+    try:
+        return SCENES[name](**kwargs)
+    except TypeError as e:   # an option the scene does not take
+        raise ValueError(f"scene {name!r}: {e}") from None
