@@ -66,6 +66,7 @@ from .chi2 import ChiSquareTest, bsdf_chi2
 from .directions import random_unit_vectors, spherical_directions
 from .discrete import DiscreteChoiceResult, discrete_choice_chi2
 from .furnace import AlbedoEstimate, albedo_sampled, albedo_uniform
+from .image_compare import ImageTestResult, image_z_test, relative_mse  # noqa: F401  (image-level renderer checks)
 from .stats import PearsonResult, PooledCells, pearson_chi2, pool_low_expected, sidak_significance
 
 __all__ = ["AlbedoEstimate", "ChiSquareTest", "ConsistencyReport", "DiscreteChoiceResult",
