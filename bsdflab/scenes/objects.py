@@ -57,8 +57,10 @@ def object_geometry(obj: str) -> tuple[dict, dict, list[float]]:
     if obj == "torus":
         major, minor = TORUS_RADII
         centre = [0.0, minor, 0.0]
+        # minor_resolution divisible by 4: a ring of vertices lies on the ground
         return ({"type": "torus", "center": centre, "major_radius": major, "minor_radius": minor,
-                 "axis": [0.0, 1.0, 0.0], "resolution": 256}, TORUS_SCALES, centre)
+                 "axis": [0.0, 1.0, 0.0], "resolution": 256,
+                 "minor_resolution": 96}, TORUS_SCALES, centre)
     raise ValueError(f"unknown object {obj!r}; known: {', '.join(OBJECTS)}")
 
 
