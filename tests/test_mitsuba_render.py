@@ -75,6 +75,8 @@ def _scaled_diffuse(scene: Scene, factor: float) -> Scene:
                 r["rgb"] = [x * factor for x in r["rgb"]]
             elif isinstance(r, (int, float)):
                 r = r * factor
+            elif isinstance(r, (list, tuple)):
+                r = [x * factor for x in r]
             else:
                 raise ValueError(f"cannot scale reflectance {r!r}")
             bsdf["reflectance"] = r
