@@ -106,6 +106,13 @@ def _smoothstep(x):
     return x * x * (3 - 2 * x)
 
 
+def layout_of(spec: dict) -> SnakeLayout:
+    """The layout of a ``snake_body`` / ``snake_head`` spec (missing parameters default)."""
+    from .geometry import GEOMETRY_TYPES, _Params
+
+    return snake_layout(_Params("snake_body", {**spec, "type": "snake_body"}, GEOMETRY_TYPES["snake_body"][0]()))
+
+
 def snake_layout(p) -> SnakeLayout:
     """Check a snake spec's parameters (a geometry ``_Params``) and lay out the centreline."""
     length = p.number("length", positive=True)

@@ -22,8 +22,7 @@ import numpy as np
 from ..presets import FILM_THICKNESS_NM, PRESETS, preset
 from ..render import Camera, Environment, Material, Scene, Shape
 from ..tables import TableGrid
-from .curves import SNAKE_DEFAULTS, snake_eyes, snake_layout
-from .geometry import GEOMETRY_TYPES, _Params
+from .curves import SNAKE_DEFAULTS, layout_of, snake_eyes
 
 GROUND_RGB = [0.37, 0.35, 0.32]        # warm grey, albedo ~0.35
 GAP_BSDF = {"type": "diffuse", "reflectance": [0.02, 0.018, 0.016]}
@@ -99,7 +98,7 @@ def snake(width: int = 640, height: int = 360, material: str = "table", scales: 
     """The snake scene. ``shape`` overrides snake geometry parameters (SNAKE_DEFAULTS,
     e.g. ``segments=400``)."""
     spec = copy.deepcopy({**SNAKE_DEFAULTS, **shape})
-    layout = snake_layout(_Params("snake_body", {"type": "snake_body", **spec}, GEOMETRY_TYPES["snake_body"][0]()))
+    layout = layout_of(spec)
     bsdf = snake_bsdf(material)
     materials = {
         "ground": ground_material(),
