@@ -227,3 +227,20 @@ def test_14_scene_dict_round_trip():
     d["camera"]["zoom"] = 2
     with pytest.raises(ValueError, match="unknown camera keys"):
         Scene.from_dict(d)
+
+
+@pytest.mark.parametrize("strategy", ["mis", "light"])
+def test_15_light_seen_at_a_grazing_angle_is_not_self_shadowed(strategy):
+    """Regression: a shadow ray aimed along the light direction from the offset origin met
+    the light's plane before its tmax and the light shadowed itself beyond ~50 degrees."""
+    floor = Shape({"type": "rectangle", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [20, 20]}, material="m")
+    lamp = Shape({"type": "rectangle", "center": [0, 3, 0], "normal": [0, -1, 0], "size": [0.2, 0.2]},
+                 emission=(100, 100, 100))
+    x = 5.0  # the lamp seen 59 degrees off its normal
+    cam = Camera(origin=(x, 1.0, 0.5), target=(x, 0.0, 0.0), fov_deg=0.05, width=4, height=4)
+    scene = Scene(cam, (floor, lamp), {"m": Material({"type": "diffuse", "reflectance": 0.7})}, max_depth=2)
+    result = render(scene, spp=256, seed=1, progress=False, strategy=strategy)
+    d2 = 9 + x * x
+    expected = 0.7 / np.pi * 100 * 0.04 * (9 / d2) / d2  # small-lamp limit: rho/pi L A cos cos / d^2
+    mean, err = image_mean(result)
+    assert np.all(np.abs(mean - expected) < Z * err + 2e-3 * expected), (mean, expected)

@@ -19,10 +19,11 @@ TABULATED = "tabulated"
 def resolve_bsdf(d: dict[str, Any], progress: bool = False, cache_dir=None) -> BSDF:
     """A BSDF from its dict; ``{"type": "tabulated", "model", "grid", "rel_error"}`` gives
     the table of ``model`` from the cache, tabulating it first when it is not there."""
+    from ..tables import TableGrid, cached_table, tabulate
+    from ..tables.table_bsdf import TableBSDF  # also registers {"type": "table"} with from_dict
+
     if d.get("type") != TABULATED:
         return from_dict(d)
-    from ..tables import TableGrid, cached_table, tabulate
-    from ..tables.table_bsdf import TableBSDF
 
     unknown = set(d) - {"type", "model", "grid", "rel_error", "min_samples"}
     if unknown or "model" not in d:

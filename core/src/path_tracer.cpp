@@ -10,6 +10,8 @@ namespace bsdflab {
 
 namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Shadow rays stop this fraction short of the light point (float BVH precision).
+constexpr double kShadowEpsilon = 1e-4;
 
 struct ShadingFrame {
     Vec3 s, t, n;
@@ -142,9 +144,19 @@ void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]
                 bsdf.eval(wi, wo, kAll, q, buf);
                 rb->to_rgb(buf, f);
                 if (f[0] != 0 || f[1] != 0 || f[2] != 0) {
-                    Vec3 origin = offset_origin(hit, es.wo);
-                    double tmax = std::isinf(es.dist) ? kInf : length(hit.p + es.wo * es.dist - origin) * (1 - 1e-5);
-                    if (!scene.occluded(origin, es.wo, tmax)) {
+                    // Aim from the offset origin at the light point itself, so the ray
+                    // meets the light's plane at exactly its length (aiming along es.wo from
+                    // the offset origin would cross it early, and the light would shadow
+                    // itself when seen at a grazing angle).
+                    Vec3 origin = offset_origin(hit, es.wo), dir = es.wo;
+                    double tmax = kInf;
+                    if (!std::isinf(es.dist)) {
+                        Vec3 to = hit.p + es.wo * es.dist - origin;
+                        double len = length(to);
+                        dir = to * (1 / len);
+                        tmax = len * (1 - kShadowEpsilon);
+                    }
+                    if (!scene.occluded(origin, dir, tmax)) {
                         double w = (s_.strategy == LightStrategy::kMIS ? power_heuristic(es.pdf, bsdf.pdf(wi, wo, kAll, q))
                                                                         : 1.0) / es.pdf;
                         for (int c = 0; c < 3; ++c) L[c] += beta[c] * f[c] * es.radiance[c] * w;
