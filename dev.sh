@@ -48,7 +48,8 @@ case "$cmd" in
     demo)
         setup
         mkdir -p out
-        "$VENV/bin/bsdflab" lobe --preset xenopeltis --theta-i 30 --out out/lobe.png "$@"
+        # Tabulates the snake's layered BSDF on first use (cached), then renders it.
+        "$VENV/bin/bsdflab" render snake --width 1280 --height 720 --spp 256 --out out/snake.exr "$@"
         ;;
     test)
         setup

@@ -77,7 +77,8 @@ def run(args: argparse.Namespace) -> int:
     prepared = []
     for label, s in scenes:
         if args.width is not None or args.height is not None:
-            s = s.with_resolution(args.width or s.camera.width, args.height or s.camera.height)
+            s = s.with_resolution(s.camera.width if args.width is None else args.width,
+                                  s.camera.height if args.height is None else args.height)
         if args.max_depth is not None:
             s = replace(s, max_depth=args.max_depth)
         prepared.append((label, s))

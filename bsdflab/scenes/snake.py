@@ -33,6 +33,7 @@ HEAD_SCALES = {"scales_per_unit_u": 0.8, "scales_around": 8, "gap": 0.04, "jitte
                "tilt_deg": 4.0, "thickness_jitter": THICKNESS_JITTER, "seed": 2, "periodic_v": True}
 EYE_BSDF = {"type": "roughconductor", "alpha": 0.05, "eta": 1.5, "k": 0.0}   # black and glossy
 MATERIAL_CHOICES = ("table", "direct", *PRESETS)
+DIRECT_WALKS = 1
 
 
 # -- the studio ---------------------------------------------------------------------------------
@@ -87,7 +88,9 @@ def snake_bsdf(material: str = "table", thickness_jitter: float = THICKNESS_JITT
     if material not in MATERIAL_CHOICES:
         raise ValueError(f"unknown material {material!r}; choose one of: {', '.join(MATERIAL_CHOICES)}")
     if material == "direct":
-        return preset("xenopeltis").to_dict()
+        # One PFMC walk per evaluation: still unbiased, and inside a path tracer more
+        # samples per pixel beat more walks per hit.
+        return preset("xenopeltis", samples=DIRECT_WALKS).to_dict()
     model = preset("xenopeltis" if material == "table" else material).to_dict()
     return tabulated(model, thickness_jitter) if model["type"] == "layered" else model
 

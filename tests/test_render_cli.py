@@ -1,0 +1,89 @@
+"""`bsdflab render` end to end: real files, scene files, bad input, Ctrl-C."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from bsdflab.cli.main import main
+from bsdflab.render import read_exr
+from bsdflab.scenes import scene
+from bsdflab.scenes.scene_file import save_scene
+
+BSDFLAB = [sys.executable, "-m", "bsdflab.cli.main"]
+
+
+def test_01_render_writes_exr_png_and_a_summary(tmp_path, capsys):
+    out = tmp_path / "f.exr"
+    rc = main(["render", "furnace", "--width", "16", "--height", "12", "--spp", "4", "--out", str(out), "--quiet"])
+    assert rc == 0
+    image = read_exr(out)
+    assert image.shape == (12, 16, 3)
+    assert abs(image.mean() - 1) < 0.05  # the white furnace: every pixel about 1
+    assert (tmp_path / "f.png").stat().st_size > 0
+    summary = json.loads(capsys.readouterr().out.split("\nwrote")[0])
+    assert summary["spp"] == 4 and summary["samples_per_second"] > 0
+
+
+def test_02_scene_file_renders_like_the_named_scene(tmp_path):
+    path = tmp_path / "scene.json"
+    save_scene(scene("basic-materials", width=12, height=9), path)
+    a, b = tmp_path / "a.exr", tmp_path / "b.exr"
+    assert main(["render", "basic-materials", "-o", "width=12", "-o", "height=9", "--spp", "2",
+                 "--out", str(a), "--quiet"]) == 0
+    assert main(["render", str(path), "--spp", "2", "--out", str(b), "--quiet"]) == 0
+    assert np.array_equal(read_exr(a), read_exr(b))
+
+
+@pytest.mark.parametrize("args, message", [
+    (["nosuch"], "unknown scene"),
+    (["furnace", "--spp", "0"], "spp"),
+    (["furnace", "--width", "0"], "width"),
+    (["furnace", "--out", "x.png"], ".exr"),
+    (["furnace", "-o", "colour"], "KEY=VALUE"),
+    (["snake", "-o", "material=gold"], "material"),
+    (["missing.json"], "missing.json"),
+])
+def test_03_bad_input_exits_2_with_a_message(args, message, tmp_path, capsys):
+    rc = main(["render", *args, "--quiet"] + ([] if "--out" in args else ["--out", str(tmp_path / "o.exr")]))
+    assert rc == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "o.exr").exists()
+
+
+def test_04_interrupted_render_leaves_no_output(tmp_path):
+    """SIGINT during a long render: non-zero exit without an abort, and no file at all."""
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    proc = subprocess.Popen([*BSDFLAB, "render", "basic-materials", "-o", "width=320", "-o", "height=240",
+                             "--spp", "100000", "--out", str(out_dir / "x.exr")],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    err = bytearray()
+    started = threading.Event()
+
+    def read():
+        while chunk := os.read(proc.stderr.fileno(), 4096):
+            err.extend(chunk)
+            if b"rendering" in err:
+                started.set()
+
+    threading.Thread(target=read, daemon=True).start()
+    try:
+        assert started.wait(60), err.decode(errors="replace")
+        time.sleep(1.0)
+        assert proc.poll() is None
+        proc.send_signal(signal.SIGINT)
+        rc = proc.wait(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert rc != 0 and rc not in (-signal.SIGABRT, -signal.SIGSEGV)
+    assert os.listdir(out_dir) == []
