@@ -244,3 +244,4 @@ def test_15_light_seen_at_a_grazing_angle_is_not_self_shadowed(strategy):
     expected = 0.7 / np.pi * 100 * 0.04 * (9 / d2) / d2  # small-lamp limit: rho/pi L A cos cos / d^2
     mean, err = image_mean(result)
     assert np.all(np.abs(mean - expected) < Z * err + 2e-3 * expected), (mean, expected)
+

@@ -87,3 +87,19 @@ def test_04_interrupted_render_leaves_no_output(tmp_path):
             proc.wait()
     assert rc != 0 and rc not in (-signal.SIGABRT, -signal.SIGSEGV)
     assert os.listdir(out_dir) == []
+
+
+def test_05_scene_set_becomes_a_labelled_contact_sheet(tmp_path):
+    out = tmp_path / "grid.exr"
+    assert main(["render", "appearance-grid", "--width", "8", "--height", "6", "--spp", "1", "--out", str(out),
+                 "--quiet"]) == 0
+    mosaic = read_exr(out)
+    assert mosaic.shape == (2 * 6 + 4, 3 * 8 + 2 * 4, 3)  # 2 rows x 3 columns, 4-pixel gaps
+    assert (tmp_path / "grid.png").stat().st_size > 0
+
+
+def test_06_list_names_every_scene_and_set(capsys):
+    assert main(["render", "--list", "x"]) == 0
+    listed = capsys.readouterr().out
+    for name in ("snake", "sphere", "torus", "basic-materials", "furnace", "appearance-grid", "ablation"):
+        assert name in listed

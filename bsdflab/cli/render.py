@@ -45,7 +45,7 @@ def _options(pairs: list[str]) -> dict:
 
 def _scenes(args):
     """[(label, Scene)] and the folder relative paths resolve against."""
-    from ..scenes import SCENES, scene
+    from ..scenes import SCENE_SETS, SCENES, scene, scene_set
     from ..scenes.scene_file import load_scene
 
     kwargs = _options(args.option)
@@ -53,10 +53,12 @@ def _scenes(args):
         if kwargs:
             raise ValueError("--option applies to built-in scenes, not scene files")
         return [("", load_scene(args.scene))], os.path.dirname(os.path.abspath(args.scene))
+    if args.scene in SCENE_SETS:
+        return scene_set(args.scene, **kwargs), None
     if args.scene not in SCENES:
-        raise ValueError(f"unknown scene {args.scene!r}; known scenes: {', '.join(SCENES)} (or a .json file)")
-    made = scene(args.scene, **kwargs)
-    return (list(made) if isinstance(made, (list, tuple)) else [("", made)]), None
+        raise ValueError(f"unknown scene {args.scene!r}; known scenes: {', '.join([*SCENES, *SCENE_SETS])} "
+                         "(or a .json file)")
+    return [("", scene(args.scene, **kwargs))], None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -64,19 +66,22 @@ def run(args: argparse.Namespace) -> int:
 
     from ..plots.contact_sheet import contact_sheet
     from ..render import render, write_exr, write_png
-    from ..scenes import SCENES
+    from ..scenes import SCENE_SETS, SCENES
     from ..scenes.scene_file import save_scene
 
     if args.list:
-        for name, make in SCENES.items():
-            print(f"{name:<18} {(make.__doc__ or '').strip().splitlines()[0]}")
+        for name, make in {**SCENES, **SCENE_SETS}.items():
+            first = ((make.__doc__ or "").strip().splitlines() or [""])[0]
+            print(f"{name:<18} {first}")
         return 0
+    if not (abs(args.exposure) <= 64):  # also rejects NaN
+        raise ValueError(f"--exposure must be a number of stops in [-64, 64], got {args.exposure}")
     if not args.out.lower().endswith(".exr"):
         raise ValueError(f"--out must end in .exr, got {args.out!r}")
     scenes, base_dir = _scenes(args)
     prepared = []
     for label, s in scenes:
-        if args.width is not None or args.height is not None:
+        if args.width is not None or args.height is not None:  # resizes every scene of a set
             s = s.with_resolution(s.camera.width if args.width is None else args.width,
                                   s.camera.height if args.height is None else args.height)
         if args.max_depth is not None:

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
+from .. import _validate as check
 from ..bsdfs.base import BSDF, from_dict
 from .environment import environment_image
 from .scene import Material, Scene
@@ -25,17 +26,19 @@ def resolve_bsdf(d: dict[str, Any], progress: bool = False, cache_dir=None) -> B
     if d.get("type") != TABULATED:
         return from_dict(d)
 
-    unknown = set(d) - {"type", "model", "grid", "rel_error", "min_samples"}
+    unknown = set(d) - {"type", "model", "grid", "rel_error"}
     if unknown or "model" not in d:
-        raise ValueError("a tabulated BSDF needs 'model' and may have 'grid', 'rel_error', 'min_samples'"
+        raise ValueError("a tabulated BSDF needs 'model' and may have 'grid', 'rel_error'"
                          + (f"; unknown keys: {', '.join(sorted(unknown))}" if unknown else ""))
     model = from_dict(d["model"])
-    grid = TableGrid.from_dict(d["grid"]) if "grid" in d else TableGrid()
-    rel_error = float(d.get("rel_error", 0.02))
-    min_samples = int(d.get("min_samples", 512))
+    try:
+        grid = TableGrid.from_dict(d["grid"]) if "grid" in d else TableGrid()
+    except (TypeError, KeyError, AttributeError) as e:
+        raise ValueError(f"bad table grid {d['grid']!r}: {e!r}") from None
+    rel_error = check.real_scalar("rel_error", d.get("rel_error", 0.02), 0.0, 1.0, lo_open=True)
 
     def make():
-        return tabulate(model, grid, rel_error=rel_error, min_samples=min_samples, progress=progress)
+        return tabulate(model, grid, rel_error=rel_error, progress=progress)
 
     table, path, hit = cached_table(model.to_dict(), grid, rel_error, ("R", "G", "B"), make, directory=cache_dir)
     log.info("table %s %s", path, "reused from the cache" if hit else "tabulated")

@@ -19,6 +19,7 @@ import numpy as np
 
 ENVIRONMENT_TYPES = ("none", "constant", "sky", "envmap")
 MAX_RESOLUTION = 16384
+MAX_PIXELS = 1 << 26  # 67 M pixels: the accumulators take ~3 GB
 
 
 def _vec3(name: str, value: Any, nonnegative: bool = False) -> tuple[float, float, float]:
@@ -72,8 +73,12 @@ class Camera:
         object.__setattr__(self, "fov_deg", _positive("camera fov_deg", self.fov_deg, 179.0))
         object.__setattr__(self, "width", _int_in("width", self.width, 1, MAX_RESOLUTION))
         object.__setattr__(self, "height", _int_in("height", self.height, 1, MAX_RESOLUTION))
+        if self.width * self.height > MAX_PIXELS:
+            raise ValueError(f"width x height must be at most {MAX_PIXELS} pixels, got {self.width * self.height}")
+        if max(abs(x) for x in (*self.origin, *self.target)) > 1e15:
+            raise ValueError("camera origin and target must be within 1e15 of the world origin")
         d = np.subtract(self.target, self.origin)
-        if np.linalg.norm(d) == 0:
+        if np.linalg.norm(d) < 1e-9 * max(1.0, np.abs(self.origin).max()):
             raise ValueError("camera origin and target must differ")
         if np.linalg.norm(np.cross(d, self.up)) <= 1e-9 * np.linalg.norm(d) * np.linalg.norm(self.up):
             raise ValueError("camera up must not be parallel to the view direction")
@@ -98,10 +103,13 @@ class Shape:
     name: str = ""
 
     def __post_init__(self):
-        if not isinstance(self.geometry, dict) or "type" not in self.geometry:
-            raise ValueError(f"shape {self.name!r}: geometry must be a dict with a 'type' key")
+        if not isinstance(self.geometry, dict) or not isinstance(self.geometry.get("type"), str):
+            raise ValueError(f"shape {self.name!r}: geometry must be a dict with a string 'type'")
         if self.emission is not None:
-            object.__setattr__(self, "emission", _vec3(f"shape {self.name!r} emission", self.emission, True))
+            e = _vec3(f"shape {self.name!r} emission", self.emission, True)
+            if max(e) > 1e12:
+                raise ValueError(f"shape {self.name!r} emission must be <= 1e12, got {e}")
+            object.__setattr__(self, "emission", e)
         if self.material is None and self.emission is None:
             raise ValueError(f"shape {self.name!r} has neither a material nor an emission")
 
@@ -160,7 +168,9 @@ class Environment:
             raise ValueError(f"unknown environment type {self.type!r}; known: {', '.join(ENVIRONMENT_TYPES)}")
         for name in ("radiance", "zenith", "horizon", "ground"):
             object.__setattr__(self, name, _vec3(f"environment {name}", getattr(self, name), True))
-        object.__setattr__(self, "scale", _positive("environment scale", self.scale))
+        object.__setattr__(self, "scale", _positive("environment scale", self.scale, 1e12))
+        if self.path is not None and not isinstance(self.path, str):
+            raise ValueError(f"environment path must be a string, got {type(self.path).__name__}")
         if self.type == "envmap" and not self.path:
             raise ValueError("an envmap environment needs a path")
 
@@ -192,7 +202,7 @@ class Scene:
                                  f"materials: {', '.join(sorted(self.materials)) or '(none)'}")
         object.__setattr__(self, "max_depth", _int_in("max_depth", self.max_depth, 1, 1024))
         object.__setattr__(self, "rr_depth", _int_in("rr_depth", self.rr_depth, 1, 1024))
-        if self.environment.type == "none" and not any(s.emission for s in self.shapes):
+        if self.environment.type == "none" and not any(s.emission and max(s.emission) > 0 for s in self.shapes):
             raise ValueError("the scene has no light: add an emissive shape or an environment")
 
     def with_resolution(self, width: int, height: int) -> "Scene":

@@ -5,8 +5,8 @@ shape's geometry spec into a triangle mesh; ``save_scene`` / ``load_scene`` read
 scene files (docs/scene_format.md).
 """
 from .geometry import GEOMETRY_TYPES, Mesh, build_mesh, mesh_area, validate_mesh
-from .registry import SCENES, scene
+from .registry import SCENE_SETS, SCENES, scene, scene_set
 from .scene_file import load_scene, save_scene
 
-__all__ = ["GEOMETRY_TYPES", "Mesh", "SCENES", "build_mesh", "load_scene", "mesh_area", "save_scene", "scene",
+__all__ = ["GEOMETRY_TYPES", "Mesh", "SCENE_SETS", "SCENES", "scene_set", "build_mesh", "load_scene", "mesh_area", "save_scene", "scene",
            "validate_mesh"]

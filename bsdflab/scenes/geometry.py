@@ -308,7 +308,7 @@ def build_mesh(spec: dict, base_dir: str | None = None) -> Mesh:
     if not isinstance(spec, dict) or "type" not in spec:
         raise ValueError(f"a geometry spec must be a dict with a 'type'; known types: {', '.join(GEOMETRY_TYPES)}")
     kind = spec["type"]
-    if kind not in GEOMETRY_TYPES:
+    if not isinstance(kind, str) or kind not in GEOMETRY_TYPES:
         raise ValueError(f"unknown geometry type {kind!r}; known types: {', '.join(GEOMETRY_TYPES)}")
     defaults, build = GEOMETRY_TYPES[kind]
     params = _Params(kind, spec, defaults())

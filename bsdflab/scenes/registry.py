@@ -4,10 +4,10 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ..render import Scene
-from .appearance_grid import appearance_grid_cell
+from .appearance_grid import appearance_grid, appearance_grid_cell
 from .basic_materials import basic_materials
 from .furnace import furnace
-from .objects import sphere, torus
+from .objects import ablation_row, sphere, torus
 from .snake import snake
 
 SCENES: dict[str, Callable[..., Scene]] = {
@@ -19,6 +19,12 @@ SCENES: dict[str, Callable[..., Scene]] = {
     "furnace": furnace,
 }
 
+# Sets of scenes rendered together into one labelled contact sheet.
+SCENE_SETS: dict[str, Callable[..., list[tuple[str, Scene]]]] = {
+    "appearance-grid": appearance_grid,
+    "ablation": ablation_row,
+}
+
 
 def scene(name: str, **kwargs) -> Scene:
     """The scene called ``name`` built with ``kwargs`` (width, height and its own options)."""
@@ -28,3 +34,13 @@ def scene(name: str, **kwargs) -> Scene:
         return SCENES[name](**kwargs)
     except TypeError as e:   # an option the scene does not take
         raise ValueError(f"scene {name!r}: {e}") from None
+
+
+def scene_set(name: str, **kwargs) -> list[tuple[str, Scene]]:
+    """The (label, scene) list called ``name`` (see SCENE_SETS)."""
+    if name not in SCENE_SETS:
+        raise ValueError(f"unknown scene set {name!r}; known sets: {', '.join(SCENE_SETS)}")
+    try:
+        return SCENE_SETS[name](**kwargs)
+    except TypeError as e:
+        raise ValueError(f"scene set {name!r}: {e}") from None

@@ -372,6 +372,9 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
     if (s.lobe & kReflection) { // the top's own reflection (delta or glossy)
         if (!(s.lobe & lobes)) return {};
         std::copy(w.begin(), w.end(), weight);
+        // A renderer weights this direction by MIS against light sampling with pdf():
+        // report that same density (the weight does not depend on it).
+        if (!(s.lobe & kDelta)) s.pdf = pdf(wi, s.wo, kAll, q);
         return s;
     }
     beta = w;

@@ -64,6 +64,7 @@ bool any_positive(const double v[3]) { return v[0] > 0 || v[1] > 0 || v[2] > 0; 
 RenderJob::RenderJob(std::shared_ptr<const RenderScene> scene, const RenderSettings &settings)
     : scene_(std::move(scene)), s_(settings) {
     if (!scene_) throw std::invalid_argument("render: no scene");
+    if (!scene_->committed()) throw std::invalid_argument("render: commit() the scene first");
     if (s_.spp < 1 || s_.pass_spp < 1) throw std::invalid_argument("render: spp must be >= 1");
     if (s_.max_depth < 1 || s_.rr_depth < 1) throw std::invalid_argument("render: depths must be >= 1");
     if (s_.tile < 1) throw std::invalid_argument("render: tile size must be >= 1");
@@ -126,7 +127,10 @@ void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]
             if (ss.gap) {
                 if (mat->has_gap) rb = &mat->gap;
             } else {
-                Vec3 nb = normalized(frame.n - frame.s * ss.slope_u - frame.t * ss.slope_v);
+                // Slopes are along (T_u, T_v); t = n x s is T_v only for right-handed (u, v)
+                // parameterisations (the snake's and the sphere's are left-handed).
+                const double handed = dot(cross(hit.dpdu, hit.dpdv), frame.n) < 0 ? -1.0 : 1.0;
+                Vec3 nb = normalized(frame.n - frame.s * ss.slope_u - frame.t * (handed * ss.slope_v));
                 if (length(nb) > 0) frame = frame_around(nb, frame.s);
                 if (mat->film_thickness_nm > 0) q.film_thickness_nm = mat->film_thickness_nm * ss.thickness_factor;
             }
@@ -150,13 +154,15 @@ void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]
                     // itself when seen at a grazing angle).
                     Vec3 origin = offset_origin(hit, es.wo), dir = es.wo;
                     double tmax = kInf;
+                    bool aimed = true;
                     if (!std::isinf(es.dist)) {
                         Vec3 to = hit.p + es.wo * es.dist - origin;
                         double len = length(to);
-                        dir = to * (1 / len);
+                        aimed = len > 0; // a light point at the origin itself: no usable ray
+                        if (aimed) dir = to * (1 / len);
                         tmax = len * (1 - kShadowEpsilon);
                     }
-                    if (!scene.occluded(origin, dir, tmax)) {
+                    if (aimed && !scene.occluded(origin, dir, tmax)) {
                         double w = (s_.strategy == LightStrategy::kMIS ? power_heuristic(es.pdf, bsdf.pdf(wi, wo, kAll, q))
                                                                         : 1.0) / es.pdf;
                         for (int c = 0; c < 3; ++c) L[c] += beta[c] * f[c] * es.radiance[c] * w;
@@ -179,6 +185,7 @@ void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]
         prev_p = hit.p;
         if (bs.lobe & kTransmission) eta *= bs.eta;
         Vec3 dw = normalized(frame.to_world(bs.wo));
+        if (!(length(dw) > 0)) break;
         if (depth >= s_.rr_depth) {
             double survive = std::min(beta_max * eta * eta, 0.95);
             if (!(rng.uniform() < survive)) break;
@@ -200,7 +207,8 @@ void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
             PCG32 pixel_rng(mix64(mix64(s_.seed) ^ pixel) ^ mix64(uint64_t(pass) + 0x51ed2705ULL));
             double sum[3] = {0, 0, 0}, sq[3] = {0, 0, 0};
             for (int k = 0; k < spp; ++k) {
-                uint64_t sample_seed = (uint64_t(pixel_rng.next()) << 32) | pixel_rng.next();
+                const uint64_t hi = pixel_rng.next(), lo = pixel_rng.next(); // in this order
+                const uint64_t sample_seed = (hi << 32) | lo;
                 double px = x + pixel_rng.uniform(), py = y + pixel_rng.uniform();
                 double L[3];
                 radiance(px, py, sample_seed, L);
@@ -222,6 +230,11 @@ void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
 }
 
 void RenderJob::run() {
+    if (running_.exchange(true)) throw std::logic_error("render: this job is already running");
+    struct Done {
+        std::atomic<bool> &flag;
+        ~Done() { flag = false; }
+    } done{running_};
     for (std::size_t pass = spp_done_ / s_.pass_spp; pass < passes_ && !cancelled_; ++pass) {
         const int spp = std::min(s_.pass_spp, s_.spp - int(pass) * s_.pass_spp);
         pass_sum_.assign(sum_.size(), 0.0);

@@ -127,6 +127,17 @@ int RenderScene::add_mesh(MeshInput m) {
     return int(id);
 }
 
+// A committed scene may be in use by a running RenderJob: it is read-only from then on.
+void RenderScene::set_camera(const Camera &c) {
+    if (committed_) throw std::logic_error("scene already committed: set the camera before commit()");
+    camera_ = c;
+}
+
+void RenderScene::set_environment(Environment e) {
+    if (committed_) throw std::logic_error("scene already committed: set the environment before commit()");
+    environment_ = std::move(e);
+}
+
 void RenderScene::commit() {
     if (committed_) return;
     rtcCommitScene(embree_->scene);
@@ -177,13 +188,17 @@ void RenderScene::fill_hit(int mesh, uint32_t prim, double b1, double b2, Surfac
     }
     // dp/du from the triangle's uv parameterisation (a fallback tangent when degenerate).
     hit.dpdu = p1 - p0;
+    hit.dpdv = p2 - p0;
     if (!m.uvs.empty()) {
         Vec3 t0 = vertex(m.uvs, 2, t[0]), t1 = vertex(m.uvs, 2, t[1]), t2 = vertex(m.uvs, 2, t[2]);
         hit.u = t0.x * b0 + t1.x * b1 + t2.x * b2;
         hit.v = t0.y * b0 + t1.y * b1 + t2.y * b2;
         double du1 = t1.x - t0.x, dv1 = t1.y - t0.y, du2 = t2.x - t0.x, dv2 = t2.y - t0.y;
         double det = du1 * dv2 - dv1 * du2;
-        if (std::abs(det) > 1e-20) hit.dpdu = ((p1 - p0) * dv2 - (p2 - p0) * dv1) * (1 / det);
+        if (std::abs(det) > 1e-20) {
+            hit.dpdu = ((p1 - p0) * dv2 - (p2 - p0) * dv1) * (1 / det);
+            hit.dpdv = ((p2 - p0) * du1 - (p1 - p0) * du2) * (1 / det);
+        }
     } else {
         hit.u = b1;
         hit.v = b2;

@@ -65,7 +65,7 @@ private:
     std::vector<double> sum_, sum_sq_;     // completed passes
     std::vector<double> pass_sum_, pass_sq_; // the pass in progress
     std::atomic<std::size_t> done_{0}, invalid_{0};
-    std::atomic<bool> cancelled_{false};
+    std::atomic<bool> cancelled_{false}, running_{false};
     int spp_done_ = 0;
     int max_channels_ = 3;
 };

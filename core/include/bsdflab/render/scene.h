@@ -46,7 +46,7 @@ struct MeshInput {
 // A surface point found by a ray.
 struct SurfaceHit {
     double t = 0;
-    Vec3 p, ng, ns, dpdu; // ng: unit geometric normal (counter-clockwise front); ns: shading
+    Vec3 p, ng, ns, dpdu, dpdv; // ng: unit geometric normal (counter-clockwise front); ns: shading
     double u = 0, v = 0;  // texture coordinates
     int mesh = -1;
     uint32_t prim = 0;
@@ -68,8 +68,9 @@ public:
 
     int add_material(Material m);
     int add_mesh(MeshInput m);
-    void set_camera(const Camera &c) { camera_ = c; }
-    void set_environment(Environment e) { environment_ = std::move(e); }
+    void set_camera(const Camera &c);
+    void set_environment(Environment e);
+    bool committed() const { return committed_; }
     // Builds the BVH and the light distribution; the scene is read-only afterwards.
     void commit();
 
