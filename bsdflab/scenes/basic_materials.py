@@ -18,6 +18,7 @@ SPACING = 2.4
 
 def basic_materials(width: int = 64, height: int = 48, max_depth: int = 6, environment: bool = True,
                     subdivisions: int = 64) -> Scene:
+    """Spheres of diffuse, conductor, dielectric and rough materials under an area light."""
     n = len(BASIC_BSDFS)
     shapes = [Shape({"type": "rectangle", "center": [0.0, 0.0, 0.0], "normal": [0.0, 1.0, 0.0],
                      "size": [40.0, 40.0]}, material="ground", name="ground")]

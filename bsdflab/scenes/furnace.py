@@ -9,6 +9,7 @@ from ..render import Camera, Environment, Material, Scene, Shape
 
 def furnace(width: int = 64, height: int = 48, reflectance: float = 1.0, max_depth: int = 64,
             subdivisions: int = 64) -> Scene:
+    """A white diffuse sphere in a uniform unit environment: renders to 1 everywhere."""
     sphere = Shape({"type": "sphere", "center": [0.0, 0.0, 0.0], "radius": 1.0, "subdivisions": subdivisions},
                    material="white", name="sphere")
     materials = {"white": Material({"type": "diffuse", "reflectance": float(reflectance)})}

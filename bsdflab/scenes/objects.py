@@ -78,11 +78,13 @@ def object_scene(obj: str = "sphere", variant: str = "full", width: int = 640, h
 
 def sphere(variant: str = "full", width: int = 640, height: int = 360, material: str = "table",
            max_depth: int = 8) -> Scene:
+    """A sphere on the ground in one ablation variant (diffuse, diffuse+bump, thin-film+bump, full)."""
     return object_scene("sphere", variant, width, height, material, max_depth)
 
 
 def torus(variant: str = "full", width: int = 640, height: int = 360, material: str = "table",
           max_depth: int = 8) -> Scene:
+    """A torus on the ground in one ablation variant (diffuse, diffuse+bump, thin-film+bump, full)."""
     return object_scene("torus", variant, width, height, material, max_depth)
 
 
