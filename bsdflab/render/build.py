@@ -26,9 +26,9 @@ def resolve_bsdf(d: dict[str, Any], progress: bool = False, cache_dir=None) -> B
     if d.get("type") != TABULATED:
         return from_dict(d)
 
-    unknown = set(d) - {"type", "model", "grid", "rel_error"}
+    unknown = set(d) - {"type", "model", "grid", "rel_error", "min_samples"}
     if unknown or "model" not in d:
-        raise ValueError("a tabulated BSDF needs 'model' and may have 'grid', 'rel_error'"
+        raise ValueError("a tabulated BSDF needs 'model' and may have 'grid', 'rel_error', 'min_samples'"
                          + (f"; unknown keys: {', '.join(sorted(unknown))}" if unknown else ""))
     model = from_dict(d["model"])
     try:
@@ -36,11 +36,17 @@ def resolve_bsdf(d: dict[str, Any], progress: bool = False, cache_dir=None) -> B
     except (TypeError, KeyError, AttributeError) as e:
         raise ValueError(f"bad table grid {d['grid']!r}: {e!r}") from None
     rel_error = check.real_scalar("rel_error", d.get("rel_error", 0.02), 0.0, 1.0, lo_open=True)
+    min_samples = d.get("min_samples")  # part of the cache key when given
+    if min_samples is not None and (isinstance(min_samples, bool) or not isinstance(min_samples, int)
+                                    or not 1 <= min_samples <= 1 << 24):
+        raise ValueError(f"min_samples must be an integer in [1, {1 << 24}], got {min_samples!r}")
 
     def make():
-        return tabulate(model, grid, rel_error=rel_error, progress=progress)
+        return tabulate(model, grid, rel_error=rel_error, progress=progress,
+                        **({} if min_samples is None else {"min_samples": min_samples}))
 
-    table, path, hit = cached_table(model.to_dict(), grid, rel_error, ("R", "G", "B"), make, directory=cache_dir)
+    table, path, hit = cached_table(model.to_dict(), grid, rel_error, ("R", "G", "B"), make, directory=cache_dir,
+                                    min_samples=min_samples)
     log.info("table %s %s", path, "reused from the cache" if hit else "tabulated")
     return TableBSDF(table)
 

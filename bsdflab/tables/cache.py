@@ -42,15 +42,18 @@ def cache_dir(directory: str | os.PathLike | None = None) -> Path:
 
 
 def cache_key(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], rel_error: float,
-              channels: Sequence[str]) -> str:
+              channels: Sequence[str], min_samples: int | None = None) -> str:
     """SHA-256 (hex) of the canonical JSON (sorted keys) of what determines a table.
 
     Hashed: ``{"channels": [...], "format_version": FORMAT_VERSION, "grid": grid.to_dict(),
-    "model": model_dict, "rel_error": float(rel_error)}``.
+    "model": model_dict, "rel_error": float(rel_error)}``, plus ``"min_samples"`` when given
+    (a non-default first-pass effort makes a different table).
     """
     grid_dict = grid.to_dict() if isinstance(grid, TableGrid) else dict(grid)
     request = {"channels": [str(c) for c in channels], "format_version": FORMAT_VERSION,
                "grid": grid_dict, "model": model_dict, "rel_error": float(rel_error)}
+    if min_samples is not None:
+        request["min_samples"] = int(min_samples)
     try:
         text = canonical_json(request)
     except (TypeError, ValueError) as e:
@@ -60,7 +63,8 @@ def cache_key(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], rel_
 
 def cached_table(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], rel_error: float,
                  channels: Sequence[str], make: Callable[[], TableData],
-                 directory: str | os.PathLike | None = None) -> tuple[TableData, Path | None, bool]:
+                 directory: str | os.PathLike | None = None,
+                 min_samples: int | None = None) -> tuple[TableData, Path | None, bool]:
     """The cached table for this request, tabulating it with `make()` only when needed.
 
     Parameters
@@ -81,7 +85,7 @@ def cached_table(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], r
     hit : bool
         True when the table was read from the cache and `make` was not called.
     """
-    path = cache_dir(directory) / f"{cache_key(model_dict, grid, rel_error, channels)}.exr"
+    path = cache_dir(directory) / f"{cache_key(model_dict, grid, rel_error, channels, min_samples)}.exr"
     if path.exists():
         try:
             return read_table(path), path, True
