@@ -105,8 +105,14 @@ class BSDF(abc.ABC):
 
     def render_core(self):
         """(C++ object, P) for the renderer: P (3, C) projects the object's channels to
-        linear sRGB, or is None when the object already answers in RGB."""
-        return self._core(DEFAULT_WAVELENGTHS), srgb_weights(DEFAULT_WAVELENGTHS)
+        linear sRGB, or is None when the object already answers in RGB.
+
+        A model whose answer does not depend on wavelength (constant indices, no film) is
+        built for one channel with P's row sums: the same RGB, 81 times less work."""
+        core, P = self._core(DEFAULT_WAVELENGTHS), srgb_weights(DEFAULT_WAVELENGTHS)
+        if _spectrally_flat(core):
+            return self._core(np.array([FLAT_PROBE_NM])), P.sum(axis=1, keepdims=True)
+        return core, P
 
     # -- serialisation ----------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
@@ -135,6 +141,26 @@ class BSDF(abc.ABC):
                 self._cores.clear()
             core = self._cores[key] = self._build(np.asarray(wavelengths, dtype=np.float64))
         return core
+
+
+FLAT_PROBE_NM = 550.0
+
+
+def _spectrally_flat(core) -> bool:
+    """True when eval and sample agree across all channels on a fixed set of directions
+    from both sides (grazing included). Flatness comes from the parameters, not the
+    directions, so a probe decides it; stochastic (layered) models are never flat."""
+    if core.channels < 2 or type(core).__name__ == "LayeredBSDF":
+        return False
+    theta = np.radians([0.0, 20.0, 45.0, 70.0, 85.0, 100.0, 135.0, 170.0])
+    wi = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=1)
+    wo = np.stack([-np.sin(theta[::-1]) * 0.8, 0.6 * np.sin(theta[::-1]), np.cos(theta[::-1])], axis=1)
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    a, b = np.repeat(wi, len(wo), axis=0), np.tile(wo, (len(wi), 1))
+    values = [core.eval(a, b, int(Lobe.ALL), None)]
+    u = np.random.default_rng(0).random((len(a), 3))
+    values.append(core.sample(a, u[:, 0], u[:, 1:], int(Lobe.ALL), None)[1])
+    return all(np.ptp(v, axis=1).max() <= 1e-12 * max(1.0, np.abs(v).max()) for v in values)
 
 
 def from_dict(d: dict[str, Any]) -> BSDF:

@@ -30,5 +30,13 @@ class Diffuse(BSDF):
     def _build(self, wavelengths: np.ndarray):
         return _core.Diffuse(wavelengths, self.reflectance.at(wavelengths), self.two_sided)
 
+    def render_core(self):
+        # eval is linear in the reflectance, so a 3-channel Diffuse with the projected
+        # reflectance gives exactly the RGB the spectral one does.
+        from ..spectra import DEFAULT_WAVELENGTHS, srgb_weights
+
+        rgb = srgb_weights(DEFAULT_WAVELENGTHS) @ self.reflectance.at(DEFAULT_WAVELENGTHS)
+        return _core.Diffuse(np.array([1.0, 2.0, 3.0]), rgb, self.two_sided), None
+
     def _params(self):
         return {"reflectance": self.reflectance.to_dict(), "two_sided": self.two_sided}
