@@ -204,7 +204,8 @@ def _make_plugin_class(mi):
             return bs, to_mitsuba(mi.Color3f, weight)
 
         def traverse(self, callback):
-            pass  # nothing differentiable or editable
+            """Exposes no parameters: the table is fixed data, neither differentiable nor
+            editable through mi.traverse."""
 
         def to_string(self):
             return f"TablePlugin[source={self.source!r}, flags={self.m_flags}]"
