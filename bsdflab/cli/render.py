@@ -5,6 +5,8 @@ import argparse
 import json
 import os
 
+from .cluster_options import add_cluster_options, client_from_args
+
 
 def register(sub) -> None:
     p = sub.add_parser("render", help="path-trace a scene (snake, sphere, torus, ...) to EXR + PNG",
@@ -27,6 +29,7 @@ def register(sub) -> None:
     p.add_argument("--save-scene", default=None, help="also write the scene as a scene file (.json)")
     p.add_argument("--cache-dir", default=None, help="table cache folder (default: the user cache)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
+    add_cluster_options(p)
     p.set_defaults(run=run)
 
 
@@ -93,11 +96,12 @@ def run(args: argparse.Namespace) -> int:
         save_scene(prepared[0][1], args.save_scene)
 
     results = []
-    for label, s in prepared:
-        if label and not args.quiet:
-            print(f"rendering {label}")
-        results.append((label, render(s, spp=args.spp, seed=args.seed, progress=not args.quiet,
-                                      base_dir=base_dir, cache_dir=args.cache_dir)))
+    with client_from_args(args) as client:
+        for label, s in prepared:
+            if label and not args.quiet:
+                print(f"rendering {label}")
+            results.append((label, render(s, spp=args.spp, seed=args.seed, progress=not args.quiet,
+                                          base_dir=base_dir, cache_dir=args.cache_dir, client=client)))
     png = os.path.splitext(args.out)[0] + ".png"
     if len(results) == 1:
         result = results[0][1]

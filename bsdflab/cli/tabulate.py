@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 
+from .cluster_options import add_cluster_options, client_from_args
 from .materials import add_material_options, material_from_args
 
 
@@ -27,23 +28,31 @@ def register(sub) -> None:
     p.add_argument("--no-cache", action="store_true", help="always tabulate; do not read or fill the cache")
     p.add_argument("--cache-dir", default=None, help="cache folder (default: $BSDFLAB_CACHE_DIR or the user cache)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_cluster_options(p)
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    import shutil
-
-    from ..tables import TableGrid, cached_table, tabulate, write_table
+    from ..tables import TableGrid, tabulate
 
     model = material_from_args(args)
     grid = TableGrid(args.n_theta_i, args.n_theta_o, args.n_phi, tuple(args.thickness))
     wavelengths = args.wavelengths if args.wavelengths else None
     channels = "rgb" if wavelengths is None else [float(w) for w in wavelengths]
 
-    def make():
-        return tabulate(model, grid, rel_error=args.rel_error, wavelengths=wavelengths,
-                        min_samples=args.min_samples, max_samples=args.max_samples,
-                        seed=args.seed, progress=not args.quiet)
+    with client_from_args(args) as client:  # connected (or refused) before any work
+        def make():
+            return tabulate(model, grid, rel_error=args.rel_error, wavelengths=wavelengths,
+                            min_samples=args.min_samples, max_samples=args.max_samples,
+                            seed=args.seed, progress=not args.quiet, client=client)
+
+        return _tabulate(args, model, grid, channels, make)
+
+
+def _tabulate(args, model, grid, channels, make) -> int:
+    import shutil
+
+    from ..tables import cached_table, write_table
 
     if args.no_cache:
         if args.out is None:

@@ -53,13 +53,15 @@ def _spp(value) -> int:
 
 
 def render(scene: Scene, spp: int = 16, seed: int = 0, progress: bool = True, pass_spp: int | None = None,
-           base_dir: str | None = None, cache_dir=None, strategy: str = "mis") -> RenderResult:
+           base_dir: str | None = None, cache_dir=None, strategy: str = "mis", client=None) -> RenderResult:
     """Path-trace ``scene`` with ``spp`` samples per pixel.
 
     The image does not depend on the number of threads. ``pass_spp`` sets how many samples
     each progressive pass adds (default: about 16 passes). Ctrl-C stops the render and
     raises KeyboardInterrupt; nothing is written anywhere by this function.
     Tables a material asks for (``"tabulated"``) are built or reused before rendering.
+    ``client``: a ``dask.distributed.Client`` to render on its workers instead of this
+    process's threads (bsdflab.distributed): the same image, bit for bit.
     """
     if not isinstance(scene, Scene):
         raise ValueError(f"scene must be a bsdflab.render.Scene, got {type(scene).__name__}")
@@ -69,6 +71,13 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, progress: bool = True, pa
     if strategy not in STRATEGIES:
         raise ValueError(f"unknown strategy {strategy!r}; known: {', '.join(STRATEGIES)}")
     pass_spp = _spp(pass_spp) if pass_spp is not None else max(1, spp // 16)
+    if client is not None:
+        if base_dir is not None:
+            raise ValueError("base_dir is for scene files read here; give workers absolute paths")
+        from ..distributed.render import render_on_cluster
+
+        return render_on_cluster(client, scene, spp, int(seed), pass_spp, STRATEGIES[strategy],
+                                 progress=progress, cache_dir=cache_dir)
     core_scene = build_render_scene(scene, base_dir=base_dir, progress=progress, cache_dir=cache_dir)
     job = _core.RenderJob(core_scene, spp, pass_spp, scene.max_depth, scene.rr_depth, int(seed), 16,
                           STRATEGIES[strategy])

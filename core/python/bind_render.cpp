@@ -158,6 +158,35 @@ void bind_render(py::module_ &m) {
                  return py::make_tuple(mean, var);
              },
              "(mean, variance of the mean), each (H, W, 3), over the completed passes")
+        .def_property_readonly("passes", &RenderJob::passes)
+        .def("pass_samples", &RenderJob::pass_samples, py::arg("pass_index"))
+        .def("render_window",
+             [](const RenderJob &j, int x0, int y0, int x1, int y1, int pass) {
+                 const std::size_t h = std::size_t(std::max(0, y1 - y0)), w = std::size_t(std::max(0, x1 - x0));
+                 py::array_t<double> sum({h, w, std::size_t(3)}), sq({h, w, std::size_t(3)});
+                 double *ps = sum.mutable_data(), *pq = sq.mutable_data();
+                 std::size_t bad;
+                 {
+                     py::gil_scoped_release release;
+                     bad = j.render_window(x0, y0, x1, y1, pass, ps, pq);
+                 }
+                 return py::make_tuple(sum, sq, bad);
+             },
+             py::arg("x0"), py::arg("y0"), py::arg("x1"), py::arg("y1"), py::arg("pass_index"),
+             "(sum, sum of squares, invalid samples) of one pass over a pixel window: a work unit "
+             "of distributed rendering, equal to what run() computes for those pixels")
+        .def_static("finish_image",
+                    [](py::array_t<double, py::array::c_style | py::array::forcecast> sum,
+                       py::array_t<double, py::array::c_style | py::array::forcecast> sq, double n) {
+                        if (sum.size() != sq.size()) throw std::invalid_argument("sum and sq differ in size");
+                        std::vector<py::ssize_t> shape(sum.shape(), sum.shape() + sum.ndim());
+                        py::array_t<double> mean(shape), var(shape);
+                        RenderJob::finish_image(sum.data(), sq.data(), std::size_t(sum.size()), n,
+                                                mean.mutable_data(), var.mutable_data());
+                        return py::make_tuple(mean, var);
+                    },
+                    py::arg("sum"), py::arg("sum_sq"), py::arg("n"),
+                    "(mean, variance of the mean) from accumulated sums over n samples, as image() computes them")
         .def("radiance",
              [](const RenderJob &j, double px, double py, uint64_t seed) {
                  double L[3];

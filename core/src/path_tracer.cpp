@@ -196,10 +196,9 @@ void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]
     }
 }
 
-void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
-    const int W = width(), H = height();
-    const int x0 = int(tile % tiles_x_) * s_.tile, y0 = int(tile / tiles_x_) * s_.tile;
-    const int x1 = std::min(x0 + s_.tile, W), y1 = std::min(y0 + s_.tile, H);
+std::size_t RenderJob::render_rect(int x0, int y0, int x1, int y1, int pass, int spp, double *out_sum,
+                                   double *out_sq, std::size_t stride) const {
+    const int W = width();
     std::size_t bad = 0;
     for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
@@ -209,7 +208,8 @@ void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
             for (int k = 0; k < spp; ++k) {
                 const uint64_t hi = pixel_rng.next(), lo = pixel_rng.next(); // in this order
                 const uint64_t sample_seed = (hi << 32) | lo;
-                double px = x + pixel_rng.uniform(), py = y + pixel_rng.uniform();
+                const double px = x + pixel_rng.uniform();
+                const double py = y + pixel_rng.uniform();
                 double L[3];
                 radiance(px, py, sample_seed, L);
                 if (!(std::isfinite(L[0]) && std::isfinite(L[1]) && std::isfinite(L[2]))) {
@@ -221,12 +221,43 @@ void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
                     sq[c] += L[c] * L[c];
                 }
             }
+            const std::size_t o = (std::size_t(y - y0) * stride + (x - x0)) * 3;
             for (int c = 0; c < 3; ++c) {
-                pass_sum_[pixel * 3 + c] = sum[c];
-                pass_sq_[pixel * 3 + c] = sq[c];
+                out_sum[o + c] = sum[c];
+                out_sq[o + c] = sq[c];
             }
         }
-    invalid_ += bad;
+    return bad;
+}
+
+void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
+    const int W = width(), H = height();
+    const int x0 = int(tile % tiles_x_) * s_.tile, y0 = int(tile / tiles_x_) * s_.tile;
+    const int x1 = std::min(x0 + s_.tile, W), y1 = std::min(y0 + s_.tile, H);
+    const std::size_t first = (std::size_t(y0) * W + x0) * 3;
+    invalid_ += render_rect(x0, y0, x1, y1, pass, spp, pass_sum_.data() + first, pass_sq_.data() + first, W);
+}
+
+int RenderJob::pass_samples(int pass) const {
+    if (pass < 0 || std::size_t(pass) >= passes_) return 0;
+    return std::min(s_.pass_spp, s_.spp - pass * s_.pass_spp);
+}
+
+std::size_t RenderJob::render_window(int x0, int y0, int x1, int y1, int pass, double *sum, double *sq) const {
+    if (x0 < 0 || y0 < 0 || x1 > width() || y1 > height() || x0 >= x1 || y0 >= y1)
+        throw std::invalid_argument("render: the window must be a non-empty part of the image");
+    if (pass < 0 || std::size_t(pass) >= passes_) throw std::invalid_argument("render: no such pass");
+    const int spp = pass_samples(pass), w = x1 - x0, t = s_.tile;
+    const std::size_t tx = (w + t - 1) / t, ty = (y1 - y0 + t - 1) / t;
+    std::atomic<std::size_t> bad{0};
+    // The same per-pixel streams as run(): tiling only changes who computes a pixel.
+    parallel_for_each(tx * ty, [&](std::size_t tile) {
+        const int ax = x0 + int(tile % tx) * t, ay = y0 + int(tile / tx) * t;
+        const std::size_t first = (std::size_t(ay - y0) * w + (ax - x0)) * 3;
+        bad += render_rect(ax, ay, std::min(ax + t, x1), std::min(ay + t, y1), pass, spp, sum + first,
+                           sq + first, std::size_t(w));
+    });
+    return bad;
 }
 
 void RenderJob::run() {
@@ -255,18 +286,22 @@ void RenderJob::run() {
     pass_sq_.clear();
 }
 
-void RenderJob::image(double *mean, double *variance_of_mean) const {
-    const double n = spp_done_;
-    for (std::size_t i = 0; i < sum_.size(); ++i) {
-        double m = n > 0 ? sum_[i] / n : 0.0;
+void RenderJob::finish_image(const double *sum, const double *sum_sq, std::size_t count, double n,
+                             double *mean, double *variance_of_mean) {
+    for (std::size_t i = 0; i < count; ++i) {
+        double m = n > 0 ? sum[i] / n : 0.0;
         mean[i] = m;
         if (n < 2) {
             variance_of_mean[i] = kInf;
         } else {
-            double s2 = std::max(0.0, (sum_sq_[i] - n * m * m) / (n - 1));
+            double s2 = std::max(0.0, (sum_sq[i] - n * m * m) / (n - 1));
             variance_of_mean[i] = s2 / n;
         }
     }
+}
+
+void RenderJob::image(double *mean, double *variance_of_mean) const {
+    finish_image(sum_.data(), sum_sq_.data(), sum_.size(), spp_done_, mean, variance_of_mean);
 }
 
 } // namespace bsdflab

@@ -56,8 +56,25 @@ public:
     // One camera sample's radiance (exposed for tests).
     void radiance(double px, double py, uint64_t sample_seed, double rgb[3]) const;
 
+    // Work units for distributed rendering: pass `pass` over the pixel window
+    // [x0, x1) x [y0, y1), tiles on all cores, into window-sized row-major RGB sums of the
+    // samples and of their squares. The numbers are exactly those run() computes for these
+    // pixels in this pass, so summing units pass by pass in order reproduces run()'s image.
+    // Returns the number of invalid (non-finite) samples, which are left out as in run().
+    std::size_t render_window(int x0, int y0, int x1, int y1, int pass, double *sum, double *sq) const;
+    std::size_t passes() const { return passes_; }
+    int pass_samples(int pass) const;
+    // The image from accumulated sums over n samples (what image() reports): shared by
+    // run() and by drivers that accumulate render_window() units themselves.
+    static void finish_image(const double *sum, const double *sum_sq, std::size_t count, double n,
+                             double *mean, double *variance_of_mean);
+
 private:
     void render_tile(std::size_t tile, int pass, int spp);
+    // Pixels [x0, x1) x [y0, y1) of one pass; out_sum/out_sq point at pixel (x0, y0) of
+    // row-major buffers whose rows are `stride` pixels long.
+    std::size_t render_rect(int x0, int y0, int x1, int y1, int pass, int spp, double *out_sum,
+                            double *out_sq, std::size_t stride) const;
 
     std::shared_ptr<const RenderScene> scene_;
     RenderSettings s_;
