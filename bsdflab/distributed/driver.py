@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import hashlib
 import json
+import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
 # Reruns of a unit that raised (beyond the scheduler's own rescheduling of units whose
 # worker died, which `distributed.scheduler.allowed-failures` bounds).
 RETRIES = 2
+POLL_S = 0.05
 
 
 def token(*parts: Any) -> str:
@@ -34,10 +36,14 @@ def run_units(client, fn: Callable[..., Any], shared: Sequence[Any], units: Sequ
     on the driver as each finishes (in completion order: ``on_result`` must not depend on it).
 
     ``shared`` values are scattered once (broadcast) instead of being sent with every unit.
-    Ctrl-C (or ``cancelled()`` becoming true) cancels every outstanding unit and raises
-    KeyboardInterrupt.
+    Ctrl-C cancels every outstanding unit and re-raises KeyboardInterrupt; ``cancelled()``
+    becoming true cancels them and raises JobCancelled.
+    Inside a service job (a bsdflab._jobs monitor), each finished unit is reported as the
+    stage's progress and a cancelled job cancels its units (JobCancelled).
     """
     from distributed import as_completed
+
+    from .._jobs import JobCancelled, cancel_requested, report_progress
 
     # Wrapped in a list: scatter() would take a dict's items as separate pieces of data.
     shared_futures = [client.scatter([v], broadcast=True, hash=True)[0] for v in shared]
@@ -50,17 +56,27 @@ def run_units(client, fn: Callable[..., Any], shared: Sequence[Any], units: Sequ
 
         bar = tqdm(total=len(units), unit="unit", desc=desc, leave=False)
     done = 0
+    stop = cancelled or (lambda: False)
     try:
-        for future in as_completed(futures):
-            if cancelled is not None and cancelled():
-                raise KeyboardInterrupt
-            on_result(unit_of[future.key], future.result())
-            future.release()
-            done += 1
-            if bar is not None:
-                bar.update(1)
-            if progress_callback is not None:
-                progress_callback(done / len(units))
+        pending = as_completed(futures)
+        while not pending.is_empty():
+            # Poll rather than block on the next unit, so a cancel is seen within POLL_S
+            # even while every outstanding unit is long.
+            if cancel_requested() or stop():
+                raise JobCancelled(f"{desc} cancelled")
+            batch = pending.next_batch(block=False)
+            if not batch:
+                time.sleep(POLL_S)
+                continue
+            for future in batch:
+                on_result(unit_of[future.key], future.result())
+                future.release()
+                done += 1
+                if bar is not None:
+                    bar.update(1)
+                report_progress(desc, done / len(units))
+                if progress_callback is not None:
+                    progress_callback(done / len(units))
     except BaseException:
         client.cancel(futures)
         raise
