@@ -13,15 +13,14 @@ from scipy import stats
 import bsdflab as bl
 from bsdflab import Lobe
 from bsdflab.reference.mitsuba_calls import query
-from bsdflab.testing import albedo_uniform, random_unit_vectors
+from bsdflab.testing import albedo_uniform, random_unit_vectors, sidak_z_limit
 from conftest import directions_at
 
 SIGNIFICANCE = 0.01
 
 
 def z_limit(n: int, alpha: float = SIGNIFICANCE) -> float:
-    per_test = 1 - (1 - alpha) ** (1 / n)
-    return stats.norm.isf(per_test / 2)
+    return sidak_z_limit(alpha, n)
 
 
 def assert_agrees(value, err, ref, what="", model_error=None):
