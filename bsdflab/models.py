@@ -5,7 +5,10 @@ where the overrides are the preset's keyword parameters (``bsdflab.presets``).
 """
 from __future__ import annotations
 
+import collections
 import inspect
+import json
+import threading
 from typing import Any
 
 from .bsdfs.base import BSDF, from_dict
@@ -27,6 +30,33 @@ def model_from_spec(spec: dict[str, Any]) -> BSDF:
     if not isinstance(overrides, dict):
         raise ValueError("'overrides' must be a dict of the preset's keyword parameters")
     return preset(spec["preset"], **overrides)
+
+
+class ModelCache:
+    """The last ``size`` models built by `model_from_spec`, by their spec: building a
+    spectral model's core objects costs far more than a small query (a server keeps one).
+    BSDF objects are safe to share between threads (the core is thread-safe)."""
+
+    def __init__(self, size: int = 32):
+        self.size = size
+        self._models: collections.OrderedDict[str, BSDF] = collections.OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, spec: dict[str, Any]) -> BSDF:
+        try:
+            key = json.dumps(spec, sort_keys=True, allow_nan=False)
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"a model spec must be plain JSON: {e}") from None
+        with self._lock:
+            if key in self._models:
+                self._models.move_to_end(key)
+                return self._models[key]
+        model = model_from_spec(spec)
+        with self._lock:
+            self._models[key] = model
+            while len(self._models) > self.size:
+                self._models.popitem(last=False)
+        return model
 
 
 def keyword_defaults(function) -> dict[str, Any]:

@@ -14,7 +14,7 @@ from fastapi import APIRouter, Query
 from fastapi.responses import Response
 
 from bsdflab import lobe_views
-from bsdflab.models import model_from_spec
+from bsdflab.models import ModelCache
 from bsdflab.plots.lobe import lobe_figure
 
 from ..deps import KEY, SettingsDep
@@ -22,6 +22,7 @@ from ..errors import ERRORS, KEY_ERRORS, over_limit
 from ..models import EvalRequest, EvalResponse, HemisphereView, LobeRequest, LobeResponse, PlaneView
 from ..settings import Settings
 
+MODELS = ModelCache(32)   # recently asked-for models, their core objects built
 router = APIRouter(prefix="/v1/bsdf", tags=["bsdf"], dependencies=[KEY], responses={**ERRORS, **KEY_ERRORS})
 
 
@@ -69,7 +70,7 @@ def evaluate(body: EvalRequest, settings: SettingsDep) -> EvalResponse:
     """f(wi, wo) |cos theta_o| (Mitsuba's convention) for every pair, in linear sRGB (D65) or
     at the given wavelengths, with standard errors for stochastic (layered) models. The
     same request always gives the same answer (walks are seeded from seed, wi, wo)."""
-    bsdf = model_from_spec(body.spec())
+    bsdf = MODELS.get(body.spec())
     wi, wo = _directions(body, settings)
     if body.wavelengths is not None:
         over_limit(settings, "limit_wavelengths", len(body.wavelengths), "wavelengths")
@@ -88,7 +89,7 @@ def evaluate(body: EvalRequest, settings: SettingsDep) -> EvalResponse:
 def lobe(body: LobeRequest, settings: SettingsDep) -> LobeResponse:
     """The plane of incidence (signed outgoing angle, mirror direction at +theta_i) and the
     upper hemisphere seen from above (orthographic x, y), in linear sRGB, for one incidence."""
-    bsdf = model_from_spec(body.spec())
+    bsdf = MODELS.get(body.spec())
     over_limit(settings, "limit_lobe_resolution", body.points, "points")
     over_limit(settings, "limit_lobe_resolution", body.resolution, "resolution")
     wi = lobe_views.incident(body.theta_i)
@@ -149,7 +150,7 @@ def lobe_png(body: LobeRequest, settings: SettingsDep) -> Response:
     """The figure of ``bsdflab lobe``: lobe in the plane of incidence, the hemisphere, and
     albedo vs incidence angle with its colour. ``samples`` sets the albedo estimates'
     sample count (default 20000); ``points``, ``resolution`` and ``view`` do not apply."""
-    bsdf = model_from_spec(body.spec())
+    bsdf = MODELS.get(body.spec())
     samples = body.samples or FIGURE_SAMPLES
     _figure_checks(settings, bsdf, body.theta_i, samples)
     return _figure(bsdf, body.theta_i, samples, body.seed or 0)
@@ -166,7 +167,7 @@ def lobe_png_query(settings: SettingsDep,
     """As POST, with the model in the query: ``?preset=xenopeltis&theta_i=45`` or
     ``?model={"type":"diffuse","reflectance":0.5}`` (URL-encoded)."""
     spec = {"preset": preset, "overrides": _json("overrides", overrides), "model": _json("model", model)}
-    bsdf = model_from_spec(spec)
+    bsdf = MODELS.get(spec)
     _figure_checks(settings, bsdf, theta_i, samples)
     return _figure(bsdf, theta_i, samples, seed)
 

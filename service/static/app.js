@@ -13,6 +13,10 @@ const BASE_LAYOUT = {
   margin: { l: 48, r: 16, t: 12, b: 40 }, showlegend: true,
   legend: { orientation: "h", x: 0, y: -0.18, font: { size: 11 } },
 };
+// matplotlib's "inferno" at 9 stops (plotly.js has no inferno of its own)
+const INFERNO = ["#000004", "#1f0c48", "#550f6d", "#88226a", "#ba3655", "#e35933", "#f98e09", "#f5c72b", "#fcffa4"]
+  .map((c, i, all) => [i / (all.length - 1), c]);
+const DECADES = 3;   // the heat map shows the top three decades of luminance
 const CONFIG = { displaylogo: false, responsive: true, modeBarButtonsToRemove: ["lasso2d", "select2d"] };
 
 const state = { presets: {}, preset: null, lobeRequest: null, filmRequest: null, source: null, job: null };
@@ -130,10 +134,16 @@ function plotHemisphere(lobe) {
   const h = lobe.hemisphere;
   const s = Math.sin((lobe.theta_i * Math.PI) / 180);
   const circle = Array.from({ length: 121 }, (_, i) => (2 * Math.PI * i) / 120);
+  const peak = Math.max(1e-12, ...h.luminance.flat().filter(Number.isFinite));
+  const floor = Math.log10(peak) - DECADES;
+  const z = h.luminance.map((row) => row.map((y) => (y == null ? null : Math.max(floor, Math.log10(Math.max(y, 1e-30))))));
+  const ticks = Array.from({ length: DECADES + 1 }, (_, i) => Math.ceil(floor) + i).filter((t) => t <= Math.log10(peak));
   const traces = [
-    { type: "heatmap", x: h.x, y: h.y, z: h.luminance, colorscale: "Inferno", hoverongaps: false,
-      colorbar: { thickness: 10, outlinewidth: 0, tickfont: { size: 10 } },
-      hovertemplate: "x %{x:.2f}, y %{y:.2f}<br>Y = %{z:.4g}<extra></extra>" },
+    { type: "heatmap", x: h.x, y: h.y, z, customdata: h.luminance, colorscale: INFERNO, hoverongaps: false, zsmooth: "best",
+      zmin: floor, zmax: Math.log10(peak),
+      colorbar: { thickness: 10, outlinewidth: 0, tickfont: { size: 10 }, tickvals: ticks,
+        ticktext: ticks.map((t) => `1e${t}`) },
+      hovertemplate: "x %{x:.2f}, y %{y:.2f}<br>Y = %{customdata:.4g}<extra></extra>" },
     { type: "scatter", mode: "lines", x: circle.map(Math.cos), y: circle.map(Math.sin), showlegend: false,
       line: { color: "#3a4458", width: 1 }, hoverinfo: "skip" },
     { type: "scatter", mode: "markers+text", x: [-s, s], y: [0, 0], text: ["ωi", "mirror"],
