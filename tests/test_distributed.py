@@ -121,3 +121,46 @@ def test_cli_unreachable_scheduler_exits_2_and_writes_nothing(tmp_path):
     assert "no Dask scheduler answers" in p.stderr
     assert len(p.stderr.strip().splitlines()) == 1
     assert not out.exists() and not list(tmp_path.iterdir())
+
+
+def _small_table_args():
+    import bsdflab as bl
+    from bsdflab.tables import TableGrid
+
+    return bl.presets.xenopeltis(), TableGrid(3, 4, 3, (360.0, 440.0))
+
+
+def test_table_equals_the_local_table_bit_for_bit(client):
+    from bsdflab.distributed.tabulate_units import tabulate_on_cluster
+    from bsdflab.tables import tabulate
+
+    model, grid = _small_table_args()
+    kw = dict(rel_error=0.05, wavelengths=None, min_samples=32, max_samples=256, seed=11)
+    local = tabulate(model, grid, progress=False, **kw)
+    # 2 x 3 x 4 x 3 = 72 cells in blocks of one slice (12 cells): 6 units per stage.
+    remote = tabulate_on_cluster(client, model, grid, progress=False, unit_cells=12, **kw)
+    assert remote.meta["units"] == 12
+    for name in ("values", "stderr", "samples"):
+        assert np.array_equal(getattr(local, name), getattr(remote, name)), name
+    for key in ("rel_error_rms", "rel_error_max", "nonfinite_walks", "pilot_walks"):
+        assert local.meta[key] == remote.meta[key], key
+
+
+def test_a_worker_killed_mid_tabulation_changes_nothing(client):
+    from bsdflab.distributed.tabulate_units import tabulate_on_cluster
+    from bsdflab.tables import tabulate
+
+    model, grid = _small_table_args()
+    kw = dict(rel_error=0.05, wavelengths=None, min_samples=32, max_samples=256, seed=12)
+    local = tabulate(model, grid, progress=False, **kw)
+    pids = list(client.run(os.getpid).values())
+    killer = threading.Timer(1.0, os.kill, (pids[1], signal.SIGKILL))
+    killer.start()
+    try:
+        remote = tabulate_on_cluster(client, model, grid, progress=False, unit_cells=12, **kw)
+    finally:
+        killer.cancel()
+    client.wait_for_workers(2, timeout=60)
+    assert pids[1] not in client.run(os.getpid).values()  # the worker really was replaced
+    for name in ("values", "stderr", "samples"):
+        assert np.array_equal(getattr(local, name), getattr(remote, name)), name

@@ -46,7 +46,9 @@ def run_units(client, fn: Callable[..., Any], shared: Sequence[Any], units: Sequ
     from .._jobs import JobCancelled, cancel_requested, report_progress
 
     # Wrapped in a list: scatter() would take a dict's items as separate pieces of data.
-    shared_futures = [client.scatter([v], broadcast=True, hash=True)[0] for v in shared]
+    # Fresh keys (hash=False): a content-hash key shared with an earlier, just-released
+    # scatter of the same value could be forgotten under this job ("lost dependencies").
+    shared_futures = [client.scatter([v], broadcast=True, hash=False)[0] for v in shared]
     futures = [client.submit(fn, *shared_futures, u, key=f"{name}-{i}", retries=RETRIES, pure=False)
                for i, u in enumerate(units)]
     unit_of = {f.key: u for f, u in zip(futures, units)}

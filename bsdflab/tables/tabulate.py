@@ -80,7 +80,7 @@ class CellBlock:
 def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = 0.01,
              wavelengths=None, min_samples: int = DEFAULT_MIN_SAMPLES,
              max_samples: int = DEFAULT_MAX_SAMPLES, seed: int = 0,
-             progress: bool = True) -> TableData:
+             progress: bool = True, client=None) -> TableData:
     """Tabulate ``model`` on ``grid``; returns the table (write it with ``write_table``).
 
     Parameters
@@ -101,6 +101,9 @@ def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = 0.01
         Seed of the walks (per cell, combined with the cell index and stage).
     progress : bool
         Show a tqdm progress bar on stderr.
+    client : dask.distributed.Client, optional
+        Run the cells on this cluster's workers (bsdflab.distributed) instead of this
+        process's threads: the same values, errors and sample counts, bit for bit.
 
     Runs :func:`pilot_cells`, :func:`floor_scale`, :func:`finish_cells` and
     :func:`assemble` over every cell (module docstring).
@@ -109,6 +112,13 @@ def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = 0.01
     check.real_scalar("rel_error", rel_error, 0.0, 1.0, lo_open=True)
     if _count("max_samples", max_samples) < _count("min_samples", min_samples):
         raise ValueError(f"max_samples ({max_samples}) must be >= min_samples ({min_samples})")
+    if client is not None:
+        from ..distributed.tabulate_units import tabulate_on_cluster
+
+        _check_model(model)
+        return tabulate_on_cluster(client, model, grid, rel_error=rel_error, wavelengths=wavelengths,
+                                   min_samples=min_samples, max_samples=max_samples,
+                                   seed=check.seed(seed), progress=progress)
     kw = dict(wavelengths=wavelengths, min_samples=min_samples, seed=seed)
     n = cell_count(model, grid)
     pilot = pilot_cells(model, grid, range(n), progress=progress, **kw)
