@@ -45,8 +45,8 @@ Dedup and caching
 from .._jobs import JobCancelled
 from .executor import (FINISHED, STATES, JobExecutor, JobFailed, JobHandle, default_workers, execute,
                        make_executor, outcome_error)
-from .kinds import JobKind, get_kind, kind_names, register_kind
+from .kinds import JobKind, get_kind, kind_names, module_of, register_kind
 
 __all__ = ["FINISHED", "STATES", "JobCancelled", "JobExecutor", "JobFailed", "JobHandle", "JobKind",
-           "default_workers", "execute", "get_kind", "kind_names", "make_executor", "outcome_error",
+           "default_workers", "execute", "get_kind", "kind_names", "make_executor", "module_of", "outcome_error",
            "register_kind"]

@@ -55,11 +55,18 @@ class JobKind:
 
 
 def register_kind(name: str, module: str) -> None:
-    """Make ``name`` run ``module``'s ``run`` (e.g. ``register_kind("fit", "bsdflab.fit.job")``).
-    Worker processes import this registry afresh: register built-in kinds in ``_MODULES``."""
+    """Make ``name`` run ``module``'s functions (e.g. ``register_kind("fit", "bsdflab.fit.job")``).
+    Executors send the module path along with each job (``module_of``), so a worker
+    process or a cluster worker registers it too."""
     if not name or not name.replace("-", "").isalnum():
         raise ValueError(f"a job kind name must be alphanumeric, got {name!r}")
     _MODULES[name] = module
+
+
+def module_of(name: str) -> str:
+    """The module path of kind ``name``."""
+    get_kind(name)
+    return _MODULES[name]
 
 
 def kind_names() -> tuple[str, ...]:
@@ -71,3 +78,12 @@ def get_kind(name: str) -> JobKind:
     if name not in _MODULES:
         raise ValueError(f"unknown job kind {name!r}; known kinds: {', '.join(_MODULES)}")
     return JobKind(name, importlib.import_module(_MODULES[name]))
+
+
+def warm_up() -> None:
+    """Import every kind's module and colour-science (seconds of imports a worker process
+    pays once at start rather than inside its first job)."""
+    import colour  # noqa: F401
+
+    for name in _MODULES:
+        get_kind(name)

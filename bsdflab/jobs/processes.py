@@ -19,6 +19,7 @@ from typing import Any
 
 from .._jobs import JobCancelled
 from .executor import JobExecutor, JobFailed, JobHandle, execute, outcome_error
+from .kinds import module_of
 
 PROGRESS_INTERVAL_S = 0.1   # at most ten progress messages a second per worker
 POLL_S = 0.5
@@ -130,7 +131,7 @@ class ProcessJobExecutor(JobExecutor):
             idle.cancel.clear()
             idle.handle, idle.cancel_sent_at = handle, None
             try:
-                idle.conn.send(("run", handle.kind, handle.request, str(handle.out_dir)))
+                idle.conn.send(("run", handle.kind, module_of(handle.kind), handle.request, str(handle.out_dir)))
             except (OSError, ValueError) as e:   # the worker just died; its sentinel says so
                 handle._finish(error=JobFailed(f"could not reach the worker: {e}", "OSError"))
                 idle.handle = None
@@ -237,7 +238,9 @@ def worker_main(conn, cancel, parent_pid: int) -> None:
     _die_with_parent()
     if os.getppid() != parent_pid:
         return
-    from . import kinds  # noqa: F401  -- import the registry before the first job
+    from .kinds import register_kind, warm_up
+
+    warm_up()
 
     def orphaned() -> bool:
         return os.getppid() != parent_pid
@@ -253,7 +256,8 @@ def worker_main(conn, cancel, parent_pid: int) -> None:
             return
         if message[0] != "run":
             return
-        _, kind, request, out_dir = message
+        _, kind, module, request, out_dir = message
+        register_kind(kind, module)
         last = [0.0]
 
         def progress(fraction: float) -> None:
