@@ -164,3 +164,70 @@ def test_a_worker_killed_mid_tabulation_changes_nothing(client):
     assert pids[1] not in client.run(os.getpid).values()  # the worker really was replaced
     for name in ("values", "stderr", "samples"):
         assert np.array_equal(getattr(local, name), getattr(remote, name)), name
+
+
+def test_service_executor_runs_jobs_on_the_cluster(client, tmp_path):
+    """BSDFLAB_EXECUTOR=dask:<address>: the service's jobs, their units on the cluster."""
+    from bsdflab.jobs.executor import make_executor
+    from bsdflab.jobs.kinds import get_kind
+    from bsdflab.render import read_exr
+
+    request = get_kind("render").normalise({"scene": "furnace", "width": 12, "height": 9, "spp": 4, "seed": 2})
+    with make_executor(f"dask:{client.scheduler.address}", workers=1) as ex:
+        result = ex.submit("render", request, tmp_path).result(timeout=300)
+    image = read_exr(tmp_path / result["files"]["exr"])
+    local = render(scene("furnace", width=12, height=9), spp=4, seed=2, progress=False)
+    assert np.array_equal(image, local.mean.astype(image.dtype))
+    assert int(result["summary"]["units"]) >= 1  # rendered by units on the cluster
+
+
+def test_cancelling_a_cluster_job_cancels_its_units(client, tmp_path):
+    from bsdflab._jobs import JobCancelled
+    from bsdflab.jobs.executor import make_executor
+    from bsdflab.jobs.kinds import get_kind
+
+    request = get_kind("render").normalise({"scene": "basic-materials", "width": 160, "height": 120,
+                                            "spp": 256, "seed": 4})
+    with make_executor(f"dask:{client.scheduler.address}", workers=1) as ex:
+        handle = ex.submit("render", request, tmp_path)
+        deadline = time.monotonic() + 120
+        while handle.progress()[0] == 0 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert handle.progress()[0] > 0
+        handle.cancel()
+        with pytest.raises(JobCancelled):
+            handle.result(timeout=60)
+    assert not list(tmp_path.glob("*.exr")) and not list(tmp_path.glob("*.png"))
+    # Nothing of the job is left computing on the cluster.
+    deadline = time.monotonic() + 30
+    while client.processing() and any(client.processing().values()) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not any(client.processing().values())
+
+
+def test_ctrl_c_on_the_driver_cancels_and_leaves_no_file(tmp_path):
+    out = tmp_path / "r.exr"
+    p = subprocess.Popen([*BSDFLAB, "render", "basic-materials", "--width", "160", "--height", "120",
+                          "--spp", "1024", "--cluster", "local:1", "--out", str(out)],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                         # a default SIGINT disposition even under a runner that ignores it
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    seen = threading.Event()
+
+    def watch():
+        buf = b""
+        while chunk := p.stderr.read1(4096):
+            buf += chunk
+            if b"rendering" in buf:  # the units' progress bar: work is on the cluster
+                seen.set()
+
+    threading.Thread(target=watch, daemon=True).start()
+    try:
+        assert seen.wait(180), "the render never started"
+        p.send_signal(signal.SIGINT)
+        rc = p.wait(timeout=120)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert rc != 0
+    assert not out.exists() and not list(tmp_path.iterdir())

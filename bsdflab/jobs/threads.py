@@ -13,6 +13,8 @@ class ThreadJobExecutor(JobExecutor):
     """``workers`` jobs at a time on a thread pool; a cancelled queued job never starts,
     a running one stops at its next progress check (within about 0.2 s)."""
 
+    client = None  # a dask.distributed.Client handed to the jobs (bsdflab.distributed.executor)
+
     def __init__(self, workers: int = 1):
         self.workers = workers
         self._pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="bsdflab-job")
@@ -30,7 +32,7 @@ class ThreadJobExecutor(JobExecutor):
             if not handle._started():
                 return
             outcome = execute(handle.kind, handle.request, handle.out_dir, handle._progress,
-                              handle.cancel_requested)
+                              handle.cancel_requested, client=self.client)
             handle._finish(outcome[1] if outcome[0] == "done" else None, outcome_error(outcome))
         finally:
             self._handles.discard(handle)
