@@ -3,6 +3,7 @@
 Each oracle evaluates a configuration exactly (to quadrature precision) with optics that
 are independent of the code it checks (the ``tmm`` package, not bsdflab's C++ core).
 """
+from .adding_doubling import AddingDoublingOracle
 from .coated_diffuse import CoatedDiffuseOracle
 
-__all__ = ["CoatedDiffuseOracle"]
+__all__ = ["AddingDoublingOracle", "CoatedDiffuseOracle"]
