@@ -79,7 +79,7 @@ def test_02_lossless_stack_conserves_energy(phase):
     theta = np.radians([0.0, 30.0, 60.0, 80.0, 88.0])
     parts = oracle.energy(theta, wavelengths=[550.0])
     assert np.max(np.abs(parts["absorbed"])) < 1e-6, parts
-    assert np.all(parts["reflection"] > 0.05) and np.all(parts["transmission"] > 0.05)
+    assert np.all(parts["reflection"] > 0.01) and np.all(parts["transmission"] > 0.01)
     # the delta part at normal incidence: Fresnel of the top plus the unscattered beam's
     # multiple reflections (exact geometric series)
     r1, r2 = 0.04, ((1.5 - 1.33) / (1.5 + 1.33)) ** 2
@@ -93,16 +93,16 @@ def test_03_energy_balance_agrees_with_the_integral_of_eval():
     hemisphere by an independent Gauss-Legendre product rule in (cos theta_o, phi_o)."""
     oracle = AddingDoublingOracle(1.5, 1.0, [bl.Slab(2.0, sigma_a=0.1, sigma_s=1.0, phase=PHASES["hg 0.6"])],
                                   base_albedo=0.6)
-    x, w = np.polynomial.legendre.leggauss(64)
+    x, w = np.polynomial.legendre.leggauss(24)
     c, wc = 0.5 * (x + 1.0), 0.5 * w                      # cos theta_o in (0, 1)
-    phi = 2 * np.pi * np.arange(64) / 64                  # periodic: trapezoid is spectral
+    phi = 2 * np.pi * np.arange(32) / 32                  # periodic: trapezoid is spectral
     cc, pp = np.meshgrid(c, phi, indexing="ij")
     wo = spherical_directions(np.arccos(cc.ravel()), pp.ravel())
     theta_i = np.radians(40.0)
     value = oracle.eval(spherical_directions(theta_i, 0.0), wo, wavelengths=[550.0])[:, 0]
-    integral = np.sum(value.reshape(cc.shape) / cc * wc[:, None]) * (2 * np.pi / 64)
-    # the integrand falls off like sqrt(c) near grazing (Fresnel), hence ~1e-5 at 64 nodes
-    assert integral == pytest.approx(oracle.albedo([theta_i], wavelengths=[550.0])[0, 0], rel=3e-5)
+    # eval includes cos theta_o: the albedo is int eval d omega_o = int dc dphi eval
+    integral = np.sum(value.reshape(cc.shape) * wc[:, None]) * (2 * np.pi / 32)
+    assert integral == pytest.approx(oracle.albedo([theta_i], wavelengths=[550.0])[0, 0], rel=1e-5)
 
 
 def test_04_reflection_is_reciprocal_and_transmission_generalised_reciprocal():

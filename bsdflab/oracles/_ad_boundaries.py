@@ -79,21 +79,32 @@ def flux_weights(mu: np.ndarray, weights: np.ndarray, orders: int) -> np.ndarray
     return scale[:, None] * (mu * weights)[None, :]
 
 
-def top_layer(mu: np.ndarray, n_slab: float, n_ext: float) -> op.Layer:
+def _diagonal(values) -> op.Operator:
+    """A delta-only operator from its values at (nodes, outputs, inputs)."""
+    return op.Operator(*values)
+
+
+def top_layer(cos, n_slab: float, n_ext: float, g: op.Grid) -> op.Layer:
     """The smooth top seen from the slab: its interior reflectance as the bottom-side
     reflection; transmissions the identity (outer factors applied by the caller)."""
-    one = op.identity(mu.shape)
-    return op.Layer(op.zero(), one, op.Operator(fresnel_reflectance(n_slab, n_ext, mu), None), one)
+    one = op.identity(g)
+    inside = _diagonal(fresnel_reflectance(n_slab, n_ext, c) for c in cos)
+    return op.Layer(op.Operator(), one, inside, one)
 
 
-def smooth_base_layer(mu: np.ndarray, n_slab: float, n_below: float) -> op.Layer:
+def smooth_base_layer(cos, n_slab: float, n_below: float, g: op.Grid) -> op.Layer:
     """A smooth interface to a medium of index n_below under the last slab."""
-    one = op.identity(mu.shape)
-    return op.Layer(op.Operator(fresnel_reflectance(n_slab, n_below, mu), None), one, op.zero(), one)
+    one = op.identity(g)
+    inside = _diagonal(fresnel_reflectance(n_slab, n_below, c) for c in cos)
+    return op.Layer(inside, one, op.Operator(), one)
 
 
-def lambertian_base_layer(albedo: np.ndarray, orders: int, n: int) -> op.Layer:
+def lambertian_base_layer(albedo, g: op.Grid) -> op.Layer:
     """An opaque Lambertian base of albedo (L,): kernel albedo / pi in order 0 only."""
-    K = np.zeros((len(albedo), orders, n, n))
-    K[:, 0] = np.asarray(albedo, dtype=np.float64)[:, None, None] / np.pi
-    return op.Layer(op.Operator(None, K), op.zero(), op.zero(), op.zero())
+    L, M = g.batch
+    k = np.zeros((L, M, 1, 1))
+    k[:, 0] = np.asarray(albedo, dtype=np.float64)[:, None, None] / np.pi
+    shapes = ((g.n, g.n), (g.n_out, g.n), (g.n, g.n_in))
+    K, Kr, Kc = (np.broadcast_to(k, (L, M) + s) for s in shapes)
+    R = op.Operator(K=K, Kr=Kr, Kc=Kc, Kp=np.broadcast_to(k[..., 0], (L, M, len(g.pr))))
+    return op.Layer(R, op.Operator(), op.Operator(), op.Operator())

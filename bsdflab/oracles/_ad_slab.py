@@ -38,19 +38,19 @@ def hg(cos_theta: np.ndarray, g: float) -> np.ndarray:
     return (1.0 - g * g) / (4.0 * np.pi * d * np.sqrt(d))
 
 
-def phase_orders(mu: np.ndarray, g: float, orders: int, same_hemisphere: bool) -> np.ndarray:
-    """Fourier coefficients p^m(mu_out, mu_in), shape (orders, N, N), so that
-    p(dphi) = sum_m p^m cos(m dphi). g = 0 is isotropic (order 0 only)."""
-    n = len(mu)
-    out = np.zeros((orders, n, n))
+def phase_orders(mu_out, mu_in, g: float, orders: int, same_hemisphere: bool) -> np.ndarray:
+    """Fourier coefficients p^m(mu_out, mu_in) for broadcastable cosine arrays, shape
+    (orders, *broadcast shape), so that p(dphi) = sum_m p^m cos(m dphi). g = 0 is
+    isotropic (order 0 only)."""
+    mo, mi = np.broadcast_arrays(np.asarray(mu_out, float), np.asarray(mu_in, float))
+    out = np.zeros((orders,) + mo.shape)
     if g == 0.0:
         out[0] = 1.0 / (4.0 * np.pi)
         return out
     sign = 1.0 if same_hemisphere else -1.0
-    s = np.sqrt(np.maximum(0.0, 1.0 - mu * mu))
+    so, si = np.sqrt(np.maximum(0.0, 1.0 - mo * mo)), np.sqrt(np.maximum(0.0, 1.0 - mi * mi))
     dphi = 2.0 * np.pi * np.arange(AZIMUTH_SAMPLES) / AZIMUTH_SAMPLES
-    cos_t = (sign * mu[:, None, None] * mu[None, :, None]
-             + s[:, None, None] * s[None, :, None] * np.cos(dphi))
+    cos_t = (sign * mo * mi)[..., None] + (so * si)[..., None] * np.cos(dphi)
     c = np.fft.rfft(hg(np.clip(cos_t, -1.0, 1.0), g), axis=-1).real / AZIMUTH_SAMPLES
     m = min(orders, c.shape[-1])
     out[:m] = np.moveaxis(c[..., :m], -1, 0)
@@ -67,37 +67,55 @@ def orders_needed(g: float, tolerance: float) -> int:
     return int(np.ceil(-np.log(tolerance) / y)) + 2
 
 
-def thin_layer(mu, omega, delta, p_reflect, p_transmit) -> op.Layer:
-    """Single-scattering layer of optical depths delta (L,), albedos omega (L,) on nodes
-    mu (N,), with phase orders (M, N, N); operators batched (L, M, N[, N])."""
-    d = np.asarray(delta, dtype=np.float64)[:, None, None, None]
-    w = np.asarray(omega, dtype=np.float64)[:, None, None, None]
-    mo, mi = mu[:, None], mu[None, :]          # output rows, input columns
-    inv_sum = 1.0 / mo + 1.0 / mi
-    refl = -np.expm1(-d * inv_sum) / (mo + mi)
+def _single_scattering(mu_out, mu_in, omega, delta, g, orders):
+    """Thin-layer kernels (reflection, transmission), each (L, M, *broadcast shape)."""
+    mo, mi = np.broadcast_arrays(np.asarray(mu_out, float), np.asarray(mu_in, float))
+    extra = (slice(None),) + (None,) * (mo.ndim + 1)
+    d, w = np.asarray(delta, float)[extra], np.asarray(omega, float)[extra]
+    refl = -np.expm1(-d * (1.0 / mo + 1.0 / mi)) / (mo + mi)
     x = 1.0 / mi - 1.0 / mo
     small = np.abs(d * x) < 1e-8
     safe_x = np.where(small, 1.0, x)
     h = np.where(small, d * (1.0 - 0.5 * d * x), -np.expm1(-d * safe_x) / safe_x)
     trans = np.exp(-d / mo) * h / (mo * mi)
-    R = op.Operator(None, w * p_reflect[None] * refl)
-    T = op.Operator(np.exp(-d[..., 0] / mu), w * p_transmit[None] * trans)
+    p_r = phase_orders(mo, mi, g, orders, same_hemisphere=False)
+    p_t = phase_orders(mo, mi, g, orders, same_hemisphere=True)
+    return w * p_r[None] * refl, w * p_t[None] * trans
+
+
+def _unscattered(tau, mu_nodes, mu_out, mu_in):
+    t = np.asarray(tau, float)[:, None, None]
+    return (np.exp(-t / mu_nodes), np.exp(-t / mu_out), np.exp(-t / mu_in))
+
+
+def thin_layer(cos, pr, pc, omega, delta, g, orders) -> op.Layer:
+    """Single-scattering layer of optical depths delta (L,) and albedos omega (L,) on
+    cos = (nodes, outputs, inputs) with the requested pairs (pr, pc)."""
+    mu, out, inp = cos
+    blocks = [_single_scattering(a, b, omega, delta, g, orders)
+              for a, b in ((mu[:, None], mu[None, :]), (out[:, None], mu[None, :]),
+                           (mu[:, None], inp[None, :]), (out[pr], inp[pc]))]
+    (rK, tK), (rKr, tKr), (rKc, tKc), (rKp, tKp) = blocks
+    R = op.Operator(K=rK, Kr=rKr, Kc=rKc, Kp=rKp)
+    T = op.Operator(*_unscattered(delta, mu, out, inp), K=tK, Kr=tKr, Kc=tKc, Kp=tKp)
     return op.Layer(R, T, R, T)
 
 
-def slab_layer(mu, W, tau, omega, g, orders, thin_depth) -> op.Layer:
+def slab_layer(cos, grid: op.Grid, tau, omega, g, thin_depth) -> op.Layer:
     """Operators of a slab of optical depths tau (L,) and albedos omega (L,), by
     doubling from a layer no thicker than thin_depth."""
     tau = np.asarray(tau, dtype=np.float64)
     omega = np.asarray(omega, dtype=np.float64)
-    shape = (len(tau), orders, len(mu))
     if not np.any(omega > 0):  # absorption only: the unscattered beam is exact
-        T = op.Operator(np.exp(-tau[:, None, None] / mu), None)
-        return op.Layer(op.zero(), T, op.zero(), T)
+        T = op.Operator(*_unscattered(tau, *cos))
+        return op.Layer(op.Operator(), T, op.Operator(), T)
     doublings = max(0, int(np.ceil(np.log2(max(float(np.max(tau)), 1e-300) / thin_depth))))
-    p_r = phase_orders(mu, g, orders, same_hemisphere=False)
-    p_t = phase_orders(mu, g, orders, same_hemisphere=True)
-    layer = thin_layer(mu, omega, tau / 2.0 ** doublings, p_r, p_t)
-    for _ in range(doublings):
-        layer = op.double(layer, W, shape)
+    delta = tau / 2.0 ** doublings
+    layer = thin_layer(cos, grid.pr, grid.pc, omega, delta, g, grid.batch[1])
+    for k in range(1, doublings + 1):
+        layer = op.double(layer, grid)
+        # the unscattered beam exactly (2^28 products of exp(-delta / mu) lose 3e-8)
+        d = layer.Td
+        T = op.Operator(*_unscattered(delta * 2.0 ** k, *cos), d.K, d.Kr, d.Kc, d.Kp)
+        layer = op.Layer(layer.Rt, T, layer.Rb, T)
     return layer

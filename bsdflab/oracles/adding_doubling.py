@@ -52,8 +52,8 @@ a 16 x thicker start).
 Valid ranges: real indices > 0; thickness >= 0; sigma_s >= 0 (grey), sigma_a >= 0
 (spectral); |g| <= 0.9 (sharper phase functions need many orders and nodes: raise
 them and check with ``eval_with_error``); phase "isotropic" or "hg" ("vmf" is not
-supported). Cost: O(L M (N + 2q)^3 log2(tau / thin_depth)) for L wavelengths, M orders,
-N nodes and q direction pairs per chunk; isotropic slabs need one order.
+supported). Cost: O(L M (N^3 + q N^2) log2(tau / thin_depth)) for L wavelengths, M
+orders, N nodes and q distinct query cosines; isotropic slabs need one order.
 
 Units: wavelengths in nm, slab thickness in µm, sigma_a and sigma_s in 1/µm.
 """
@@ -73,7 +73,6 @@ from ._ad_slab import orders_needed, slab_layer
 NODES = 24
 THIN_DEPTH = 2.0 ** -28
 ORDER_TOLERANCE = 1e-9
-CHUNK = 24          # direction pairs per solve (each adds two zero-weight nodes)
 PHASES = ("isotropic", "hg")
 
 
@@ -269,18 +268,20 @@ class AddingDoublingOracle:
         rho = None if self.base_albedo is None else self.base_albedo.at(wl)
         return slabs, rho
 
-    def _stack(self, mu, weights, wl, orders, thin_depth) -> op.Layer:
-        """The whole stack's operators (top boundary, slabs, base) on nodes mu."""
-        W = bd.flux_weights(mu, weights, orders)
-        shape = (len(wl), orders, len(mu))
+    def _stack(self, cos, pairs, weights, wl, orders, thin_depth) -> op.Layer:
+        """The whole stack's operators (top boundary, slabs, base) on cos = (nodes,
+        output cosines, input cosines) with the requested (output, input) index pairs."""
+        mu, out, inp = cos
+        g = op.Grid(bd.flux_weights(mu, weights, orders), pairs[0], pairs[1],
+                    (len(wl), orders), len(mu), len(out), len(inp))
         slabs, rho = self._optics(wl)
         if self.base_ior is not None:
-            layer = bd.smooth_base_layer(mu, self.int_ior, self.base_ior)
+            layer = bd.smooth_base_layer(cos, self.int_ior, self.base_ior, g)
         else:
-            layer = bd.lambertian_base_layer(rho, orders, len(mu))
-        for tau, omega, g in reversed(slabs):
-            layer = op.stack(slab_layer(mu, W, tau, omega, g, orders, thin_depth), layer, W, shape)
-        return op.stack(bd.top_layer(mu, self.int_ior, self.ext_ior), layer, W, shape)
+            layer = bd.lambertian_base_layer(rho, g)
+        for tau, omega, phase_g in reversed(slabs):
+            layer = op.stack(slab_layer(cos, g, tau, omega, phase_g, thin_depth), layer, g)
+        return op.stack(bd.top_layer(cos, self.int_ior, self.ext_ior, g), layer, g)
 
     def _eval(self, a, b, wl, nodes, orders, thin_depth) -> np.ndarray:
         out = np.zeros((len(a), len(wl)))
@@ -290,68 +291,62 @@ class AddingDoublingOracle:
         if len(active) == 0:
             return out
         grid, weights = bd.nodes(nodes, self._breaks())
-        n = len(grid)
+        outputs, pr = np.unique(mu_v[active], return_inverse=True)
+        inputs, pc = np.unique(mu_l[active], return_inverse=True)
+        layer = self._stack((grid, outputs, inputs), (pr.ravel(), pc.ravel()), weights, wl,
+                            orders, thin_depth)
         # cos(m dphi) of the propagation azimuths: incoming -wo, outgoing wi
-        dphi = np.arctan2(a[:, 1], a[:, 0]) - np.arctan2(b[:, 1], b[:, 0]) - np.pi
-        m = np.arange(orders)
-        for chunk in np.array_split(active, -(-len(active) // CHUNK)):
-            q = len(chunk)
-            mu = np.concatenate([grid, mu_l[chunk], mu_v[chunk]])
-            w = np.concatenate([weights, np.zeros(2 * q)])
-            layer = self._stack(mu, w, wl, orders, thin_depth)
-            col, row = n + np.arange(q), n + q + np.arange(q)
-            up_v, up_l = a[chunk, 2] > 0, b[chunk, 2] > 0
-            value = np.zeros((len(wl), q))
-            for sel_v, sel_l, o in ((True, True, layer.Rt), (True, False, layer.Tu),
-                                    (False, True, layer.Td), (False, False, layer.Rb)):
-                pick = (up_v == sel_v) & (up_l == sel_l)
-                if not np.any(pick) or o.K is None:
-                    continue
-                k = o.K[:, :, row[pick], col[pick]]                  # (L, M, picked)
-                cosines = np.cos(np.outer(m, dphi[chunk][pick]))     # (M, picked)
-                value[:, pick] = np.einsum("lmp,mp->lp", k, cosines)
-            scale = (t_v[chunk] * t_l[chunk] * (n_v[chunk] / self.int_ior) ** 2
-                     * np.abs(b[chunk, 2]))
-            out[chunk] = (value * scale).T
+        dphi = (np.arctan2(a[active, 1], a[active, 0]) - np.arctan2(b[active, 1], b[active, 0])
+                - np.pi)
+        cosines = np.cos(np.outer(np.arange(orders), dphi))           # (M, pairs)
+        up_v, up_l = a[active, 2] > 0, b[active, 2] > 0
+        value = np.zeros((len(wl), len(active)))
+        for sel_v, sel_l, o in ((True, True, layer.Rt), (True, False, layer.Tu),
+                                (False, True, layer.Td), (False, False, layer.Rb)):
+            pick = (up_v == sel_v) & (up_l == sel_l)
+            if np.any(pick) and o.Kp is not None:
+                kp = np.broadcast_to(o.Kp, (len(wl), orders, len(active)))
+                value[:, pick] = np.einsum("lmp,mp->lp", kp[..., pick], cosines[:, pick])
+        scale = t_v[active] * t_l[active] * (n_v[active] / self.int_ior) ** 2 * np.abs(b[active, 2])
+        out[active] = (value * scale).T
         return out
 
     def _energy(self, c_i, wl) -> dict[str, np.ndarray]:
         mu_l, t_l, _ = self._side(c_i)
         grid, weights = bd.nodes(self.nodes, self._breaks())
-        n, q = len(grid), len(c_i)
-        mu = np.concatenate([grid, mu_l])
-        layer = self._stack(mu, np.concatenate([weights, np.zeros(q)]), wl, 1, self.thin_depth)
-        col, shape = n + np.arange(q), (len(wl), 1, len(mu))
+        none = np.zeros(0, dtype=int)
+        layer = self._stack((grid, np.zeros(0), mu_l), (none, none), weights, wl, 1, self.thin_depth)
+        shape = (len(wl), 1, len(c_i))
         t_top = 1.0 - bd.fresnel_reflectance(self.int_ior, self.ext_ior, grid)
         # order 0 of the outgoing field, integrated over the nodes the light leaves through:
         # int T(mu) K mu dmu dphi (the étendue cancels the (n_out / n_s)^2 of radiance)
         flux = 2.0 * np.pi * grid * weights
-        parts = {"reflection": _outflux(layer.Rt, flux * t_top, n, col) * t_l[:, None]}
+        parts = {"reflection": _outflux(layer.Rt, flux * t_top, shape) * t_l[:, None]}
         spec = bd.fresnel_reflectance(self.ext_ior, self.int_ior, c_i)
-        parts["delta_reflection"] = spec[:, None] + t_l[:, None] ** 2 * _delta(layer.Rt, shape, col)
+        parts["delta_reflection"] = spec[:, None] + t_l[:, None] ** 2 * _delta(layer.Rt, shape)
         if self.base_ior is None:
-            zero = np.zeros((q, len(wl)))
+            zero = np.zeros((len(c_i), len(wl)))
             parts["transmission"], parts["delta_transmission"] = zero, zero.copy()
             return parts
         t_bot = 1.0 - bd.fresnel_reflectance(self.int_ior, self.base_ior, grid)
-        parts["transmission"] = _outflux(layer.Td, flux * t_bot, n, col) * t_l[:, None]
+        parts["transmission"] = _outflux(layer.Td, flux * t_bot, shape) * t_l[:, None]
         t_bot_q = 1.0 - bd.fresnel_reflectance(self.int_ior, self.base_ior, mu_l)
-        parts["delta_transmission"] = (t_l * t_bot_q)[:, None] * _delta(layer.Td, shape, col)
+        parts["delta_transmission"] = (t_l * t_bot_q)[:, None] * _delta(layer.Td, shape)
         return parts
 
 
-def _outflux(o: op.Operator, flux: np.ndarray, n: int, col: np.ndarray) -> np.ndarray:
-    """sum_j flux_j K^0[j, col] over the quadrature nodes j < n, shape (q, L)."""
-    if o.K is None:
-        return np.zeros((len(col), 1))
-    return np.einsum("j,ljq->ql", flux, o.K[:, 0, :n][:, :, col])
+def _outflux(o: op.Operator, flux: np.ndarray, shape) -> np.ndarray:
+    """sum_j flux_j K^0[j, input] over the quadrature nodes, shape (inputs, L)."""
+    if o.Kc is None:
+        return np.zeros((shape[2], shape[0]))
+    return np.einsum("j,ljq->ql", flux, np.broadcast_to(o.Kc, shape[:2] + (len(flux), shape[2]))[:, 0])
 
 
-def _delta(o: op.Operator, shape, col: np.ndarray) -> np.ndarray:
-    """Order-0 delta part of o at nodes col, shape (q, L) (0 where o has none)."""
-    if o.D is None:
-        return np.zeros((len(col), shape[0]))
-    return np.broadcast_to(o.D, shape)[:, 0, col].T
+def _delta(o: op.Operator, shape) -> np.ndarray:
+    """Order-0 delta part of o at the input cosines, shape (inputs, L)."""
+    if o.Dc is None:
+        return np.zeros((shape[2], shape[0]))
+    return np.broadcast_to(o.Dc, shape)[:, 0].T
 
 
 def _int_at_least(name: str, value, lo: int) -> int:
