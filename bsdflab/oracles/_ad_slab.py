@@ -19,9 +19,10 @@ tests/test_oracle_adding_doubling.py).
 Phase-function Fourier coefficients: p(cos Theta) with
 cos Theta = +-mu mu' + sqrt(1 - mu^2) sqrt(1 - mu'^2) cos(dphi) (+ between two downward
 directions, - between a downward and an upward one) is sampled at ``AZIMUTH_SAMPLES``
-azimuths and transformed by a real FFT; Henyey-Greenstein is analytic in dphi in a strip
-of half-width y = arccosh(1 + (1 - |g|)^2 / (2 |g|)), so its coefficients fall at least
-like exp(-m y) and aliasing is below exp(-y AZIMUTH_SAMPLES / 2).
+azimuths (at least 4 per kept order, a power of two) and transformed by a real FFT;
+Henyey-Greenstein is analytic in dphi in a strip of half-width
+y = arccosh(1 + (1 - |g|)^2 / (2 |g|)), so its coefficients fall at least like exp(-m y)
+and the aliasing of K samples is below exp(-y K / 2) (< 1e-13 for K >= 4 orders_needed).
 """
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ import numpy as np
 
 from . import _ad_operators as op
 
-AZIMUTH_SAMPLES = 512
+MIN_AZIMUTH_SAMPLES = 64
 
 
 def hg(cos_theta: np.ndarray, g: float) -> np.ndarray:
@@ -49,21 +50,27 @@ def phase_orders(mu_out, mu_in, g: float, orders: int, same_hemisphere: bool) ->
         return out
     sign = 1.0 if same_hemisphere else -1.0
     so, si = np.sqrt(np.maximum(0.0, 1.0 - mo * mo)), np.sqrt(np.maximum(0.0, 1.0 - mi * mi))
-    dphi = 2.0 * np.pi * np.arange(AZIMUTH_SAMPLES) / AZIMUTH_SAMPLES
+    samples = max(MIN_AZIMUTH_SAMPLES, 1 << int(np.ceil(np.log2(4 * orders))))
+    dphi = 2.0 * np.pi * np.arange(samples) / samples
     cos_t = (sign * mo * mi)[..., None] + (so * si)[..., None] * np.cos(dphi)
-    c = np.fft.rfft(hg(np.clip(cos_t, -1.0, 1.0), g), axis=-1).real / AZIMUTH_SAMPLES
+    c = np.fft.rfft(hg(np.clip(cos_t, -1.0, 1.0), g), axis=-1).real / samples
     m = min(orders, c.shape[-1])
     out[:m] = np.moveaxis(c[..., :m], -1, 0)
     out[1:m] *= 2.0
     return out
 
 
-def orders_needed(g: float, tolerance: float) -> int:
-    """Fourier orders after which Henyey-Greenstein's coefficients are below tolerance
-    (relative to its largest), from the analyticity strip (module docstring)."""
+def orders_needed(g: float, tolerance: float, sine: float = 1.0) -> int:
+    """Fourier orders after which Henyey-Greenstein's coefficients p^m(mu, mu') are below
+    tolerance (relative to its largest) whenever one of the two sines is <= `sine`.
+
+    cos Theta = a + b cos(dphi) with |a| + b <= 1 and b <= sine: the pole of
+    (1 + g^2 - 2 g cos Theta)^(-3/2) lies at cosh(y) >= 1 + (1 - |g|)^2 / (2 |g| sine), so
+    the coefficients fall like exp(-m y). Every term of the adding equations contains a
+    factor with a query cosine, so the query directions' largest sine sets the decay."""
     if g == 0.0:
         return 1
-    y = np.arccosh(1.0 + (1.0 - abs(g)) ** 2 / (2.0 * abs(g)))
+    y = np.arccosh(1.0 + (1.0 - abs(g)) ** 2 / (2.0 * abs(g) * max(sine, 1e-12)))
     return int(np.ceil(-np.log(tolerance) / y)) + 2
 
 

@@ -39,7 +39,7 @@ leaves and enters, as bsdflab's dielectric does for camera paths.
 Accuracy (measured by ``convergence_study`` and tests/test_oracle_adding_doubling.py)
 ------------------------------------------------------------------------------------
 Three truncations: ``nodes`` Gauss-Legendre nodes per panel, ``orders`` Fourier orders
-(default from the phase function's analyticity, coefficients below 1e-9 of the largest),
+(default from the phase function's analyticity, coefficients below 1e-7 of the largest),
 and the starting thickness ``thin_depth`` of the doubling (error O(tau delta / mu^2)).
 With the defaults (24 nodes, thin_depth 2^-24) the relative error of eval is <= 1e-5
 for optical depths 0.5-5, albedos up to 0.99, g in [-0.3, 0.6] and cosines >= 0.02
@@ -72,7 +72,7 @@ from ._ad_slab import orders_needed, slab_layer
 
 NODES = 24
 THIN_DEPTH = 2.0 ** -28
-ORDER_TOLERANCE = 1e-9
+ORDER_TOLERANCE = 1e-7
 PHASES = ("isotropic", "hg")
 
 
@@ -96,7 +96,8 @@ class AddingDoublingOracle:
     nodes : int >= 4
         Gauss-Legendre nodes per cosine panel.
     orders : int >= 1, optional
-        Fourier orders in azimuth (default from the phase functions).
+        Fourier orders in azimuth (default: from the phase functions and the query
+        directions per call, ``_ad_slab.orders_needed``).
     thin_depth : float > 0
         Largest optical depth of the single-scattering start of the doubling.
     """
@@ -123,9 +124,7 @@ class AddingDoublingOracle:
         self.base_albedo = None if base_ior is not None else Spectrum.coerce(
             0.0 if base_albedo is None else base_albedo, "base_albedo", 0.0, 1.0)
         self.nodes = _int_at_least("nodes", nodes, 4)
-        self.orders = (max(orders_needed(s.phase.g if s.phase.type == "hg" else 0.0,
-                                         ORDER_TOLERANCE) for s in self.slabs)
-                       if orders is None else _int_at_least("orders", orders, 1))
+        self.orders = None if orders is None else _int_at_least("orders", orders, 1)
         self.thin_depth = check.real_scalar("thin_depth", thin_depth, 0.0, lo_open=True)
 
     @classmethod
@@ -164,7 +163,7 @@ class AddingDoublingOracle:
         """
         a, b = check.direction_pair(wi, wo)
         wl, to_rgb = self._channels(wavelengths)
-        out = self._eval(a, b, wl, self.nodes, self.orders, self.thin_depth)
+        out = self._eval(a, b, wl, self.nodes, 1.0, self.thin_depth)
         return out @ to_rgb.T if to_rgb is not None else out
 
     def eval_with_error(self, wi, wo, wavelengths=None) -> tuple[np.ndarray, np.ndarray]:
@@ -173,9 +172,9 @@ class AddingDoublingOracle:
         geometrically converging truncations is far below that change)."""
         a, b = check.direction_pair(wi, wo)
         wl, to_rgb = self._channels(wavelengths)
-        fine = self._eval(a, b, wl, self.nodes, self.orders, self.thin_depth)
-        coarse = self._eval(a, b, wl, max(4, (2 * self.nodes) // 3),
-                            max(1, -(-2 * self.orders // 3)), 16.0 * self.thin_depth)
+        fine = self._eval(a, b, wl, self.nodes, 1.0, self.thin_depth)
+        coarse = self._eval(a, b, wl, max(4, (2 * self.nodes) // 3), 2.0 / 3.0,
+                            16.0 * self.thin_depth)
         err = np.abs(fine - coarse)
         if to_rgb is not None:
             return fine @ to_rgb.T, err @ np.abs(to_rgb).T
@@ -283,7 +282,15 @@ class AddingDoublingOracle:
             layer = op.stack(slab_layer(cos, g, tau, omega, phase_g, thin_depth), layer, g)
         return op.stack(bd.top_layer(cos, self.int_ior, self.ext_ior, g), layer, g)
 
-    def _eval(self, a, b, wl, nodes, orders, thin_depth) -> np.ndarray:
+    def orders_for(self, cosines) -> int:
+        """Fourier orders used for queries at these slab cosines (``orders`` if given)."""
+        if self.orders is not None:
+            return self.orders
+        sine = float(np.sqrt(max(0.0, 1.0 - float(np.min(cosines)) ** 2))) if len(cosines) else 1.0
+        return max(orders_needed(s.phase.g if s.phase.type == "hg" else 0.0, ORDER_TOLERANCE, sine)
+                   for s in self.slabs)
+
+    def _eval(self, a, b, wl, nodes, order_scale, thin_depth) -> np.ndarray:
         out = np.zeros((len(a), len(wl)))
         mu_v, t_v, n_v = self._side(a[:, 2])       # viewer: light leaves toward wi
         mu_l, t_l, _ = self._side(b[:, 2])         # light arrives from wo
@@ -293,6 +300,7 @@ class AddingDoublingOracle:
         grid, weights = bd.nodes(nodes, self._breaks())
         outputs, pr = np.unique(mu_v[active], return_inverse=True)
         inputs, pc = np.unique(mu_l[active], return_inverse=True)
+        orders = max(1, int(np.ceil(order_scale * self.orders_for(np.concatenate([outputs, inputs])))))
         layer = self._stack((grid, outputs, inputs), (pr.ravel(), pc.ravel()), weights, wl,
                             orders, thin_depth)
         # cos(m dphi) of the propagation azimuths: incoming -wo, outgoing wi
