@@ -46,6 +46,7 @@ ISO, FWD, BACK = None, {"type": "hg", "g": 0.6}, {"type": "hg", "g": -0.3}
 TOP = bl.Dielectric(1.5, 1.0)
 MATCHED = bl.Dielectric(1.5, 1.5)     # an index-matched smooth boundary (no optical effect)
 AIR_BELOW = bl.Dielectric(1.0, 1.5)   # glass slab to air below: transmissive
+OPEN_TOP, OPEN_BASE = bl.Dielectric(1.5, 1.5), bl.Dielectric(1.5, 1.5)  # no delta reflections
 
 # name: (interfaces, slabs, base, sides) with sides "R" (reflection) and/or "T" (both ways)
 FAST = {
@@ -53,6 +54,7 @@ FAST = {
     "hg.6 tau5 w.9-.99 black": ([TOP], [slab(5.0, [0.9, 0.95, 0.99], FWD)], bl.Diffuse(0.0), "R"),
     "hg-.3 tau.5 w.5-.95 lambert": ([TOP], [slab(0.5, [0.5, 0.8, 0.95], BACK)], bl.Diffuse(0.8), "R"),
     "hg.6 tau2 w.7-.99 glass": ([TOP], [slab(2.0, [0.7, 0.9, 0.99], FWD)], AIR_BELOW, "RT"),
+    "iso tau3 w.5-.99 matched both sides": ([OPEN_TOP], [slab(3.0, [0.5, 0.9, 0.99])], OPEN_BASE, "RT"),
 }
 SLOW = {
     f"{pname} tau{tau} {bname}": ([TOP], [slab(tau, [0.5, 0.9, 0.99], phase)], base, sides)

@@ -39,19 +39,21 @@ leaves and enters, as bsdflab's dielectric does for camera paths.
 Accuracy (measured by ``convergence_study`` and tests/test_oracle_adding_doubling.py)
 ------------------------------------------------------------------------------------
 Three truncations: ``nodes`` Gauss-Legendre nodes per panel, ``orders`` Fourier orders
-(default from the phase function's analyticity, coefficients below 1e-7 of the largest),
-and the starting thickness ``thin_depth`` of the doubling (error O(tau delta / mu^2)).
-With the defaults (24 nodes, thin_depth 2^-24) the relative error of eval is <= 1e-5
-for optical depths 0.5-5, albedos up to 0.99, g in [-0.3, 0.6] and cosines >= 0.02
-(outside), measured as the change to (48 nodes, 2^-28); closed forms reproduced:
+(default: chosen per call from the Henyey-Greenstein pole and the query directions,
+coefficients below 1e-7 of the largest), and the starting thickness ``thin_depth`` of the
+doubling (error O(tau delta / mu^2), the dominant one). With the defaults (24 nodes,
+thin_depth 2^-28) the largest relative change to a run with 48 nodes, 64 orders and
+2^-30 is 1.2e-7 over optical depths 0.5-5, albedos 0.5-0.99, g in {0, 0.6, -0.3}, outside
+cosines 1 ... 0.02, reflection and transmission (docs/oracles.md has the table; the
+stated accuracy is <= 1e-5 relative in that range, tested). Closed forms reproduced:
 Chandrasekhar's H-function for a semi-infinite isotropic slab, energy conservation
-R + T = 1, reciprocity, and CoatedDiffuseOracle when sigma_s = 0. ``eval_with_error``
-returns an a-posteriori bound (the change to a run with 2/3 of the nodes and orders and
-a 16 x thicker start).
+R + T = 1, reciprocity, the thin-slab single-scattering limit, and CoatedDiffuseOracle
+when sigma_s = 0. ``eval_with_error`` returns an a-posteriori bound (the change to a
+run with 2/3 of the nodes and orders and a 16 x thicker start).
 
 Valid ranges: real indices > 0; thickness >= 0; sigma_s >= 0 (grey), sigma_a >= 0
-(spectral); |g| <= 0.9 (sharper phase functions need many orders and nodes: raise
-them and check with ``eval_with_error``); phase "isotropic" or "hg" ("vmf" is not
+(spectral); |g| <= 0.7 with the defaults (sharper phase functions need more nodes:
+raise them and check with ``eval_with_error``); phase "isotropic" or "hg" ("vmf" is not
 supported). Cost: O(L M (N^3 + q N^2) log2(tau / thin_depth)) for L wavelengths, M
 orders, N nodes and q distinct query cosines; isotropic slabs need one order.
 
