@@ -36,8 +36,8 @@ as ``Layered.delta_reflectance``; ``energy`` gives every part of the balance. Fo
 transmission f carries the radiance factor (n_to / n_from)^2 of the media the light
 leaves and enters, as bsdflab's dielectric does for camera paths.
 
-Accuracy (measured by ``convergence_study`` and tests/test_oracle_adding_doubling.py)
-------------------------------------------------------------------------------------
+Accuracy (measured by ``bsdflab.oracles.ad_convergence`` and the tests)
+----------------------------------------------------------------------
 Three truncations: ``nodes`` Gauss-Legendre nodes per panel, ``orders`` Fourier orders
 (default: chosen per call from the Henyey-Greenstein pole and the query directions,
 coefficients below 1e-7 of the largest), and the starting thickness ``thin_depth`` of the
@@ -67,7 +67,8 @@ import numpy as np
 
 from .. import _validate as check
 from ..layered.slab import Slab
-from ..spectra import DEFAULT_WAVELENGTHS, Spectrum, srgb_weights
+from ..bsdfs.base import BSDF
+from ..spectra import Spectrum
 from . import _ad_boundaries as bd
 from . import _ad_operators as op
 from ._ad_slab import orders_needed, slab_layer
@@ -232,11 +233,8 @@ class AddingDoublingOracle:
         return f"AddingDoublingOracle({params})"
 
     # -- internals --------------------------------------------------------------------
-    def _channels(self, wavelengths):
-        if wavelengths is None:
-            return DEFAULT_WAVELENGTHS, srgb_weights(DEFAULT_WAVELENGTHS)
-        wl = check.real_array("wavelengths", wavelengths, 0.0, lo_open=True)
-        return np.atleast_1d(wl).ravel(), None
+    # (wavelengths, RGB weights or None) exactly as every bsdflab BSDF reads `wavelengths`
+    _channels = BSDF._channels
 
     def _breaks(self) -> list[float]:
         cuts = [bd.critical_cosine(self.int_ior, self.ext_ior)]
