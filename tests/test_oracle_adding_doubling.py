@@ -200,3 +200,12 @@ def test_10_degenerate_directions_give_zero_not_nan():
     wo = np.array([[1.0, 0, 0], [0, 0, 1.0], [0, 0, -1.0], [0, 0, 1.0]])
     value = oracle.eval(wi, wo, wavelengths=WL)
     assert np.all(np.isfinite(value)) and np.all(value == 0.0)
+
+
+def test_11_rgb_output_is_the_spectral_result_through_the_colour_weights():
+    from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
+    oracle = AddingDoublingOracle(1.5, 1.0, [bl.Slab(1.0, sigma_a={"type": "rgb", "rgb": [0.1, 0.3, 0.9]},
+                                                     sigma_s=1.0)], base_albedo=0.6)
+    wi, wo = random_unit_vectors(3, seed=3, hemisphere="upper"), random_unit_vectors(3, seed=4, hemisphere="upper")
+    spectral = oracle.eval(wi, wo, wavelengths=DEFAULT_WAVELENGTHS)
+    assert np.allclose(oracle.eval(wi, wo), spectral @ srgb_weights(DEFAULT_WAVELENGTHS).T, rtol=1e-12)
