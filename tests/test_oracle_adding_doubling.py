@@ -119,6 +119,9 @@ def test_04_reflection_is_reciprocal_and_transmission_generalised_reciprocal():
     t_up = oracle.eval(wi, below, wavelengths=[550.0])[:, 0] / wo[:, 2]
     assert np.all(t_up > 0)
     assert np.allclose(t_down / 1.2 ** 2, t_up / 1.0 ** 2, rtol=1e-9)
+    r_below = oracle.eval(-wi, below, wavelengths=[550.0])[:, 0] / wo[:, 2]   # both below
+    assert np.all(r_below > 0)
+    assert np.allclose(r_below, oracle.eval(below, -wi, wavelengths=[550.0])[:, 0] / wi[:, 2], rtol=1e-9)
 
 
 @pytest.mark.parametrize("phase", list(PHASES))
