@@ -81,7 +81,7 @@ def test_table_and_render_end_to_end(server, tmp_path):
 
 def test_sigkill_mid_job_then_restart_completes_it(tmp_path):
     """The job is re-queued by the next server and completes; nothing half-written is left."""
-    request = {**SMALL_TABLE, "grid": {"n_theta_i": 3, "n_theta_o": 5, "n_phi": 4},
+    request = {**SMALL_TABLE, "grid": {"n_theta_i": 3, "n_theta_o": 4, "n_phi": 3},
                "min_samples": 512, "max_samples": 512}
     first = ServiceProcess(tmp_path)
     try:

@@ -25,6 +25,7 @@ from ..tables import TableGrid, cache_key, cached_table, read_attributes, read_t
 from ..tables.channels import table_channels
 from ..tables.file_format import HASH_ATTRIBUTE
 from ..tables.summary import relative_error_summary
+from ..tables.tabulate import _count   # the tabulator's own check of walk counts
 
 DEFAULT_MIN_SAMPLES = 512
 FIELDS = {"model", "preset", "overrides", "grid", "rel_error", "wavelengths", "min_samples",
@@ -119,9 +120,3 @@ def describe(path: str | os.PathLike, table=None) -> dict[str, Any]:
                         "max": int(samples.max()), "mean": float(samples.mean())},
             "content_hash": read_attributes(path).get(HASH_ATTRIBUTE, ""),
             "bytes": os.path.getsize(path)}
-
-
-def _count(name: str, value) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= 1 << 24:
-        raise ValueError(f"{name} must be an integer in [1, {1 << 24}], got {value!r}")
-    return int(value)
