@@ -55,6 +55,19 @@ class ServiceProcess:
         self.log.flush()
         return (self.data_dir / f"server-{self.port}.log").read_text()[-4000:]
 
+    def children(self) -> list[int]:
+        """Process ids whose parent is the server (its job workers), from /proc."""
+        found = []
+        for entry in Path("/proc").iterdir():
+            if entry.name.isdigit():
+                try:
+                    fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+                except OSError:
+                    continue
+                if int(fields[1]) == self.process.pid:
+                    found.append(int(entry.name))
+        return found
+
     def kill(self) -> None:
         """SIGKILL: no shutdown code runs."""
         self.process.send_signal(signal.SIGKILL)

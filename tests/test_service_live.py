@@ -37,6 +37,15 @@ def sha256(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
+def alive(pid: int) -> bool:
+    """The process exists and is not a zombie."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
 def direct_table(request: dict):
     """The same table from the Python API in this process."""
     r = get_kind("tabulate").normalise(request)
@@ -89,8 +98,14 @@ def test_sigkill_mid_job_then_restart_completes_it(tmp_path):
         wait_state(first.url, job["id"], ("running",))
         while httpx.get(f"{first.url}/v1/jobs/{job['id']}").json()["progress"] == 0:
             time.sleep(0.02)
+        workers = first.children()
+        assert workers, "the server runs its jobs in worker processes"
     finally:
         first.kill()
+    end = time.monotonic() + 10   # the workers die with their server (PR_SET_PDEATHSIG)
+    while any(alive(pid) for pid in workers):
+        assert time.monotonic() < end, f"worker processes {workers} outlived the killed server"
+        time.sleep(0.05)
     artefact = tmp_path / "artefacts" / f"{job['hash']}.exr"
     time.sleep(1.0)   # a worker that outlived its server would go on and write the table
     assert not artefact.exists(), "the job finished before the kill: make it longer"
