@@ -46,8 +46,8 @@ def melanin_absorption(sigma_550: float = 1.2, exponent: float = 3.33) -> Spectr
     return Spectrum.tabulated(wl, sigma_550 * (wl / 550.0) ** -exponent, name="sigma_a")
 
 
-def guanine_film(thickness_nm: float = FILM_THICKNESS_NM) -> list[dict]:
-    return [{"material": GUANINE_IOR, "thickness_nm": thickness_nm}]
+def guanine_film(thickness_nm: float = FILM_THICKNESS_NM, ior: float = GUANINE_IOR) -> list[dict]:
+    return [{"material": ior, "thickness_nm": thickness_nm}]
 
 
 def iridophore_stack(platelets: int = 5, platelet_nm: float = 80.0, gap_nm: float = 100.0) -> list[dict]:
@@ -60,37 +60,48 @@ def iridophore_stack(platelets: int = 5, platelet_nm: float = 80.0, gap_nm: floa
     return layers
 
 
-def _top(film) -> RoughDielectric:
-    return RoughDielectric(ROUGHNESS, int_ior=KERATIN_IOR_550, ext_ior=AIR_IOR, film=film)
+PIGMENT_SIGMA_550 = 1.2
 
 
-def _pigment_slab() -> Slab:
-    return Slab(thickness_um=4.0, sigma_a=melanin_absorption(), sigma_s=0.2,
+def _top(film, roughness: float = ROUGHNESS) -> RoughDielectric:
+    return RoughDielectric(roughness, int_ior=KERATIN_IOR_550, ext_ior=AIR_IOR, film=film)
+
+
+def _pigment_slab(sigma_550: float = PIGMENT_SIGMA_550) -> Slab:
+    return Slab(thickness_um=4.0, sigma_a=melanin_absorption(sigma_550), sigma_s=0.2,
                 phase={"type": "hg", "g": 0.6})
 
 
-def xenopeltis(film_thickness_nm: float = FILM_THICKNESS_NM, samples: int = 256, seed: int = 0) -> Layered:
+# Keyword overrides (the lobe explorer's sliders and `preset(name, **overrides)`):
+# film_ior: the iridophore film's index; roughness: GGX alpha of the top; pigment_absorption:
+# the melanin slab's sigma_a at 550 nm in 1/um; base_albedo: linear-sRGB albedo of the base.
+def xenopeltis(film_thickness_nm: float = FILM_THICKNESS_NM, samples: int = 256, seed: int = 0,
+               film_ior: float = GUANINE_IOR, roughness: float = ROUGHNESS,
+               pigment_absorption: float = PIGMENT_SIGMA_550, base_albedo=BASE_RGB) -> Layered:
     """The full model: guanine thin film on keratin, melanin slab, dark diffuse base."""
-    return Layered([_top(guanine_film(film_thickness_nm))], [_pigment_slab()],
-                   Diffuse(BASE_RGB), samples=samples, seed=seed)
+    return Layered([_top(guanine_film(film_thickness_nm, film_ior), roughness)], [_pigment_slab(pigment_absorption)],
+                   Diffuse(base_albedo), samples=samples, seed=seed)
 
 
-def xenopeltis_iridophore_stack(samples: int = 256, seed: int = 0) -> Layered:
+def xenopeltis_iridophore_stack(samples: int = 256, seed: int = 0, roughness: float = ROUGHNESS,
+                                pigment_absorption: float = PIGMENT_SIGMA_550,
+                                base_albedo=BASE_RGB) -> Layered:
     """As `xenopeltis` with a 5-platelet guanine/cytoplasm stack as the iridophore."""
-    return Layered([_top(iridophore_stack())], [_pigment_slab()], Diffuse(BASE_RGB),
-                   samples=samples, seed=seed)
+    return Layered([_top(iridophore_stack(), roughness)], [_pigment_slab(pigment_absorption)],
+                   Diffuse(base_albedo), samples=samples, seed=seed)
 
 
-def xenopeltis_diffuse() -> Diffuse:
+def xenopeltis_diffuse(base_albedo=BASE_RGB) -> Diffuse:
     """Ablation: the base colour alone (no film, no pigment slab, no gloss)."""
-    return Diffuse(BASE_RGB)
+    return Diffuse(base_albedo)
 
 
 def xenopeltis_thin_film(film_thickness_nm: float = FILM_THICKNESS_NM, samples: int = 256,
-                         seed: int = 0) -> Layered:
+                         seed: int = 0, film_ior: float = GUANINE_IOR, roughness: float = ROUGHNESS,
+                         base_albedo=BASE_RGB) -> Layered:
     """Ablation: the thin-film interface over the diffuse base, without the pigment slab."""
-    return Layered([_top(guanine_film(film_thickness_nm))], [Slab(thickness_um=0.0)],
-                   Diffuse(BASE_RGB), samples=samples, seed=seed)
+    return Layered([_top(guanine_film(film_thickness_nm, film_ior), roughness)], [Slab(thickness_um=0.0)],
+                   Diffuse(base_albedo), samples=samples, seed=seed)
 
 
 PRESETS = {
@@ -102,7 +113,10 @@ PRESETS = {
 
 
 def preset(name: str, **kwargs):
-    """A preset by name (see PRESETS)."""
+    """A preset by name (see PRESETS); ``kwargs`` override its keyword parameters."""
     if name not in PRESETS:
         raise ValueError(f"unknown preset {name!r}; known presets: {', '.join(PRESETS)}")
-    return PRESETS[name](**kwargs)
+    try:
+        return PRESETS[name](**kwargs)
+    except TypeError as e:  # a keyword the preset does not take
+        raise ValueError(f"preset {name!r}: {e}") from None
