@@ -1,7 +1,8 @@
 """Fresnel coefficients of a single planar interface, real or complex indices.
 
 Sign convention (Born & Wolf; the same as the `tmm` package), for light going from a
-medium of index n_i into one of index n_t (indices n + i k, k >= 0 absorbing):
+medium of index n_i into one of index n_t (indices n + i k, k >= 0 absorbing; n in
+[1e-3, 1e3] and k <= 1e3, docs/limits.md):
 
     r_s = (n_i cos_i - n_t cos_t) / (n_i cos_i + n_t cos_t)
     r_p = (n_t cos_i - n_i cos_t) / (n_t cos_i + n_i cos_t)
@@ -20,6 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import _core
+from .._validate import MAX_EXTINCTION, MAX_IOR, MIN_IOR
 
 
 class Amplitudes(NamedTuple):
@@ -37,9 +39,11 @@ class Reflectance(NamedTuple):
 
 
 def _complex(name, value):
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{name} must be a real or complex number or array")
     try:
         a = np.asarray(value, dtype=np.complex128)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name} must be a real or complex number or array") from None
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be finite (found NaN or infinity)")
@@ -57,6 +61,9 @@ def _inputs(cos_i, n_i, n_t):
             raise ValueError(f"{name} must have a real part > 0")
         if np.any(n.imag < 0):
             raise ValueError(f"{name} must have an imaginary part (k) >= 0")
+        if np.any(n.real < MIN_IOR) or np.any(n.real > MAX_IOR) or np.any(n.imag > MAX_EXTINCTION):
+            raise ValueError(f"{name} must have a real part in [{MIN_IOR:g}, {MAX_IOR:g}] and an "
+                             f"imaginary part <= {MAX_EXTINCTION:g} (docs/limits.md)")
     try:
         c, ni, nt = np.broadcast_arrays(c, ni, nt)
     except ValueError:

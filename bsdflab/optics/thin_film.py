@@ -16,12 +16,12 @@ film_transmittance(...)  same arguments as film_reflectance -> ndarray
 Arguments
 ---------
 wavelength_nm
-    Vacuum wavelengths in nm, finite and > 0.
+    Vacuum wavelengths in nm, in [1, 1e6].
 theta or cos_theta (exactly one)
     Angle of incidence in radians in [0, pi/2], or its cosine in [0, 1], measured in the
     medium the light arrives from.
 thickness_nm
-    Replaces the thickness of a one-layer film (nm, finite, >= 0), to sweep d.
+    Replaces the thickness of a one-layer film (nm, in [0, 1e7]), to sweep d.
 reverse
     Light arrives from the substrate side (the stack is traversed bottom-up; theta is
     then measured in the substrate).
@@ -53,7 +53,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .. import _core
-from .._validate import real_array, real_scalar
+from .. import _validate as check
+from .._validate import real_array
 from .dispersion import Constant, Dispersion, as_dispersion, dispersion_from_dict, wavelengths_nm
 
 POLARISATIONS = ("s", "p", "unpolarised")
@@ -77,7 +78,7 @@ class Layer:
     def __post_init__(self):
         object.__setattr__(self, "material", as_dispersion(self.material, "material"))
         object.__setattr__(self, "thickness_nm",
-                           real_scalar("thickness_nm", self.thickness_nm, 0.0))
+                           check.film_thickness("thickness_nm", self.thickness_nm))
 
     def to_dict(self) -> dict[str, Any]:
         return {"material": self.material.to_dict(), "thickness_nm": self.thickness_nm}
@@ -151,16 +152,17 @@ class _Problem(NamedTuple):
 
 
 _FILM_PARAMETERS = """film : FilmStack or tuple (n0, n1, d_nm, n2)
-        The stack, or one film: indices (numbers n + i k with k >= 0, dispersion models or
-        their dicts) and a thickness d_nm in nm (finite, >= 0; may be an array).
+        The stack, or one film: indices (numbers n + i k, n in [1e-3, 1e3], k in [0, 1e3],
+        dispersion models or their dicts) and a thickness d_nm in nm (in [0, 1e7]; may be
+        an array).
     wavelength_nm : array_like
-        Vacuum wavelengths in nm, finite and > 0.
+        Vacuum wavelengths in nm, in [1, 1e6].
     theta : array_like, optional
         Angle of incidence in radians, in [0, pi/2], in the medium light arrives from.
     cos_theta : array_like, optional
         Its cosine, in [0, 1]. Give exactly one of theta and cos_theta.
     thickness_nm : array_like, optional
-        Replaces the thickness of a one-layer film (nm, finite, >= 0) to sweep it.
+        Replaces the thickness of a one-layer film (nm, in [0, 1e7]) to sweep it.
     reverse : bool, optional
         Light arrives from the substrate side (theta then lies in the substrate)."""
 
@@ -278,7 +280,7 @@ def _media(film) -> tuple[list[Dispersion], list[Any], list[str]]:
     elif isinstance(film, tuple) and len(film) == 4:
         n0, n1, d, n2 = film
         media = [as_dispersion(n0, "n0"), as_dispersion(n1, "n1"), as_dispersion(n2, "n2")]
-        thicknesses = [real_array("d_nm", d, 0.0)]
+        thicknesses = [check.film_thickness("d_nm", d, array=True)]
     else:
         raise ValueError("film must be a FilmStack or a tuple (n0, n1, d_nm, n2); "
                          f"got {type(film).__name__}")
@@ -297,13 +299,19 @@ def _cosine(theta, cos_theta) -> np.ndarray:
 
 
 def _check_index(name, n):
-    if np.all(np.isfinite(n) & (n.real > 0) & (n.imag >= 0)):  # one pass when all is well
+    ok = (np.isfinite(n) & (n.real >= check.MIN_IOR) & (n.real <= check.MAX_IOR)
+          & (n.imag >= 0) & (n.imag <= check.MAX_EXTINCTION))
+    if np.all(ok):  # one pass when all is well
         return
     if not np.all(np.isfinite(n)):
         raise ValueError(f"{name} index must be finite at every wavelength")
     if np.any(n.real <= 0):
         raise ValueError(f"{name} index must have a real part n > 0; got min {n.real.min():g}")
-    raise ValueError(f"{name} index must have k >= 0 (absorbing); got min {n.imag.min():g}")
+    if np.any(n.imag < 0):
+        raise ValueError(f"{name} index must have k >= 0 (absorbing); got min {n.imag.min():g}")
+    raise ValueError(f"{name} index must have n in [{check.MIN_IOR:g}, {check.MAX_IOR:g}] and k <= "
+                     f"{check.MAX_EXTINCTION:g} (docs/limits.md); got n {n.real.min():g} to "
+                     f"{n.real.max():g}, k up to {n.imag.max():g}")
 
 
 def _indices(media, names, wl, power, reverse):
@@ -330,7 +338,7 @@ def _problem(film, wavelength_nm, theta, cos_theta, thickness_nm, reverse, power
         if len(thicknesses) != 1:
             raise ValueError(f"thickness_nm overrides a one-layer film; this stack has "
                              f"{len(thicknesses)} layers")
-        thicknesses = [real_array("thickness_nm", thickness_nm, 0.0)]
+        thicknesses = [check.film_thickness("thickness_nm", thickness_nm, array=True)]
     wl = wavelengths_nm(wavelength_nm)
     cos0 = _cosine(theta, cos_theta)
     indices = _indices(media, names, wl, power, reverse)
