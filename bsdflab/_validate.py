@@ -191,3 +191,23 @@ def per_row(name: str, value: Any, n: int, lo: float | None = None,
     if a.shape != (n,):
         raise ValueError(f"{name} must be a number or have shape ({n},), got {a.shape}")
     return np.ascontiguousarray(a)
+
+
+MAX_NESTING = 64  # dicts and lists inside each other in a request (a scene needs ~8)
+
+
+def nesting(name: str, value: Any, limit: int = MAX_NESTING) -> None:
+    """Refuse JSON-like data nested more than ``limit`` levels deep (checked without
+    recursion, so hostile depth cannot exhaust the stack)."""
+    stack = [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, dict):
+            children = item.values()
+        elif isinstance(item, (list, tuple)):
+            children = item
+        else:
+            continue
+        if depth > limit:
+            raise ValueError(f"{name} is nested more than {limit} levels deep")
+        stack.extend((child, depth + 1) for child in children)

@@ -51,6 +51,9 @@ TABLE_BYTES_PER_CELL_CHANNEL = 96
 # triangle).
 MESH_BYTES_PER_VERTEX = 256
 MESH_BYTES_PER_TRIANGLE = 256
+# what a mesh keeps in the core while rendering: float32 positions and normals, uint32
+# indices and Embree's BVH (~64 per triangle), per triangle with ~0.5 vertex each.
+SCENE_BYTES_PER_TRIANGLE = 128
 # a mesh file: what it decodes to relative to its size on disk (binary PLY ~ 12-13 bytes
 # per vertex / face becomes float64 / int64 arrays plus trimesh's caches).
 MESH_FILE_EXPANSION = 24

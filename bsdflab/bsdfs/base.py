@@ -171,6 +171,7 @@ def from_dict(d: dict[str, Any]) -> BSDF:
     """Rebuild a BSDF from ``to_dict`` output (also the HTTP and table-file form)."""
     if not isinstance(d, dict) or "type" not in d:
         raise ValueError("a BSDF dict needs a 'type' key; known types: " + ", ".join(sorted(_REGISTRY)))
+    check.nesting("the BSDF dict", d)
     kind = d["type"]
     cls = _REGISTRY.get(kind) if isinstance(kind, str) else None
     if cls is None:
