@@ -130,6 +130,13 @@ def integer(name: str, value: Any, lo: int, hi: int) -> int:
     return int(value)
 
 
+def flag(name: str, value: Any) -> bool:
+    """A boolean: True or False (numpy bools too); not 0/1, strings or other truthy things."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be true or false, got {brief(value)}")
+    return bool(value)
+
+
 def count(name: str, value: Any, hi: int = MAX_COUNT) -> int:
     """A positive amount of work (walks, depth): an integer in [1, hi]."""
     return integer(name, value, 1, hi)

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .._validate import MAX_EXTINCTION, MAX_IOR, MIN_IOR, ior
+from .._validate import MAX_EXTINCTION, MAX_IOR, MIN_IOR, flag, ior
 from ..optics.metals import metal_ior
 from ..optics.thin_film import Layer
 from ..spectra import Spectrum
@@ -56,6 +56,8 @@ class ConductorInterior:
             raise ValueError("give either material or (eta, k), not both")
         if material is None and eta is None and k is None:
             material = "none"
+        if material is not None and not isinstance(material, str):
+            raise ValueError(f"material must be the name of a metal, got {type(material).__name__}")
         self.material = material
         if material == "none":
             # A perfect mirror, as Mitsuba's default: eta = 0, k = 1 gives R = 1 everywhere.
@@ -86,7 +88,7 @@ class ConductorParams:
     def _init_conductor(self, material, eta, k, ext_ior, two_sided, film) -> None:
         self.interior = ConductorInterior(material, eta, k)
         self.ext_ior = ext_ior_param(ext_ior)
-        self.two_sided = bool(two_sided)
+        self.two_sided = flag("two_sided", two_sided)
         self.film = parse_film(film)
 
     def _conductor_term(self, wavelengths: np.ndarray):
