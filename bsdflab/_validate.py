@@ -77,7 +77,8 @@ def directions(name: str, value: Any) -> np.ndarray:
         raise ValueError(f"{name} must have shape (N, 3) or (3,), got {np.shape(value)}")
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be finite (found NaN or infinity)")
-    length = np.linalg.norm(a, axis=1)
+    with np.errstate(over="ignore"):  # huge entries: an infinite length, refused below
+        length = np.linalg.norm(a, axis=1)
     bad = np.abs(length - 1.0) > UNIT_TOLERANCE
     if np.any(bad):
         raise ValueError(f"{name} must be unit vectors (|w| = 1 within {UNIT_TOLERANCE}); "
@@ -115,7 +116,7 @@ def lobe_mask(value: Any) -> int:
     except _NUMBER_ERRORS:
         raise ValueError(f"lobes must be a Lobe flag, got {brief(value)}") from None
     if v < 0 or v > 63:
-        raise ValueError(f"lobes must be a combination of Lobe flags (0..63), got {v}")
+        raise ValueError(f"lobes must be a combination of Lobe flags (0..63), got {brief(v)}")
     return v
 
 

@@ -79,8 +79,15 @@ def fresnel_amplitudes(cos_i, n_i, n_t) -> Amplitudes:
     """
     c, ni, nt = _inputs(cos_i, n_i, n_t)
     shape = c.shape
-    out = _core.fresnel_amplitudes(np.ravel(ni), np.ravel(nt), np.ravel(c))
-    return Amplitudes(*(np.reshape(a, shape) for a in out))
+    r_s, r_p, t_s, t_p, cos_t = (np.reshape(a, shape) for a in
+                                 _core.fresnel_amplitudes(np.ravel(ni), np.ravel(nt), np.ravel(c)))
+    # Equal indices are no interface: r = 0, t = 1 -- also at grazing incidence, where the
+    # general formula is 0 / 0.
+    same = ni == nt
+    if np.any(same):
+        r_s, r_p, t_s, t_p, cos_t = (np.where(same, v, a) for v, a in
+                                     ((0, r_s), (0, r_p), (1, t_s), (1, t_p), (c, cos_t)))
+    return Amplitudes(r_s, r_p, t_s, t_p, cos_t)
 
 
 def fresnel_reflectance(cos_i, n_i, n_t) -> Reflectance:
@@ -100,4 +107,6 @@ def fresnel_transmittance(cos_i, n_i, n_t) -> Reflectance:
         ts = np.real(nt * a.cos_t) / np.real(ni * c) * np.abs(a.t_s) ** 2
         tp = np.real(nt * np.conj(a.cos_t)) / np.real(ni * np.conj(c)) * np.abs(a.t_p) ** 2
     ts, tp = np.nan_to_num(ts), np.nan_to_num(tp)
+    same = ni == nt  # no interface: everything passes, grazing included (0 / 0 above)
+    ts, tp = np.where(same, 1.0, ts), np.where(same, 1.0, tp)
     return Reflectance(ts, tp, 0.5 * (ts + tp))

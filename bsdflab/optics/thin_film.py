@@ -58,6 +58,7 @@ from .._validate import real_array
 from .dispersion import Constant, Dispersion, as_dispersion, dispersion_from_dict, wavelengths_nm
 
 POLARISATIONS = ("s", "p", "unpolarised")
+MIN_COSINE = 1e-60
 
 
 @dataclass(frozen=True)
@@ -292,10 +293,14 @@ def _cosine(theta, cos_theta) -> np.ndarray:
     if (theta is None) == (cos_theta is None):
         raise ValueError("give exactly one of theta (radians, [0, pi/2]) and cos_theta ([0, 1])")
     if cos_theta is not None:
-        return real_array("cos_theta", cos_theta, 0.0, 1.0)
-    # A tolerance of a few ulps lets np.pi / 2 itself through.
-    t = real_array("theta", theta, 0.0, np.pi / 2 + 1e-12)
-    return np.cos(np.minimum(t, np.pi / 2))
+        c = real_array("cos_theta", cos_theta, 0.0, 1.0)
+    else:
+        # A tolerance of a few ulps lets np.pi / 2 itself through.
+        t = real_array("theta", theta, 0.0, np.pi / 2 + 1e-12)
+        c = np.cos(np.minimum(t, np.pi / 2))
+    # Below ~1e-77 the core's fourth powers of n cos underflow and index-matched media give
+    # 0 / 0; a cosine of 1e-60 differs from such a one by nothing double precision shows.
+    return np.where((c > 0) & (c < MIN_COSINE), MIN_COSINE, c)
 
 
 def _check_index(name, n):
