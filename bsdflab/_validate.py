@@ -16,11 +16,13 @@ UNIT_TOLERANCE = 1e-4
 # k is bounded the same way; two indices in range have a ratio within [1e-6, 1e6].
 MIN_IOR, MAX_IOR = 1e-3, 1e3
 MAX_EXTINCTION = 1e3
-# Wavelengths: 1 nm (soft X-ray) to 1 mm (far infrared), so that phases 2 pi n d / lambda
-# and the colour grid stay well inside double precision.
-MIN_WAVELENGTH_NM, MAX_WAVELENGTH_NM = 1.0, 1e6
-# Film thicknesses: 0 to 1 cm; a coherent "thin" film beyond that has no meaning.
-MAX_FILM_THICKNESS_NM = 1e7
+# Wavelengths from 1 nm (soft X-ray; shorter ones -- denormals gave NaN -- break the
+# phase arithmetic) to 1e12 nm: long wavelengths only make phases vanish, and the
+# scaled-stack identity of plots/film_colour evaluates at lambda / s up to ~1e12 nm.
+MIN_WAVELENGTH_NM, MAX_WAVELENGTH_NM = 1.0, 1e12
+# Film thicknesses: 0 to 1 m (an opaque absorbing layer may be thick; phases 2 pi n d / lambda
+# stay below 1e13 rad, finite in double precision; 1e308 gave NaN).
+MAX_FILM_THICKNESS_NM = 1e9
 # Seeds are the core's uint64; counts of work (walks, depths) its int32 and far below.
 MAX_SEED = (1 << 64) - 1
 MAX_COUNT = 1 << 24

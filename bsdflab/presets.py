@@ -59,7 +59,7 @@ def melanin_absorption(sigma_550: float = 1.2, exponent: float = 3.33) -> Spectr
 
 
 def guanine_film(thickness_nm: float = FILM_THICKNESS_NM) -> list[dict]:
-    """One guanine film of ``thickness_nm`` in [0, 1e7] nm."""
+    """One guanine film of ``thickness_nm`` in [0, 1e9] nm."""
     return [{"material": GUANINE_IOR, "thickness_nm": check.film_thickness("thickness_nm", thickness_nm)}]
 
 
@@ -67,7 +67,7 @@ def iridophore_stack(platelets: int = 5, platelet_nm: float = 80.0, gap_nm: floa
     """Alternating guanine platelets and cytoplasm gaps (a multilayer reflector).
 
     platelets: an integer in [1, 16] (2 platelets - 1 layers fit the core's 32-layer film);
-    platelet_nm, gap_nm: thicknesses in [0, 1e7] nm."""
+    platelet_nm, gap_nm: thicknesses in [0, 1e9] nm."""
     platelets = check.integer("platelets", platelets, 1, MAX_PLATELETS)
     platelet_nm = check.film_thickness("platelet_nm", platelet_nm)
     gap_nm = check.film_thickness("gap_nm", gap_nm)

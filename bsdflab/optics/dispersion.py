@@ -32,7 +32,7 @@ from .._validate import MAX_EXTINCTION, MAX_IOR, MIN_IOR, real_array, real_scala
 
 
 def wavelengths_nm(value: Any, name: str = "wavelength_nm") -> np.ndarray:
-    """Validated wavelengths in nm (any shape), within [1, 1e6] nm (docs/limits.md)."""
+    """Validated wavelengths in nm (any shape), within [1, 1e12] nm (docs/limits.md)."""
     return check.wavelengths_nm(name, value)
 
 

@@ -16,12 +16,12 @@ film_transmittance(...)  same arguments as film_reflectance -> ndarray
 Arguments
 ---------
 wavelength_nm
-    Vacuum wavelengths in nm, in [1, 1e6].
+    Vacuum wavelengths in nm, in [1, 1e12].
 theta or cos_theta (exactly one)
     Angle of incidence in radians in [0, pi/2], or its cosine in [0, 1], measured in the
     medium the light arrives from.
 thickness_nm
-    Replaces the thickness of a one-layer film (nm, in [0, 1e7]), to sweep d.
+    Replaces the thickness of a one-layer film (nm, in [0, 1e9]), to sweep d.
 reverse
     Light arrives from the substrate side (the stack is traversed bottom-up; theta is
     then measured in the substrate).
@@ -154,16 +154,16 @@ class _Problem(NamedTuple):
 
 _FILM_PARAMETERS = """film : FilmStack or tuple (n0, n1, d_nm, n2)
         The stack, or one film: indices (numbers n + i k, n in [1e-3, 1e3], k in [0, 1e3],
-        dispersion models or their dicts) and a thickness d_nm in nm (in [0, 1e7]; may be
+        dispersion models or their dicts) and a thickness d_nm in nm (in [0, 1e9]; may be
         an array).
     wavelength_nm : array_like
-        Vacuum wavelengths in nm, in [1, 1e6].
+        Vacuum wavelengths in nm, in [1, 1e12].
     theta : array_like, optional
         Angle of incidence in radians, in [0, pi/2], in the medium light arrives from.
     cos_theta : array_like, optional
         Its cosine, in [0, 1]. Give exactly one of theta and cos_theta.
     thickness_nm : array_like, optional
-        Replaces the thickness of a one-layer film (nm, in [0, 1e7]) to sweep it.
+        Replaces the thickness of a one-layer film (nm, in [0, 1e9]) to sweep it.
     reverse : bool, optional
         Light arrives from the substrate side (theta then lies in the substrate)."""
 
