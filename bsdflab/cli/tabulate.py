@@ -35,6 +35,7 @@ def run(args: argparse.Namespace) -> int:
     import shutil
 
     from ..tables import TableGrid, cached_table, tabulate, write_table
+    from ..tables.data import check_table_memory
     from .errors import check_writable
 
     if args.out is not None:
@@ -42,6 +43,7 @@ def run(args: argparse.Namespace) -> int:
     model = material_from_args(args)
     grid = TableGrid(args.n_theta_i, args.n_theta_o, args.n_phi, tuple(args.thickness))
     wavelengths = args.wavelengths if args.wavelengths else None
+    check_table_memory(grid, 3 if wavelengths is None else len(wavelengths))
     channels = "rgb" if wavelengths is None else [float(w) for w in wavelengths]
 
     def make():

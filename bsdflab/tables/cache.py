@@ -21,8 +21,7 @@ from typing import Any
 
 from .. import _core
 from .. import _validate as check
-from .. import limits
-from .data import FORMAT_VERSION, TableData, TableGrid
+from .data import FORMAT_VERSION, TableData, TableGrid, check_table_memory
 from .file_format import canonical_json, read_table, write_table
 
 ENV_VAR = "BSDFLAB_CACHE_DIR"
@@ -156,9 +155,7 @@ def cached_table(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], r
         True when the table was read from the cache and `make` was not called.
     """
     request = request_dict(model_dict, grid, rel_error, channels, min_samples, max_samples, seed)
-    grid_obj = TableGrid.from_dict(request["grid"])
-    limits.check_bytes(f"a table of {grid_obj.cells(2)} cells x {len(request['channels'])} channels",
-                       limits.table_bytes(grid_obj.cells(2), len(request["channels"])))
+    check_table_memory(TableGrid.from_dict(request["grid"]), len(request["channels"]))
     key = cache_key(model_dict, grid, rel_error, channels, min_samples, max_samples, seed)
     path = cache_dir(directory) / f"{key}.exr"
     if path.exists():

@@ -39,6 +39,13 @@ def node_centres(n: int) -> np.ndarray:
     return (np.arange(n) + 0.5) * (0.5 * np.pi / n)
 
 
+def check_table_memory(grid: "TableGrid", n_channels: int, n_lobes: int = 2) -> None:
+    """Refuse a table on ``grid`` whose estimated memory exceeds ``BSDFLAB_MAX_BYTES``
+    (call before tabulating; ``n_lobes`` 2 covers transmissive models)."""
+    cells = grid.cells(n_lobes)
+    limits.check_bytes(f"a table of {cells} cells x {n_channels} channels", limits.table_bytes(cells, n_channels))
+
+
 @dataclass(frozen=True)
 class TableGrid:
     """Resolution of a table. Defaults balance accuracy and tabulation time for the
