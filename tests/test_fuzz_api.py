@@ -196,28 +196,27 @@ def _optics(data):
 def _presets_and_containers(data):
     which = data.draw(st.sampled_from(["stack", "melanin", "film", "grid", "camera", "scene", "mesh", "preset"]))
     a, b = data.draw(mostly(st.floats(0.1, 50.0))), data.draw(mostly(st.floats(1.0, 90.0)))
+    # every draw happens before the call: a draw inside it could end the example mid-case
+    k = data.draw(mostly(st.integers(-3, 600)))
     if which == "stack":
-        outcome(lambda: presets.iridophore_stack(data.draw(st.one_of(st.integers(-3, 20), anything)), a, 100.0),
-                lambda layers: None)
+        outcome(lambda: presets.iridophore_stack(k, a, 100.0), lambda layers: None)
     elif which == "melanin":
         outcome(lambda: presets.melanin_absorption(a, b).at(bl.DEFAULT_WAVELENGTHS),
                 lambda v: finite(v, bl.DEFAULT_WAVELENGTHS.shape))
     elif which == "film":
         outcome(lambda: presets.guanine_film(a), lambda layers: None)
     elif which == "grid":
-        outcome(lambda: TableGrid(data.draw(st.one_of(st.integers(0, 600), anything)), 4, 3, a if isinstance(a, list) else ()),
-                lambda g: None)
+        outcome(lambda: TableGrid(k, 4, 3, a if isinstance(a, list) else ()), lambda g: None)
     elif which == "camera":
-        outcome(lambda: Camera(fov_deg=a, width=data.draw(st.one_of(st.integers(1, 20000), anything))),
-                lambda c: None)
+        outcome(lambda: Camera(fov_deg=a, width=k), lambda c: None)
     elif which == "scene":
         shape = {"geometry": {"type": "sphere", "radius": a}, "emission": [1, 1, 1]}
         outcome(lambda: Scene.from_dict({"camera": {"fov_deg": b}, "shapes": [shape]}), lambda s: None)
     elif which == "mesh":
         spec = data.draw(st.sampled_from([
-            {"type": "sphere", "radius": a, "subdivisions": data.draw(st.one_of(st.integers(4, 16), anything))},
+            {"type": "sphere", "radius": a, "subdivisions": k},
             {"type": "torus", "major_radius": 1.0, "minor_radius": a, "resolution": 8},
-            {"type": "disk", "radius": a, "resolution": data.draw(st.one_of(st.integers(3, 12), anything))},
+            {"type": "disk", "radius": a, "resolution": k},
             {"type": "rectangle", "size": [a, 1.0]}]))
         outcome(lambda: build_mesh(spec), lambda m: finite(m.positions))
     else:
