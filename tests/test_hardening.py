@@ -233,6 +233,19 @@ def test_03_accepted_extremes_stay_finite():
     assert np.all(np.isfinite(r)) and np.all((r >= 0) & (r <= 1))
 
 
+def test_03_index_matched_and_absent_films_at_grazing_are_finite():
+    # found by this fuzzing (old: NaN): equal media, or a zero-thickness film
+    # between equal media, near grazing incidence divided 0 by 0; either is no interface
+    c = np.array([1e-30, 1e-70, 1e-300, 0.5])
+    assert np.array_equal(optics.fresnel_reflectance(c, 1.5, 1.5).unpolarised, np.zeros(4))
+    assert np.array_equal(optics.fresnel_transmittance(c, 1.5, 1.5).unpolarised, np.ones(4))
+    for film in ((1.0, 2.0, 0.0, 1.0), (1.3, 1.3, 100.0, 1.3), (1.3, 1.3, 0.0, 1.3)):
+        r = optics.film_reflectance(film, 500.0, cos_theta=c)
+        t = optics.film_transmittance(film, 500.0, cos_theta=c)
+        np.testing.assert_allclose(r, 0.0, atol=1e-12)
+        np.testing.assert_allclose(t, 1.0, atol=1e-12)
+
+
 def test_04_one_sample_render_says_its_variance_is_undefined():
     # old: variance was inf everywhere
     result = render(scene("furnace", width=4, height=3), spp=1, progress=False)

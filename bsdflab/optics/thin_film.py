@@ -374,19 +374,53 @@ def _one_film_columns(p: _Problem):
 def _solve(p: _Problem) -> list[np.ndarray]:
     """(r_s, r_p, t_s, t_p, R_s, R_p, T_s, T_p), each of shape p.shape."""
     if len(p.thicknesses) == 1:
-        out = _core.thin_film(*_one_film_columns(p))
-    else:
-        n_all = np.stack([np.broadcast_to(n, p.shape) for n in p.indices], axis=-1)
-        d_all = np.stack([np.broadcast_to(t, p.shape) for t in p.thicknesses], axis=-1)
-        out = _core.film_stack(n_all.reshape(-1, len(p.indices)),
-                               d_all.reshape(-1, len(p.thicknesses)),
-                               _flat(p.cos0, p.shape, np.float64),
-                               _flat(p.wavelength_nm, p.shape, np.float64))
+        return _with_bare_fallback(p, [np.reshape(a, p.shape) for a in _core.thin_film(*_one_film_columns(p))])
+    return _with_bare_fallback(p, _solve_stack(p))
+
+
+def _solve_stack(p: _Problem) -> list[np.ndarray]:
+    n_all = np.stack([np.broadcast_to(n, p.shape) for n in p.indices], axis=-1)
+    d_all = np.stack([np.broadcast_to(t, p.shape) for t in p.thicknesses], axis=-1)
+    out = _core.film_stack(n_all.reshape(-1, len(p.indices)),
+                           d_all.reshape(-1, len(p.thicknesses)),
+                           _flat(p.cos0, p.shape, np.float64),
+                           _flat(p.wavelength_nm, p.shape, np.float64))
     return [np.reshape(a, p.shape) for a in out]
+
+
+def _with_bare_fallback(p: _Problem, out: list[np.ndarray]) -> list[np.ndarray]:
+    """Where every layer has zero thickness the film is absent and the answer is the bare
+    interface's. The kernels clear their fractions into one denominator, which cancels to
+    0 / 0 for such a film near grazing incidence; those entries take the bare interface."""
+    bad = ~np.all([np.isfinite(a) for a in out], axis=0)
+    if not np.any(bad):
+        return out
+    absent = np.all([np.broadcast_to(t, p.shape) == 0 for t in p.thicknesses], axis=0)
+    use = bad & absent
+    if not np.any(use):
+        return out
+    bare = _bare_interface(p)
+    return [np.where(use, b, a) for a, b in zip(out, bare[4:6] if len(out) == 2 else bare)]
+
+
+def _bare_interface(p: _Problem) -> list[np.ndarray]:
+    """(r_s, r_p, t_s, t_p, R_s, R_p, T_s, T_p) of the interface incident -> substrate."""
+    from .fresnel import fresnel_amplitudes
+
+    n_in, n_out = (np.broadcast_to(n, p.shape) for n in (p.indices[0], p.indices[-1]))
+    c = np.broadcast_to(p.cos0, p.shape)
+    a = fresnel_amplitudes(c, n_in, n_out)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        T_s = np.real(n_out * a.cos_t) / np.real(n_in * c) * np.abs(a.t_s) ** 2
+        T_p = np.real(n_out * np.conj(a.cos_t)) / np.real(n_in * np.conj(c)) * np.abs(a.t_p) ** 2
+    same = n_in == n_out
+    T_s, T_p = (np.where(same, 1.0, np.nan_to_num(t)) for t in (T_s, T_p))
+    return [a.r_s, a.r_p, a.t_s, a.t_p, np.abs(a.r_s) ** 2, np.abs(a.r_p) ** 2, T_s, T_p]
 
 
 def _solve_reflectance(p: _Problem) -> list[np.ndarray]:
     """(R_s, R_p); one film takes the kernel that skips transmission."""
     if len(p.thicknesses) == 1:
-        return [np.reshape(a, p.shape) for a in _core.thin_film_reflectance(*_one_film_columns(p))]
+        out = [np.reshape(a, p.shape) for a in _core.thin_film_reflectance(*_one_film_columns(p))]
+        return _with_bare_fallback(p, out)
     return _solve(p)[4:6]
