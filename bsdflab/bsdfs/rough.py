@@ -14,7 +14,7 @@ from .. import _core
 from .._validate import real_scalar
 from .base import BSDF
 from .interface_term import (DEFAULT_EXT_IOR, DEFAULT_INT_IOR, ConductorParams, ext_ior_param,
-                             film_to_list, make_term, parse_film)
+                             film_to_list, int_ior_param, make_term, parse_film)
 
 
 def _alpha(value) -> float:
@@ -66,8 +66,8 @@ class RoughDielectric(BSDF):
                  ext_ior: float = DEFAULT_EXT_IOR, film=None):
         super().__init__()
         self.alpha = _alpha(alpha)
-        self.int_ior = real_scalar("int_ior", int_ior, 0.0, lo_open=True)
         self.ext_ior = ext_ior_param(ext_ior)
+        self.int_ior = int_ior_param(int_ior, self.ext_ior)
         if self.int_ior == self.ext_ior:
             raise ValueError("int_ior must differ from ext_ior (an index-matched rough "
                              "interface has no well-defined half vector)")

@@ -37,7 +37,11 @@ class TableBSDF(BSDF):
         if not isinstance(table, TableData):
             from .file_format import read_table
 
-            path = os.fspath(table if table is not None else path)
+            source = table if table is not None else path
+            if not isinstance(source, (str, os.PathLike)):
+                raise ValueError(f"table must be a TableData or the path of a table file, "
+                                 f"got {type(source).__name__}")
+            path = os.fspath(source)
             table = read_table(path)
         table.check()
         self.table = table

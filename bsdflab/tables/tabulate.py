@@ -20,7 +20,7 @@ from ..bsdfs.base import BSDF
 from ..layered import Layered
 from ..lobes import Lobe
 from .channels import table_channels
-from .data import LOBES, TableData, TableGrid
+from .data import LOBES, TableData, TableGrid, check_table_memory
 
 ERROR_FLOOR = 0.05
 SIGNIFICANT = 0.01  # cells counted in the achieved-error statistics: f > 1 % of the max
@@ -64,6 +64,7 @@ def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = 0.01
     rows = np.vstack([P, lum @ P])
     lobes = LOBES if model.lobes & Lobe.TRANSMISSION else LOBES[:1]
     split = isinstance(model, Layered)
+    check_table_memory(grid, len(names), len(lobes))  # before the core allocates (docs/limits.md)
 
     job = _core.TabulationJob(model._core(model_wl), len(lobes), grid.n_theta_i, grid.n_theta_o,
                               grid.n_phi, list(grid.thickness_nm), list(rows.ravel()), rows.shape[0],
