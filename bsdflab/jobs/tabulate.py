@@ -65,17 +65,18 @@ def cells(request: dict[str, Any]) -> int:
 
 
 def _key_arguments(request: dict[str, Any]):
+    """(model, grid, rel_error, channels) and the effort and seed, as the cache keys them
+    (defaults spelled out share the entry of requests that leave them out)."""
     names = table_channels(request["wavelengths"])[0]
-    min_samples = request["min_samples"]
-    # The cache key leaves the default first-pass effort out (as render's tables do).
-    return (request["model"], TableGrid.from_dict(request["grid"]), request["rel_error"], names,
-            None if min_samples == DEFAULT_MIN_SAMPLES else min_samples)
+    effort = {"min_samples": request["min_samples"], "max_samples": request["max_samples"],
+              "seed": request["seed"]}
+    return request["model"], TableGrid.from_dict(request["grid"]), request["rel_error"], names, effort
 
 
 def key(request: dict[str, Any]) -> str:
     """The table cache's key (``bsdflab.tables.cache_key``) of this request."""
-    model, grid, rel_error, names, min_samples = _key_arguments(request)
-    return cache_key(model, grid, rel_error, names, min_samples)
+    model, grid, rel_error, names, effort = _key_arguments(request)
+    return cache_key(model, grid, rel_error, names, **effort)
 
 
 def existing(request: dict[str, Any], out_dir: Path) -> dict[str, Any] | None:
@@ -91,7 +92,7 @@ def existing(request: dict[str, Any], out_dir: Path) -> dict[str, Any] | None:
 def run(request: dict[str, Any], out_dir: Path, progress, cancelled, client=None) -> dict[str, Any]:
     from ..bsdfs import from_dict
 
-    model_dict, grid, rel_error, names, min_samples = _key_arguments(request)
+    model_dict, grid, rel_error, names, effort = _key_arguments(request)
     model = from_dict(model_dict)
     extra = {} if client is None else {"client": client}
 
@@ -101,8 +102,7 @@ def run(request: dict[str, Any], out_dir: Path, progress, cancelled, client=None
                             min_samples=request["min_samples"], max_samples=request["max_samples"],
                             seed=request["seed"], progress=False, **extra)
 
-    table, path, hit = cached_table(model_dict, grid, rel_error, names, make, directory=out_dir,
-                                    min_samples=min_samples)
+    table, path, hit = cached_table(model_dict, grid, rel_error, names, make, directory=out_dir, **effort)
     if path is None:
         raise OSError(f"could not write the table into {out_dir}")
     return {"hash": path.stem, "files": {"exr": path.name}, "from_cache": hit, **describe(path, table)}
