@@ -10,7 +10,9 @@ pairs, measures in one run, on every core:
   * the time per direction pair to reach 1 % relative standard error.
   * with --per-walk: ns per walk of small estimates (1 and 8 wavelengths, the xenopeltis
     preset and a plastic stack), where per-walk overheads such as allocations show.
-Run: python3 bench/bench_layered.py [--pairs 32] [--samples 2000] [--per-walk]
+  * with --allocations (under LD_PRELOAD of bench/malloc_count.c, see there): heap
+    allocations per walk and per eval() call, counted, not timed.
+Run: python3 bench/bench_layered.py [--pairs 32] [--samples 2000] [--per-walk] [--allocations]
 """
 from __future__ import annotations
 
@@ -47,7 +49,10 @@ def main() -> None:
     ap.add_argument("--pairs", type=int, default=32)
     ap.add_argument("--samples", type=int, default=2000)
     ap.add_argument("--per-walk", action="store_true", help="also time small per-walk estimates")
+    ap.add_argument("--allocations", action="store_true", help="count heap allocations (LD_PRELOAD)")
     args = ap.parse_args()
+    if args.allocations:
+        allocations()
     if args.per_walk:
         per_walk()
 
@@ -89,6 +94,40 @@ def per_walk() -> None:
             model.eval_with_error(wi[:2], wo[:2], wavelengths=wl, samples=100)
             best = min(_timed(model, wi, wo, wl) for _ in range(3))
             print(f"  {name:11s} {len(wl)} wavelengths: {1e9 * best / (64 * 4000):8.1f} ns/walk")
+
+
+def allocations() -> None:
+    """Heap allocations per walk (from the difference of two efforts) and per plain eval()."""
+    import ctypes
+    import os
+
+    lib = next((p for p in os.environ.get("LD_PRELOAD", "").split(":") if "malloc_count" in p), None)
+    if lib is None:
+        raise SystemExit("--allocations needs LD_PRELOAD=<malloc_count.so> (see bench/malloc_count.c)")
+    count = ctypes.CDLL(lib).malloc_count
+    count.restype = ctypes.c_long
+    threads = os.environ.get("BSDFLAB_THREADS")
+    os.environ["BSDFLAB_THREADS"] = "1"  # one thread: no thread start-up allocations
+    wi = random_unit_vectors(16, seed=1, hemisphere="upper")
+    wo = random_unit_vectors(16, seed=2, hemisphere="upper")
+    plastic = bl.Layered([bl.Dielectric(1.5)], [bl.Slab(0.0)], bl.Diffuse(0.5))
+    for name, model in (("xenopeltis", bl.presets.xenopeltis()), ("plastic", plastic)):
+        core = model._core(np.array([550.0]))
+        model.eval_with_error(wi, wo, wavelengths=[550.0], samples=10)
+        used = []
+        for n in (100, 1100):
+            c0 = count()
+            model.eval_with_error(wi, wo, wavelengths=[550.0], samples=n)
+            used.append(count() - c0)
+        c0 = count()
+        core.eval(wi, wo, int(bl.Lobe.ALL), None)
+        per_eval = count() - c0
+        print(f"  {name:11s} {(used[1] - used[0]) / (1000 * 16):.3f} allocations per walk; "
+              f"{per_eval} per eval() call of 16 pairs x {model.samples} walks")
+    if threads is None:
+        del os.environ["BSDFLAB_THREADS"]
+    else:
+        os.environ["BSDFLAB_THREADS"] = threads
 
 
 def _timed(model, wi, wo, wl) -> float:
