@@ -7,8 +7,12 @@ absorbs light on the way down and back up; a diffuse base gives the natural dark
 Parameters and where they come from
 -----------------------------------
 * Outer medium: keratin, n = 1.532 + 5890 / lambda^2 (lambda in nm), Leertouwer, Wilts &
-  Stavenga 2011 (Opt. Express 19:24061). The interface needs one real index to bend rays,
-  so the slab uses keratin's value at 550 nm (1.5515); the film sees the full dispersion.
+  Stavenga 2011 (Opt. Express 19:24061). An interface needs one real index to bend rays,
+  so the slab *and* the film's substrate use keratin's value at 550 nm (1.5515, computed
+  from KERATIN_CAUCHY): keratin's dispersion (n falls from 1.569 at 400 nm to 1.544 at
+  700 nm) is not modelled, and the guanine film's index is constant too. The film's
+  colours come from interference, whose phase 4 pi n d cos / lambda the ~1 % index change
+  would shift by well under the spread of film thicknesses the paper sweeps.
 * Iridophore film: guanine crystals, n ~ 1.83 (same literature as the digest); no measured
   film thickness exists for Xenopeltis -- the paper sweeps 300-1200 nm; we default to the
   seed implementation's 400 nm. The stack variant uses guanine platelets of 80 nm (within
@@ -33,7 +37,7 @@ from .layered import Layered, Slab
 from .spectra import Spectrum
 
 KERATIN_CAUCHY = {"model": "cauchy", "A": 1.532, "B": 5890.0}
-KERATIN_IOR_550 = 1.532 + 5890.0 / 550.0**2
+KERATIN_IOR_550 = KERATIN_CAUCHY["A"] + KERATIN_CAUCHY["B"] / 550.0**2
 GUANINE_IOR = 1.83
 CYTOPLASM_IOR = 1.33
 AIR_IOR = 1.000277

@@ -12,8 +12,8 @@ Axes (all angles in radians):
 
 ``values`` holds the BSDF value f(wi, wo) -- without the cosine -- of the *tabulated part*.
 When ``split_direct`` is True (layered models), the top interface's own reflection is not
-in the table: it is evaluated exactly from ``model["interfaces"][0]`` at lookup time, and
-so is the top's delta reflection. Otherwise the table holds the whole non-delta BSDF.
+in the table: it is evaluated exactly from the model's ``exact_part`` (the top interface)
+at lookup time, and so is the top's delta reflection. Otherwise the table holds the whole non-delta BSDF.
 """
 from __future__ import annotations
 

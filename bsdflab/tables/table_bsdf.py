@@ -81,7 +81,7 @@ class TableBSDF(BSDF):
         g = t.grid
         direct, P = None, []
         if t.split_direct:
-            top = from_dict(t.model["interfaces"][0])
+            top = from_dict(t.model).exact_part
             if self._wavelengths is None:
                 direct = top._core(DEFAULT_WAVELENGTHS)
                 P = srgb_weights(DEFAULT_WAVELENGTHS).ravel()
@@ -101,10 +101,20 @@ class TableBSDF(BSDF):
 
 def default_film_thickness(model: dict) -> float:
     """Total film thickness (nm) of the model's coating -- the top interface's for a layered
-    model, the model's own for a coated interface -- or -1 without a film."""
+    model, the model's own for a coated interface -- or -1 without a film. The model is
+    asked (`film_thickness_of`); a dict that is no valid model has no film."""
     try:
-        coated = model["interfaces"][0] if "interfaces" in model else model
-        film = coated.get("film") or []
-        return float(sum(layer["thickness_nm"] for layer in film)) if film else -1.0
-    except (KeyError, IndexError, TypeError, AttributeError):
+        bsdf = from_dict(model)
+    except (ValueError, TypeError):
         return -1.0
+    return film_thickness_of(bsdf)
+
+
+def film_thickness_of(bsdf: BSDF) -> float:
+    """A model's film thickness (nm): its own answer (`film_thickness_nm`, e.g. a layered
+    model's top film) or the total of its own `film` layers; -1 without a film."""
+    own = getattr(bsdf, "film_thickness_nm", None)
+    if own is not None:
+        return float(own)
+    film = getattr(bsdf, "film", None) or ()
+    return float(sum(layer.thickness_nm for layer in film)) if film else -1.0
