@@ -1,6 +1,6 @@
 """Cross-check bsdflab's rough (GGX) interfaces against Mitsuba 3, query by query.
 
-    python3 -m bsdflab.reference.mitsuba_bsdf     # reports, rough materials included
+    python3 -m bsdflab.reference     # reports, rough materials included
 
 ``RoughConductor`` / ``RoughDielectric`` go over as Mitsuba's ``roughconductor`` /
 ``roughdielectric`` (mitsuba_bsdf.to_mitsuba). Both codes warp uniforms to visible
@@ -31,7 +31,7 @@ from bsdflab.bsdfs import BSDF, from_dict
 
 from .comparison import QUANTITIES, Comparison, errors_between, rel_error
 from .conditioning import ILL_CONDITIONED, INPUT_PERTURBATION
-from .mitsuba_bsdf import _critical, _notes, _setup, _summarise, to_mitsuba
+from .mitsuba_bsdf import comparison_notes, comparison_setup, critical_side, summarise, to_mitsuba
 from .mitsuba_calls import mitsuba_answers
 from .query_sets import bsdflab_answers, draw_queries
 from .rough_conditioning import pair_values, rough_reasons, rough_sensitivity
@@ -55,12 +55,12 @@ def compare_rough(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | 
     """Compare a bsdflab rough interface with Mitsuba 3 on ``n_pairs`` random queries
     (arguments as mitsuba_bsdf.compare_bsdf); the record's quantities are
     ROUGH_QUANTITIES (module doc)."""
-    d, wl, target, model_difference = _setup(bsdf, n_pairs, wavelength, target)
+    d, wl, target, model_difference = comparison_setup(bsdf, n_pairs, wavelength, target)
     if d["type"] not in ROUGH_TYPES:
         raise ValueError(f"compare_rough compares {', '.join(ROUGH_TYPES)}, got {d['type']!r}")
     b, plugin = from_dict(d), to_mitsuba(d, wl)
     channels = None if wl is None else [wl]
-    q = draw_queries(int(n_pairs), seed, _critical(d))
+    q = draw_queries(int(n_pairs), seed, critical_side(d))
     mapped = replace(q, u2=bsdflab_uniforms(d, q.u2, q.wi))
 
     ours = bsdflab_answers(b, mapped, channels)   # eval / pdf of (wi, wo); mapped samples
@@ -113,12 +113,12 @@ def compare_rough(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | 
                          | (ok["theirs"] & ~(at["theirs"].pdf > 0)))
     steep = np.any([v > ILL_CONDITIONED for v in moved.values()], axis=0)
     all_wo = (q.wo, wo["own32"], wo["theirs"], wo["ours"])
-    return _summarise(
+    return summarise(
         repr(b), wl, err, s, sens.flips,
         lambda idx: rough_reasons(d, q.wi, all_wo, idx, sens.flips, steep),
         same_lobe=same_lobe, sampled=sampled,
         validity_mismatch=validity_mismatch, target=target, model_difference=model_difference,
-        notes=_notes(d) + (WARP_NOTE,), quantities=ROUGH_QUANTITIES)
+        notes=comparison_notes(d) + (WARP_NOTE,), quantities=ROUGH_QUANTITIES)
 
 
 def rough_cases() -> list[tuple[str, BSDF, float | None]]:

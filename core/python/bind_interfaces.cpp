@@ -34,6 +34,38 @@ void bind_interfaces(py::module_ &m) {
         .def(py::init<std::vector<double>, std::shared_ptr<const FresnelTerm>, bool>(),
              py::arg("wavelengths"), py::arg("term"), py::arg("two_sided"));
     py::class_<RoughInterface, BSDF, std::shared_ptr<RoughInterface>>(m, "RoughInterface")
-        .def(py::init<std::vector<double>, std::shared_ptr<const FresnelTerm>, double, bool>(),
-             py::arg("wavelengths"), py::arg("term"), py::arg("alpha"), py::arg("two_sided"));
+        .def(py::init([](std::vector<double> wl, std::shared_ptr<const FresnelTerm> term,
+                         double alpha, bool two_sided, const std::string &distribution,
+                         bool multiscatter) {
+                 MicrofacetType type;
+                 if (distribution == "ggx") type = MicrofacetType::GGX;
+                 else if (distribution == "beckmann") type = MicrofacetType::Beckmann;
+                 else throw std::invalid_argument("distribution must be 'ggx' or 'beckmann'");
+                 py::gil_scoped_release release; // the energy tables take a moment
+                 return std::make_shared<RoughInterface>(std::move(wl), std::move(term), alpha,
+                                                         two_sided, type, multiscatter);
+             }),
+             py::arg("wavelengths"), py::arg("term"), py::arg("alpha"), py::arg("two_sided"),
+             py::arg("distribution") = "ggx", py::arg("multiscatter") = false)
+        .def_property_readonly("pass_through", &RoughInterface::pass_through)
+        .def("single_scattering_albedo",
+             [](const RoughInterface &r, int side, double mu) {
+                 const MultiScatter *ms = r.multiscatter();
+                 if (!ms) throw std::invalid_argument("only an energy-compensated interface has albedo tables");
+                 std::vector<double> out(r.channels());
+                 for (int c = 0; c < r.channels(); ++c) out[c] = ms->albedo(side, mu, c);
+                 return out;
+             },
+             py::arg("side"), py::arg("mu"),
+             "the tabulated single-scattering albedo per channel (side 0 above, 1 below)");
+    m.def("microfacet_d",
+          [](const std::string &distribution, double alpha, std::vector<double> m) {
+              Microfacet mf(distribution == "beckmann" ? MicrofacetType::Beckmann : MicrofacetType::GGX, alpha);
+              return mf.D(Vec3{m.at(0), m.at(1), m.at(2)});
+          });
+    m.def("microfacet_lambda",
+          [](const std::string &distribution, double alpha, std::vector<double> v) {
+              Microfacet mf(distribution == "beckmann" ? MicrofacetType::Beckmann : MicrofacetType::GGX, alpha);
+              return mf.Lambda(Vec3{v.at(0), v.at(1), v.at(2)});
+          });
 }
