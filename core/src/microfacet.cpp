@@ -26,6 +26,14 @@ double increasing_root(F f, double lo, double hi, double x) {
     return x;
 }
 
+// A start for Newton on the CDF of exp(-s^2) / sqrt(pi): the tail form
+// s ~ sqrt(-log(2 u)) (within ~0.3 for u <= 0.5), mirrored above one half.
+double gaussian_guess(double u) {
+    double t = std::min(u, 1.0 - u);
+    double s = std::sqrt(std::max(0.0, -std::log(2.0 * t))) * 0.8;
+    return u < 0.5 ? -s : s;
+}
+
 // Keep uniforms strictly inside (0, 1): the slopes of 0 and 1 are infinite.
 double open_unit(double u) {
     constexpr double eps = std::numeric_limits<double>::epsilon();
@@ -40,7 +48,7 @@ double beckmann_cross_slope(double u) {
         value = 0.5 * std::erfc(-s) - u;
         slope = std::exp(-s * s) / kSqrtPi;
     };
-    return increasing_root(f, -9.0, 9.0, 0.0);
+    return increasing_root(f, -9.0, 9.0, gaussian_guess(u));
 }
 
 double beckmann_visible_slope(double cot_theta, double u) {
@@ -57,7 +65,7 @@ double beckmann_visible_slope(double cot_theta, double u) {
     };
     double lo = std::min(c, 0.0) - 1.0;
     for (int i = 0; i < 8 && cdf(lo) / total > u; ++i) lo -= 2.0; // (1 - u) >= eps: s > -9
-    return increasing_root(f, lo, c, 0.5 * (lo + c));
+    return increasing_root(f, lo, c, std::min(gaussian_guess(u), 0.5 * (lo + c)));
 }
 
 double Microfacet::D(const Vec3 &m) const {
