@@ -146,26 +146,30 @@ def test_09_bad_input(make, match):
 @pytest.mark.parametrize("alpha", [0.1, 0.5, 1.5])
 def test_10_smith_lambda_and_ndf_against_quadrature(dist, alpha):
     """The core's D is normalised (int D cos theta_m = 1) and its Lambda satisfies Smith's
-    relation int D(m) max(0, v.m) dm = v.z (1 + Lambda(v)) (Heitz 2014, eq. 5), both by
-    a Gauss-Legendre product quadrature over the normals' hemisphere in a variable that
-    crowds the nodes near the normal; checked to 1e-6."""
+    relation int D(m) max(0, v.m) dm = v.z (1 + Lambda(v)) (Heitz 2014, eq. 5), by a
+    400 x 400 Gauss-Legendre product quadrature over the normals' hemisphere (theta_m =
+    (pi / 2) s^2 crowds the nodes near the normal) of the oracle's numpy D, which equals
+    the core's to 1e-12. Converged to ~1e-6 (800 nodes move it by that); the kink of
+    max(0, v.m) near grazing allows 1e-5."""
     from bsdflab import _core
-    x, w = np.polynomial.legendre.leggauss(200)
-    # theta_m = (pi / 2) s^2, s in [0, 1]: nodes dense near the normal, where D peaks
-    theta = 0.5 * np.pi * ((x + 1) / 2) ** 2
-    dtheta = 0.5 * np.pi * (x + 1) / 2 * 0.5
+    from bsdflab.oracles.microsurface import ndf
+    x, w = np.polynomial.legendre.leggauss(400)
+    s = (x + 1) / 2
+    theta, dtheta = 0.5 * np.pi * s**2, 0.5 * np.pi * s  # d theta / dx
     phi = np.pi * (x + 1)
     T, P = np.meshgrid(theta, phi, indexing="ij")
-    W = np.outer(w * dtheta, w * np.pi)
+    W = np.outer(w * dtheta, w * np.pi).ravel() * np.sin(T).ravel()
     m = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], axis=-1).reshape(-1, 3)
-    D = np.array([_core.microfacet_d(dist, alpha, list(v)) for v in m])
-    sin = np.sin(T).ravel()
-    assert np.sum(D * m[:, 2] * sin * W.ravel()) == pytest.approx(1.0, abs=1e-6)
+    D = ndf(dist, alpha, m)
+    some = np.random.default_rng(10).choice(len(m), 500, replace=False)
+    core_d = np.array([_core.microfacet_d(dist, alpha, list(v)) for v in m[some]])
+    assert np.allclose(core_d, D[some], rtol=1e-12, atol=0)
+    assert np.sum(D * m[:, 2] * W) == pytest.approx(1.0, abs=1e-6)
     for deg in (0.0, 30.0, 60.0, 80.0, 89.0):
         v = np.array([np.sin(np.radians(deg)), 0.0, np.cos(np.radians(deg))])
-        lhs = np.sum(D * np.maximum(0.0, m @ v) * sin * W.ravel())
+        lhs = np.sum(D * np.maximum(0.0, m @ v) * W)
         lam = _core.microfacet_lambda(dist, alpha, list(v))
-        assert lhs == pytest.approx(v[2] * (1 + lam), rel=1e-6, abs=1e-9), (deg, lhs, lam)
+        assert lhs == pytest.approx(v[2] * (1 + lam), rel=1e-5, abs=1e-9), (deg, lhs, lam)
 
 
 def test_11_near_index_matched_rough_dielectric_is_no_interface():
@@ -180,7 +184,7 @@ def test_11_near_index_matched_rough_dielectric_is_no_interface():
     s = g.sample(wi, seed=13, wavelengths=[550.0])
     t = s.lobe == Lobe.DELTA_TRANSMISSION
     assert np.mean(t) > 0.999
-    assert np.allclose(s.wo[t], -wi[t], atol=1e-8)
+    assert np.allclose(s.wo[t], -wi[t], atol=1e-6)  # bent by (eta - 1) tan theta
     assert np.allclose(s.weight[t], 1.0, atol=1e-8)
     # a relative difference of 1e-4 is still a rough interface
     assert bl.RoughDielectric(0.3, 1.0001, 1.0).lobes & Lobe.GLOSSY_TRANSMISSION
