@@ -136,27 +136,33 @@ def test_08_defaults_and_dicts():
 
 
 # -- against the microsurface oracle -------------------------------------------------------
-# Kulla-Conty's lobe is a model of the multiply scattered light, not its exact shape; these
-# bounds are the measured model error (docs/rough_interfaces.md) plus 4.5 sigma of noise.
-KC_CONDUCTOR_ERROR = 0.01   # albedo of a coloured conductor
+# Kulla-Conty's lobe models the multiply scattered light, it is not exact; and bsdflab's
+# single scattering uses the separable G1 G1 (Mitsuba's), the oracle the height-correlated
+# G2, which keeps more light at grazing angles. The bounds are the measured differences
+# (docs/rough_interfaces.md: Au 550 nm: -0.0025 / -0.0076 at alpha 0.3, 0 / 60 deg;
+# -0.025 / -0.040 at alpha 0.8) rounded up, plus 4.5 sigma of both estimates' noise.
+KC_CONDUCTOR_ERROR = {0.3: 0.012, 0.8: 0.05}
 KC_SPLIT_ERROR = 0.03       # reflected share of a dielectric's energy
 
 
-def test_09_compensated_conductor_albedo_against_the_oracle():
-    """Au (550 nm), GGX alpha 0.8, at 0 and 60 deg: the compensated albedo against the
-    random walk's (all scattering orders). The single-scattering model is far darker."""
-    au = bl.RoughConductor(0.8, material="Au", multiscatter=True)
-    plain = bl.RoughConductor(0.8, material="Au")
+@pytest.mark.parametrize("alpha", [0.3, 0.8])
+def test_09_compensated_conductor_albedo_against_the_oracle(alpha):
+    """Au (550 nm), GGX, at 0 and 60 deg: the compensated albedo against the random walk's
+    (all scattering orders), and the compensation closes >= 85 % of the single-scattering
+    model's gap to it."""
+    au = bl.RoughConductor(alpha, material="Au", multiscatter=True)
+    plain = bl.RoughConductor(alpha, material="Au")
     n_rel = au.eta.at([550.0])[0] + 1j * au.k.at([550.0])[0]
     for deg in (0, 60):
         wi = directions_at(np.cos(np.radians(deg)), phi=0.0)
-        walks = ms.random_walk(wi, 100_000, 0.8, "ggx", conductor_index=n_rel / au.ext_ior, seed=13)
+        walks = ms.random_walk(wi, 100_000, alpha, "ggx", conductor_index=n_rel / au.ext_ior,
+                               seed=13)
         ref, ref_err = walks.moments(walks.side == 1)
         s = albedo_sampled(au, wi, n=100_000, seed=14, wavelengths=[550.0])
         p = albedo_sampled(plain, wi, n=100_000, seed=14, wavelengths=[550.0])
-        tol = 4.5 * np.hypot(ref_err[0], s.stderr[0]) + KC_CONDUCTOR_ERROR + TABLE_ERROR
-        assert abs(s.mean[0] - ref[0]) < tol, (deg, s.mean, ref)
-        assert ref[0] - p.mean[0] > 2 * tol  # what the compensation fixes
+        noise = 4.5 * np.hypot(ref_err[0], s.stderr[0])
+        assert abs(s.mean[0] - ref[0]) < noise + KC_CONDUCTOR_ERROR[alpha], (deg, s.mean, ref)
+        assert ref[0] - s.mean[0] < 0.15 * (ref[0] - p.mean[0]) + noise, (deg, s.mean, p.mean, ref)
 
 
 @pytest.mark.parametrize("cos_theta", [0.8, -0.8, -0.5])
