@@ -238,3 +238,18 @@ def test_11_beckmann_g1_conversion_is_needed_and_exact():
     assert np.median(rel_fixed) < 1e-5
     assert np.all(mr.exact_g1_factor(RoughConductor(0.3).to_dict(), q.wi) == 1.0)
     assert mr.exact_g1_factor(d, np.array([[0.0, 0.0, 1.0]]))[0] == 1.0
+
+
+def test_12_no_import_cycle_and_a_package_main():
+    """mitsuba_bsdf.py imports nothing of mitsuba_rough.py (the shared helpers are public
+    in mitsuba_bsdf); the report runner lives in bsdflab.reference.__main__."""
+    import ast
+    import importlib
+    import inspect
+
+    tree = ast.parse(inspect.getsource(mb))
+    imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    imported |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    assert not any(name and "mitsuba_rough" in name for name in imported)
+    runner = importlib.import_module("bsdflab.reference.__main__")
+    assert callable(runner.main)

@@ -27,12 +27,15 @@ CHI2_CASES = [
     (lambda: bl.RoughDielectric(0.2, 1.0, 1.33), 0.6),   # interior less dense than exterior
     (lambda: bl.RoughDielectric(0.3, 1.5, 1.0, film=FILM), 0.5),
     (lambda: bl.RoughDielectric(0.3, 1.5, 1.0, film=FILM), -0.5),
-    (lambda: bl.RoughConductor(0.05, material="Au", distribution="beckmann"), 0.9),
     (lambda: bl.RoughConductor(0.5, material="Cu", distribution="beckmann"), 0.05),
-    (lambda: bl.RoughDielectric(0.3, 1.5, 1.0, distribution="beckmann"), 0.7),
     (lambda: bl.RoughDielectric(0.3, 1.5, 1.0, distribution="beckmann"), -0.3),  # TIR
     (lambda: bl.RoughDielectric(0.8, 1.0, 1.33, distribution="beckmann"), -0.8),
-    (lambda: bl.RoughDielectric(0.2, 1.5, 1.0, film=FILM, distribution="beckmann"), 0.5),
+    pytest.param(lambda: bl.RoughConductor(0.05, material="Au", distribution="beckmann"), 0.9,
+                 marks=pytest.mark.slow),
+    pytest.param(lambda: bl.RoughDielectric(0.3, 1.5, 1.0, distribution="beckmann"), 0.7,
+                 marks=pytest.mark.slow),
+    pytest.param(lambda: bl.RoughDielectric(0.2, 1.5, 1.0, film=FILM, distribution="beckmann"),
+                 0.5, marks=pytest.mark.slow),
 ]
 
 

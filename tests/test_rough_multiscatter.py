@@ -38,9 +38,9 @@ def test_01_single_scattering_loses_10_to_22_percent_from_inside(deg, expected):
 
 @pytest.mark.parametrize("dist", ["ggx", "beckmann"])
 @pytest.mark.parametrize("alpha", [0.3, 0.8])
-@pytest.mark.parametrize("cos_theta", [1.0, 0.5, 0.15, -1.0, -0.5, -0.15])
+@pytest.mark.parametrize("cos_theta", [1.0, 0.15, -1.0, -0.5])
 def test_02_compensated_lossless_dielectric_conserves_energy_from_both_sides(dist, alpha, cos_theta):
-    """R + T = 1 within 4.5 sigma (the sampled estimate's noise; Sidak over 24 cases at
+    """R + T = 1 within 4.5 sigma (the sampled estimate's noise; Sidak over 16 cases at
     1 %) plus the tables' error; the single-scattering model falls short where it loses
     more than that."""
     wi = directions_at(cos_theta)
@@ -71,15 +71,19 @@ def test_03_white_conductor_conserves_energy_and_tables_match_the_single_scatter
         assert abs(table - e.mean[0]) < 4.5 * e.stderr[0] + TABLE_ERROR, (cos_theta, table, e)
 
 
+_slow = pytest.mark.slow  # (the coloured and film cases build tables over many wavelengths)
 CHI2_CASES = [
-    (lambda: bl.RoughConductor(0.5, material="Au", multiscatter=True), 0.7),
-    (lambda: bl.RoughConductor(0.8, material="Cu", two_sided=True, multiscatter=True), -0.3),
-    (lambda: bl.RoughConductor(0.4, material="Al", film=FILM, multiscatter=True), 0.5),
     (lambda: bl.RoughConductor(0.6, distribution="beckmann", multiscatter=True), 0.1),
     (lambda: bl.RoughDielectric(0.5, 1.5, 1.0, multiscatter=True), 0.6),
     (lambda: bl.RoughDielectric(0.5, 1.5, 1.0, multiscatter=True), -0.6),
     (lambda: bl.RoughDielectric(0.8, 1.0, 1.33, distribution="beckmann", multiscatter=True), -0.9),
-    (lambda: bl.RoughDielectric(0.3, 1.5, 1.0, film=FILM, multiscatter=True), -0.4),
+    pytest.param(lambda: bl.RoughConductor(0.5, material="Au", multiscatter=True), 0.7, marks=_slow),
+    pytest.param(lambda: bl.RoughConductor(0.8, material="Cu", two_sided=True, multiscatter=True),
+                 -0.3, marks=_slow),
+    pytest.param(lambda: bl.RoughConductor(0.4, material="Al", film=FILM, multiscatter=True), 0.5,
+                 marks=_slow),
+    pytest.param(lambda: bl.RoughDielectric(0.3, 1.5, 1.0, film=FILM, multiscatter=True), -0.4,
+                 marks=_slow),
 ]
 
 
@@ -91,7 +95,10 @@ def test_04_chi2_of_the_mixture_sampler(make, cos_theta):
     assert test.run(), test.message
 
 
-@pytest.mark.parametrize("make, cos_theta", CHI2_CASES)
+ALL_CASES = [c.values if hasattr(c, "values") else c for c in CHI2_CASES]  # none slow
+
+
+@pytest.mark.parametrize("make, cos_theta", ALL_CASES)
 def test_05_eval_pdf_consistency(make, cos_theta):
     r = eval_pdf_consistency(make(), directions_at(cos_theta), n=5_000, seed=6)
     assert r.max_pdf_error < 1e-8 and r.max_weight_error < 1e-8, r
