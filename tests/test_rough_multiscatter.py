@@ -186,3 +186,35 @@ def test_10_dielectric_reflection_share_against_the_oracle(cos_theta):
     r, r_err = refl.mean(), refl.std() / np.sqrt(len(refl))
     tol = 4.5 * np.hypot(ref_err[0], r_err) + KC_SPLIT_ERROR
     assert abs(r - ref[0]) < tol, (r, ref)
+
+
+THREADS_SCRIPT = """
+import numpy as np, bsdflab as bl
+rng = np.random.default_rng(7)
+v = rng.normal(size=(20000, 3)); v /= np.linalg.norm(v, axis=1, keepdims=True)
+w = rng.normal(size=(20000, 3)); w /= np.linalg.norm(w, axis=1, keepdims=True)
+out = []
+for m in (bl.RoughDielectric(0.5, 1.5, 1.0, multiscatter=True, film=[dict(material=2.0, thickness_nm=400.0)]),
+          bl.RoughConductor(0.4, material='Au', distribution='beckmann', multiscatter=True)):
+    s = m.sample(v, seed=3, wavelengths=[450.0, 550.0, 650.0])
+    t = rng.uniform(0, 500, len(v))
+    out += [m.eval(v, w, wavelengths=[450.0, 550.0, 650.0], thickness=t),
+            m.pdf(v, w, wavelengths=[450.0, 550.0, 650.0]), s.wo, s.weight, s.pdf]
+np.save({path!r}, np.concatenate([np.ravel(a) for a in out]))
+"""
+
+
+def test_11_one_thread_equals_many(tmp_path):
+    """The compensated cores (their tables, the per-thread buffers of the tint at a query
+    thickness) give bit-identical answers on 1 and 2 threads."""
+    import os
+    import subprocess
+    import sys
+    results = []
+    for threads in ("1", "2"):
+        path = tmp_path / f"t{threads}.npy"
+        env = dict(os.environ, BSDFLAB_THREADS=threads)
+        subprocess.run([sys.executable, "-c", THREADS_SCRIPT.format(path=str(path))], check=True,
+                       env=env, timeout=300)
+        results.append(path.read_bytes())
+    assert results[0] == results[1]
