@@ -73,7 +73,7 @@ def test_03_white_conductor_conserves_energy_and_tables_match_the_single_scatter
 
 _slow = pytest.mark.slow  # (the coloured and film cases build tables over many wavelengths)
 CHI2_CASES = [
-    (lambda: bl.RoughConductor(0.6, distribution="beckmann", multiscatter=True), 0.1),
+    (lambda: bl.RoughDielectric(0.6, 1.5, 1.0, distribution="beckmann", multiscatter=True), 0.1),
     (lambda: bl.RoughDielectric(0.5, 1.5, 1.0, multiscatter=True), 0.6),
     (lambda: bl.RoughDielectric(0.5, 1.5, 1.0, multiscatter=True), -0.6),
     (lambda: bl.RoughDielectric(0.8, 1.0, 1.33, distribution="beckmann", multiscatter=True), -0.9),
@@ -83,6 +83,8 @@ CHI2_CASES = [
     pytest.param(lambda: bl.RoughConductor(0.4, material="Al", film=FILM, multiscatter=True), 0.5,
                  marks=_slow),
     pytest.param(lambda: bl.RoughDielectric(0.3, 1.5, 1.0, film=FILM, multiscatter=True), -0.4,
+                 marks=_slow),
+    pytest.param(lambda: bl.RoughConductor(0.6, distribution="beckmann", multiscatter=True), 0.1,
                  marks=_slow),
 ]
 
@@ -100,7 +102,7 @@ ALL_CASES = [c.values if hasattr(c, "values") else c for c in CHI2_CASES]  # non
 
 @pytest.mark.parametrize("make, cos_theta", ALL_CASES)
 def test_05_eval_pdf_consistency(make, cos_theta):
-    r = eval_pdf_consistency(make(), directions_at(cos_theta), n=5_000, seed=6)
+    r = eval_pdf_consistency(make(), directions_at(cos_theta), n=2_000, seed=6)
     assert r.max_pdf_error < 1e-8 and r.max_weight_error < 1e-8, r
 
 

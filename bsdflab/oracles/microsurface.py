@@ -82,8 +82,8 @@ def _newton_increasing(f, lo: np.ndarray, hi: np.ndarray, iterations: int = 60) 
         value, slope = f(x)
         lo = np.where(value < 0, x, lo)
         hi = np.where(value < 0, hi, x)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            nxt = x - value / slope
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            nxt = x - value / slope  # a zero slope (the tails) falls back to bisection
         nxt = np.where((nxt > lo) & (nxt < hi), nxt, 0.5 * (lo + hi))
         done = np.all(np.abs(nxt - x) <= 1e-13 * np.maximum(1.0, np.abs(x)))
         x = nxt
