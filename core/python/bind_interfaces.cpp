@@ -1,4 +1,6 @@
 // Bindings of Fresnel terms and the smooth / rough interface BSDFs built from them.
+#include <array>
+#include <cmath>
 #include <pybind11/complex.h>
 #include <pybind11/stl.h>
 #include "arrays.h"
@@ -58,14 +60,21 @@ void bind_interfaces(py::module_ &m) {
              },
              py::arg("side"), py::arg("mu"),
              "the tabulated single-scattering albedo per channel (side 0 above, 1 below)");
+    // Scalar access to the distributions, for tests against quadrature.
+    auto distribution = [](const std::string &name, double alpha) {
+        if (name != "ggx" && name != "beckmann")
+            throw std::invalid_argument("distribution must be 'ggx' or 'beckmann'");
+        if (!(alpha > 0) || !std::isfinite(alpha)) throw std::invalid_argument("alpha must be > 0");
+        return Microfacet(name == "ggx" ? MicrofacetType::GGX : MicrofacetType::Beckmann, alpha);
+    };
     m.def("microfacet_d",
-          [](const std::string &distribution, double alpha, std::vector<double> m) {
-              Microfacet mf(distribution == "beckmann" ? MicrofacetType::Beckmann : MicrofacetType::GGX, alpha);
-              return mf.D(Vec3{m.at(0), m.at(1), m.at(2)});
-          });
+          [distribution](const std::string &name, double alpha, std::array<double, 3> v) {
+              return distribution(name, alpha).D(Vec3{v[0], v[1], v[2]});
+          },
+          py::arg("distribution"), py::arg("alpha"), py::arg("m"), "D(m) of a unit normal");
     m.def("microfacet_lambda",
-          [](const std::string &distribution, double alpha, std::vector<double> v) {
-              Microfacet mf(distribution == "beckmann" ? MicrofacetType::Beckmann : MicrofacetType::GGX, alpha);
-              return mf.Lambda(Vec3{v.at(0), v.at(1), v.at(2)});
-          });
+          [distribution](const std::string &name, double alpha, std::array<double, 3> v) {
+              return distribution(name, alpha).Lambda(Vec3{v[0], v[1], v[2]});
+          },
+          py::arg("distribution"), py::arg("alpha"), py::arg("v"), "Smith's Lambda of a direction");
 }
