@@ -4,6 +4,8 @@ Each oracle evaluates a configuration exactly (to quadrature precision) with opt
 are independent of the code it checks (the ``tmm`` package or the oracle's own closed
 forms, never bsdflab's C++ core). ``CoatedDiffuseOracle``: non-scattering slabs, thin
 films; ``AddingDoublingOracle``: scattering slabs (isotropic, Henyey-Greenstein).
+``microsurface`` is the stochastic exception: Heitz et al. 2016's random walk on a Smith
+microsurface (numpy), the reference for rough interfaces' multiple scattering.
 """
 from .adding_doubling import AddingDoublingOracle
 from .coated_diffuse import CoatedDiffuseOracle
