@@ -5,9 +5,9 @@ import argparse
 import sys
 
 from .. import __version__
-from . import info, lobe, render, table, tabulate, thinfilm
+from . import fit, info, lobe, render, table, tabulate, thinfilm
 
-COMMANDS = (render, lobe, thinfilm, tabulate, table, info)
+COMMANDS = (render, lobe, thinfilm, tabulate, table, info, fit)
 
 
 def build_parser() -> argparse.ArgumentParser:
