@@ -14,8 +14,8 @@ from .. import _core
 from .data import GEOMETRIES, Dataset
 from .parameters import FORWARD_NAMES, PARAMETERS
 
-THICKNESS_NODES = 16   # Gauss-Hermite nodes over the thickness distribution
-ANGLE_NODES = 48       # Gauss-Legendre nodes of the hemispherical integrals
+THICKNESS_NODES = 24   # Gauss-Hermite nodes over the thickness distribution
+ANGLE_NODES = 32       # Gauss-Legendre nodes of the hemispherical integrals
 
 
 class ForwardModel:

@@ -44,7 +44,7 @@ def simulate(config: SimulationConfig, command: str = "") -> tuple[Dataset, np.n
     sigma = np.sqrt(config.absolute_noise ** 2 + (config.relative_noise * y) ** 2)
     rng = np.random.default_rng(config.seed)
     obs = y + config.truth["noise_scale"] * sigma * rng.standard_normal(len(y))
-    truth = ", ".join(f"{k}={v:g}" for k, v in config.truth.items())
+    truth = ", ".join(f"{k}={v:.10g}" for k, v in config.truth.items())
     comments = ["SYNTHETIC DATA (not a measurement), made by bsdflab fit simulate" + (f": {command}" if command else ""),
                 f"truth: {truth}",
                 f"noise: sigma = sqrt({config.absolute_noise:g}^2 + ({config.relative_noise:g} y)^2), "
