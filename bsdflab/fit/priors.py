@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy import stats
@@ -50,7 +51,7 @@ class Prior:
             raise ValueError(f"parameter {name!r}: median must be > 0, got {args['median']:g}")
         return cls(kind, tuple(args.items()))
 
-    @property
+    @cached_property
     def dist(self):
         a = dict(self.args)
         if self.kind == "uniform":

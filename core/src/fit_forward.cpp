@@ -1,4 +1,5 @@
 #include "bsdflab/fit_forward.h"
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -11,6 +12,7 @@ namespace bsdflab::fit {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr std::size_t kFilmEvalsPerThread = 4000; // ~0.5 ms of work
 
 bool finite_params(const double *p) {
     for (int i = 0; i < kParamCount; ++i)
@@ -65,7 +67,11 @@ ForwardModel::ForwardModel(std::vector<double> wavelengths_nm, std::vector<Obser
 
 void ForwardModel::evaluate(const double *params, std::size_t count, double *out) const {
     const std::size_t nw = wavelengths_.size(), nr = rows_.size();
-    parallel_for(count * nw, 1, [&](std::size_t s, std::size_t e) {
+    // Film evaluations per (set, wavelength) at most; threads only pay off for a few
+    // hundred microseconds of work per thread (starting them costs ~tens of microseconds).
+    const std::size_t per_item = gh_x_.size() * (c_.size() + 2 * nr / std::max<std::size_t>(nw, 1) + 1);
+    const std::size_t grain = std::max<std::size_t>(1, kFilmEvalsPerThread / std::max<std::size_t>(per_item, 1));
+    parallel_for(count * nw, grain, [&](std::size_t s, std::size_t e) {
         for (std::size_t i = s; i < e; ++i) {
             std::size_t set = i / nw;
             evaluate_wavelength(params + set * kParamCount, i % nw, out + set * nr);
