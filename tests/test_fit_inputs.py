@@ -115,3 +115,16 @@ def test_simulation_noise_model():
                                 "measurement": [{"geometry": "specular", "angles_deg": [1], "wavelengths_nm": [500]}]})
     with pytest.raises(ValueError, match="angle_pairs_deg"):
         SimulationConfig.parse({"measurement": [{"geometry": "diffuse", "angles_deg": [1], "wavelengths_nm": [500]}]})
+
+
+@pytest.mark.parametrize("spec", [{"prior": "uniform", "low": 300.0, "high": 600.0},
+                                  {"prior": "normal", "mean": 1.83, "sd": 0.05},
+                                  {"prior": "lognormal", "median": 1.2, "sigma": 0.7},
+                                  {"prior": "truncnormal", "mean": 0.3, "sd": 0.2, "low": 0.0, "high": 1.0}])
+def test_prior_logpdf_matches_scipy(spec):
+    from bsdflab.fit.priors import Prior
+
+    prior = Prior.make("x", spec)
+    lo, hi = prior.dist.ppf([1e-4, 1 - 1e-4])
+    x = np.concatenate([np.linspace(lo, hi, 50), [lo - 1.0, hi + 1.0, -1.0, 0.0]])
+    np.testing.assert_allclose(prior.logpdf(x), prior.dist.logpdf(x), rtol=1e-12, atol=1e-12)

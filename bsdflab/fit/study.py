@@ -177,7 +177,7 @@ def _write_renders(draws_full, mean_full, ap, folder: str, seed: int) -> None:
     from .renders import render_draws
 
     values = [mean_full, *draws_full]
-    labels = ["posterior mean"] + [f"draw {i + 1}: d = {v[0]:.0f} nm" for i, v in enumerate(draws_full)]
+    labels = ["posterior mean"] + [f"draw {i + 1}: d = {v[0]:.1f} nm" for i, v in enumerate(draws_full)]
     items = render_draws(values, labels, ap.render_size, ap.render_spp, seed)
     contact_sheet(items, os.path.join(folder, "renders.png"), title="sphere renders of posterior draws",
                   columns=min(len(items), 5))
