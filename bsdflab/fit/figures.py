@@ -71,7 +71,7 @@ def predictive_plot(dataset: Dataset, model_draws: np.ndarray, predictive_draws:
     plt.close(fig)
 
 
-def trace_plot(run: RunResult, path: str) -> None:
+def trace_plot(run: RunResult, path: str, tau_multiple: float = 50.0) -> None:
     plt = _plt()
     k = len(run.names)
     fig, axes = plt.subplots(k + 1, 1, figsize=(8, 1.6 * (k + 1) + 0.4), squeeze=False)
@@ -87,7 +87,7 @@ def trace_plot(run: RunResult, path: str) -> None:
     taus = np.array([t for _, t in run.tau_history])
     for j, name in enumerate(run.names):
         ax.plot(ns, taus[:, j], marker=".", lw=0.8, label=name)
-    ax.plot(ns, ns / 50.0, "k--", lw=0.8, label="N / 50")
+    ax.plot(ns, ns / tau_multiple, "k--", lw=0.8, label=f"N / {tau_multiple:g} (stop when τ is below)")
     ax.set_xlabel("step N", fontsize=8)
     ax.set_ylabel("τ estimate", fontsize=8)
     ax.tick_params(labelsize=7)

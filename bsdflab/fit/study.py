@@ -107,7 +107,7 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
     noise = logpost.full(pick)[:, ALL_NAMES.index("noise_scale")][:, None] * data.sigma[None, :]
     predictive_plot(data, model_draws, model_draws + noise * rng.standard_normal(model_draws.shape),
                     os.path.join(folder, "predictive.png"))
-    trace_plot(run, os.path.join(folder, "trace.png"))
+    trace_plot(run, os.path.join(folder, "trace.png"), config.sampler.tau_multiple)
 
     mean_full = logpost.full(np.mean(draws, axis=0))[0]
     ap = config.appearance
