@@ -32,8 +32,9 @@ def corner_plot(draws: np.ndarray, names, path: str, truths=None) -> None:
     import corner
 
     plt = _plt()
-    fig = corner.corner(draws, labels=[_label(n) for n in names], quantiles=[0.05, 0.5, 0.95],
-                        show_titles=True, title_fmt=".4g", title_kwargs={"fontsize": 8},
+    k = draws.shape[1]
+    fig = corner.corner(draws, fig=plt.figure(figsize=(2.6 * k, 2.6 * k)), labels=[_label(n) for n in names],
+                        quantiles=[0.05, 0.5, 0.95], show_titles=True, title_fmt=".4g", title_kwargs={"fontsize": 7},
                         label_kwargs={"fontsize": 8}, truths=truths, truth_color="tab:red")
     fig.suptitle("posterior (lines: 5 %, 50 %, 95 %" + ("; red: truth)" if truths is not None else ")"),
                  fontsize=9)
