@@ -207,3 +207,43 @@ def test_ctrl_c_leaves_no_half_written_study(tmp_path):
     assert p.returncode != 0
     assert not out.exists()
     assert not [q for q in os.listdir(tmp_path) if q.startswith(".study")]
+
+
+def test_free_noise_scale_finds_understated_sigmas():
+    """Data whose true noise is 2x the stated sigma: a free noise_scale recovers ~2."""
+    cfg = SimulationConfig.parse(tomllib.loads(TRUTH_TOML.format(d=430.0, A=1.83, rel=0.02, seed=9, step=10)
+                                               .replace("base_albedo = 0.3", "base_albedo = 0.3\nnoise_scale = 2.0")))
+    data = simulate(cfg)[0]
+    config = fit_config(steps=600, seed=3).__class__.parse(tomllib.loads(
+        FIT_TOML.format(walkers=8, steps=600, seed=3).replace(
+            "base_albedo = 0.3", 'base_albedo = 0.3\nnoise_scale = { prior = "lognormal", median = 1.0, sigma = 1.0 }')))
+    run = run_sampler(LogPosterior(data, config), config.sampler, progress=False)
+    lo, hi = np.quantile(run.draws()[:, run.names.index("noise_scale")], [0.05, 0.95])
+    # 70 rows: the scale's posterior sd is ~2/sqrt(2*70) = 0.17, so [lo, hi] spans ~1.6-2.4
+    assert lo < 2.0 < hi and hi < 2.8 and lo > 1.3
+
+
+def test_appearance_colour_against_colour_science():
+    """The strip colour of one specular spectrum equals colour-science's sd_to_XYZ route,
+    and a draw equal to the mean material has Delta E00 = 0."""
+    import colour
+
+    from bsdflab.fit.appearance import appearance_posterior, lab_of, specular_spectra
+    from bsdflab.fit.forward import default_theta
+    from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
+
+    full = np.append(default_theta(film_thickness_nm=430.0), 1.0)
+    spectrum = specular_spectra(full, [30.0], 1, 8)[0, 0]
+    sd = colour.SpectralDistribution(dict(zip(DEFAULT_WAVELENGTHS, spectrum)))
+    xyz = colour.sd_to_XYZ(sd, colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"],
+                           colour.SDS_ILLUMINANTS["D65"], method="Integration") / 100.0
+    white = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
+    ref = colour.XYZ_to_Lab(xyz, illuminant=white)
+    ours = lab_of(spectrum @ srgb_weights(DEFAULT_WAVELENGTHS).T)
+    # different integration rules of the same CMF tables (5 nm sums vs colour's) and the
+    # Bradford adaptation of the grid white: ~0.1 Lab units, well under a just-noticeable 1
+    assert colour.delta_E(ours, ref, method="CIE 2000") < 0.3
+    other = np.append(default_theta(film_thickness_nm=450.0), 1.0)
+    app = appearance_posterior(np.vstack([full, other]), full, [0.0, 30.0, 60.0], 1, 8)
+    np.testing.assert_allclose(app.delta_e[0], 0.0, atol=1e-9)
+    assert np.all(app.delta_e[1] > 1.0)   # 20 nm thicker is a visible change
