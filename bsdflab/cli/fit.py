@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import shlex
+import sys
 
 
 def register(sub) -> None:
@@ -48,7 +49,11 @@ def run(args: argparse.Namespace) -> int:
     from ..fit.study import run_study
 
     config = FitConfig.load(args.config)
-    summary = run_study(args.data, config, args.out, progress=not args.quiet, overwrite=args.overwrite)
+    try:
+        summary = run_study(args.data, config, args.out, progress=not args.quiet, overwrite=args.overwrite)
+    except KeyboardInterrupt:
+        print(f"\nbsdflab fit: interrupted; nothing was written to {args.out}", file=sys.stderr)
+        return 130
     print(summary["stop_reason"])
     print(f"acceptance fraction {summary['acceptance_fraction']['mean']:.3f}; "
           f"min ESS {summary['ess_tau_min']:.0f} ({summary['ess_per_second']:.1f}/s)")

@@ -17,6 +17,7 @@ import os
 import shutil
 import tempfile
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -166,8 +167,6 @@ def _write_scene(values, folder: str) -> None:
 
     scene = sphere_scene(values, 320)
     mat = scene.materials["object"]
-    from dataclasses import replace
-
     full = replace(scene, materials={**scene.materials, "object": replace(mat, bsdf=material_dict(values))})
     save_scene(full, os.path.join(folder, "sphere.json"))
 
