@@ -17,17 +17,29 @@ from .posterior import LogPosterior
 from .sampling import RunResult
 
 
+def arviz():
+    """arviz, imported without its FutureWarning about the coming 1.0 refactor."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FutureWarning)
+        import arviz as az
+    return az
+
+
 def inference_data(run: RunResult, logpost: LogPosterior, dataset: Dataset):
     """ArviZ InferenceData of the post-burn-in chains (walkers = chains), with the log
     posterior, the observed data and the run's diagnostics as attributes."""
-    import arviz as az
+    import xarray as xr
 
+    az = arviz()
     idata = az.from_emcee(run.sampler, var_names=list(run.names))
     idata = idata.sel(draw=slice(run.burn, None))
-    idata.add_groups(observed_data={"reflectance": dataset.reflectance},
-                     constant_data={"sigma": dataset.sigma, "wavelength_nm": dataset.wavelength_nm,
-                                    "angle_deg": dataset.angle_deg, "angle_out_deg": dataset.angle_out_deg,
-                                    "geometry": dataset.geometry})
+    rows = {"row": np.arange(len(dataset))}
+    idata.add_groups(
+        observed_data=xr.Dataset({"reflectance": ("row", dataset.reflectance)}, coords=rows),
+        constant_data=xr.Dataset({k: ("row", getattr(dataset, k)) for k in
+                                  ("sigma", "wavelength_nm", "angle_deg", "angle_out_deg", "geometry")}, coords=rows))
     attrs = {"stop_reason": run.stop_reason, "converged": int(run.converged), "steps": run.steps,
              "burn_in": run.burn, "thin": run.thin, "walkers": int(run.chain.shape[1]),
              "tau": run.tau.tolist(), "acceptance_fraction_mean": float(np.mean(run.acceptance)),
@@ -42,8 +54,7 @@ def inference_data(run: RunResult, logpost: LogPosterior, dataset: Dataset):
 
 def summary_rows(run: RunResult, idata, truths: dict | None = None) -> list[dict]:
     """Per free parameter: median, 90 % equal-tailed credible interval, mean, sd, ESS, R-hat."""
-    import arviz as az
-
+    az = arviz()
     draws = run.draws()
     ess_b = az.ess(idata, method="bulk")
     ess_t = az.ess(idata, method="tail")
