@@ -160,7 +160,7 @@ def test_study_folder(tmp_path):
     assert idata.posterior.sizes["draw"] == summary["steps"] - summary["burn_in"]
     assert "stop_reason" in idata.posterior.attrs
     material = json.loads((out / "material.json").read_text())
-    model = from_dict({k: v for k, v in material.items() if k != "fit"})
+    model = from_dict(material)
     assert model.type_name == "layered"
     assert load_scene(out / "sphere.json").materials["object"].bsdf["type"] == "layered"
     assert "step cap" in summary["stop_reason"] or "converged" in summary["stop_reason"]

@@ -122,11 +122,8 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
               for a, m, lo, hi, b in zip(app.angles_deg, iv["median"], iv["low"], iv["high"], iv["bound"])]
     _text(os.path.join(folder, "appearance.csv"), "\n".join(lines) + "\n")
 
-    material = from_dict(material_dict(mean_full)).to_dict()
-    fit_info = {"posterior_mean": dict(zip(ALL_NAMES, map(float, mean_full))),
-                "note": "film_thickness_spread_nm is a spatial average with no counterpart in one BSDF; "
-                        "the model carries the mean thickness"}
-    _text(os.path.join(folder, "material.json"), json.dumps({**material, "fit": fit_info}, indent=1) + "\n")
+    material = from_dict(material_dict(mean_full)).to_dict()   # canonical form, as from_dict reads it
+    _text(os.path.join(folder, "material.json"), json.dumps(material, indent=1) + "\n")
     _write_scene(mean_full, folder)
     if ap.renders:
         _write_renders(app_draws[:ap.renders], mean_full, ap, folder, config.sampler.seed)
@@ -155,6 +152,9 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
                        "statement": f"the specular colour at {app.angles_deg[angle30]:g} deg is known to within "
                                     f"dE00 <= {iv['bound'][angle30]:.2f} (90 % of posterior draws)",
                        "display_exposure_stops": exposure},
+        "posterior_mean": dict(zip(ALL_NAMES, map(float, mean_full))),
+        "material_note": "material.json carries the mean film thickness: the thickness spread is a spatial "
+                         "average with no counterpart in one BSDF",
         "parameters": rows, "seconds": time.perf_counter() - t0,
     }
     _text(os.path.join(folder, "summary.json"), json.dumps(summary, indent=1, default=float) + "\n")
