@@ -14,6 +14,12 @@ from .parameters import parameter
 from .sampling import RunResult
 
 
+# short titles over the corner plot's diagonal (the axis labels carry the full names)
+SYMBOLS = {"film_thickness_nm": "d", "film_thickness_spread_nm": "σ_d", "film_index_A": "A", "film_index_B": "B",
+           "substrate_index": "n_s", "exterior_index": "n_e", "sigma_a_550": "σ_a(550)",
+           "absorption_exponent": "exponent", "slab_thickness_um": "h", "base_albedo": "ρ", "noise_scale": "s"}
+
+
 def _plt():
     import matplotlib
 
@@ -35,6 +41,7 @@ def corner_plot(draws: np.ndarray, names, path: str, truths=None) -> None:
     k = draws.shape[1]
     fig = corner.corner(draws, fig=plt.figure(figsize=(2.6 * k, 2.6 * k)), labels=[_label(n) for n in names],
                         quantiles=[0.05, 0.5, 0.95], show_titles=True, title_fmt=".4g", title_kwargs={"fontsize": 7},
+                        titles=[SYMBOLS.get(n, n) for n in names],
                         label_kwargs={"fontsize": 8}, truths=truths, truth_color="tab:red")
     fig.suptitle("posterior (lines: 5 %, 50 %, 95 %" + ("; red: truth)" if truths is not None else ")"),
                  fontsize=9)
