@@ -63,6 +63,17 @@ def _real(section: str, key: str, value, lo: float, hi: float = math.inf, lo_ope
     return float(value)
 
 
+def _settings(cls, section: str, d: dict, ranges: dict) -> dict:
+    """Values of the keys in ``ranges`` ({key: (lo, hi)}; float bounds mean a real number)
+    from table ``d``, each defaulting to the dataclass ``cls``'s default."""
+    _check_keys(section, d, cls.__dataclass_fields__)
+    base, out = cls(), {}
+    for key, (lo, hi) in ranges.items():
+        v = d.get(key, getattr(base, key))
+        out[key] = _real(section, key, v, lo, hi) if isinstance(lo, float) else _integer(section, key, v, lo, hi)
+    return out
+
+
 @dataclass(frozen=True)
 class ModelSettings:
     thickness_nodes: int = 24
@@ -70,10 +81,7 @@ class ModelSettings:
 
     @classmethod
     def parse(cls, d: dict) -> "ModelSettings":
-        _check_keys("model", d, cls.__dataclass_fields__)
-        base = cls()
-        return cls(_integer("model", "thickness_nodes", d.get("thickness_nodes", base.thickness_nodes), 1, 200),
-                   _integer("model", "angle_nodes", d.get("angle_nodes", base.angle_nodes), 2, 1000))
+        return cls(**_settings(cls, "model", d, {"thickness_nodes": (1, 200), "angle_nodes": (2, 1000)}))
 
 
 @dataclass(frozen=True)
@@ -87,14 +95,9 @@ class SamplerSettings:
 
     @classmethod
     def parse(cls, d: dict) -> "SamplerSettings":
-        _check_keys("sampler", d, cls.__dataclass_fields__)
-        b = cls()
-        s = cls(_integer("sampler", "walkers", d.get("walkers", b.walkers), 4, 10000),
-                _integer("sampler", "max_steps", d.get("max_steps", b.max_steps), 10, 10_000_000),
-                _real("sampler", "tau_multiple", d.get("tau_multiple", b.tau_multiple), 1.0),
-                _integer("sampler", "check_every", d.get("check_every", b.check_every), 10, 1_000_000),
-                _integer("sampler", "seed", d.get("seed", b.seed), 0, 2**63 - 1),
-                _integer("sampler", "map_starts", d.get("map_starts", b.map_starts), 1, 1000))
+        s = cls(**_settings(cls, "sampler", d, {
+            "walkers": (4, 10000), "max_steps": (10, 10_000_000), "tau_multiple": (1.0, math.inf),
+            "check_every": (10, 1_000_000), "seed": (0, 2**63 - 1), "map_starts": (1, 1000)}))
         if s.walkers % 2:
             raise ValueError(f"[sampler] walkers must be even (emcee's stretch move), got {s.walkers}")
         return s
@@ -110,16 +113,13 @@ class AppearanceSettings:
 
     @classmethod
     def parse(cls, d: dict) -> "AppearanceSettings":
-        _check_keys("appearance", d, cls.__dataclass_fields__)
-        b = cls()
-        angles = d.get("angles_deg", list(b.angles_deg))
+        angles = d.get("angles_deg", list(cls().angles_deg))
         if not isinstance(angles, list) or not angles:
             raise ValueError(f"[appearance] angles_deg must be a non-empty list, got {angles!r}")
         angles = tuple(_real("appearance", "angles_deg", a, 0.0, 89.0) for a in angles)
-        return cls(_integer("appearance", "draws", d.get("draws", b.draws), 2, 100000), angles,
-                   _integer("appearance", "renders", d.get("renders", b.renders), 0, 64),
-                   _integer("appearance", "render_size", d.get("render_size", b.render_size), 8, 1024),
-                   _integer("appearance", "render_spp", d.get("render_spp", b.render_spp), 1, 65536))
+        values = _settings(cls, "appearance", {k: v for k, v in d.items() if k != "angles_deg"}, {
+            "draws": (2, 100000), "renders": (0, 64), "render_size": (8, 1024), "render_spp": (1, 65536)})
+        return cls(angles_deg=angles, **values)
 
 
 @dataclass(frozen=True)
