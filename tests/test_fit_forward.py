@@ -132,3 +132,15 @@ def test_smooth_in_the_parameters():
     d1, d2, d3 = deriv(1.0), deriv(0.5), deriv(0.25)
     # Richardson: the h^2 error terms shrink 4x per halving
     np.testing.assert_allclose((d1 - d2) / (d2 - d3), 4.0, rtol=0.02)
+
+
+def test_threads_do_not_change_the_answer(monkeypatch):
+    """A large batch runs threaded; the result must equal the one-thread result bit for bit."""
+    rows = [(SPEC, a, np.nan, w) for a in (10.0, 50.0) for w in np.arange(400.0, 701.0, 10.0)]
+    rows += [(DIFF, 0.0, 45.0, w) for w in (450.0, 550.0, 650.0)]
+    m = ForwardModel(design(rows))
+    thetas = np.array([default_theta(film_thickness_nm=d, film_thickness_spread_nm=10.0, sigma_a_550=0.3,
+                                     base_albedo=0.4) for d in np.linspace(300.0, 600.0, 64)])
+    threaded = m.evaluate(thetas)
+    monkeypatch.setenv("BSDFLAB_THREADS", "1")
+    np.testing.assert_array_equal(m.evaluate(thetas), threaded)
