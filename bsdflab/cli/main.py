@@ -5,9 +5,9 @@ import argparse
 import sys
 
 from .. import __version__
-from . import info, lobe, render, serve, table, tabulate, thinfilm
+from . import fit, info, lobe, render, serve, table, tabulate, thinfilm
 
-COMMANDS = (render, lobe, thinfilm, tabulate, table, info, serve)
+COMMANDS = (render, lobe, thinfilm, tabulate, table, info, fit, serve)
 
 
 def build_parser() -> argparse.ArgumentParser:
