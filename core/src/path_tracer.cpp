@@ -13,29 +13,9 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Shadow rays stop this fraction short of the light point (float BVH precision).
 constexpr double kShadowEpsilon = 1e-4;
 
-struct ShadingFrame {
-    Vec3 s, t, n;
-    Vec3 to_local(const Vec3 &v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
-    Vec3 to_world(const Vec3 &v) const { return s * v.x + t * v.y + n * v.z; }
-};
-
 Vec3 normalized(const Vec3 &v) {
     double l = length(v);
     return l > 0 ? v * (1 / l) : Vec3{0, 0, 0};
-}
-
-// Orthonormal frame around n with s as close to `tangent` as possible.
-ShadingFrame frame_around(const Vec3 &n, const Vec3 &tangent) {
-    Vec3 s = tangent - n * dot(n, tangent);
-    double l = length(s);
-    if (!(l > 1e-9 * (length(tangent) + 1e-300))) {
-        // No usable tangent: any perpendicular (Duff et al. 2017's branchless basis).
-        double sign = std::copysign(1.0, n.z), a = -1 / (sign + n.z), b = n.x * n.y * a;
-        s = {1 + sign * n.x * n.x * a, sign * b, -sign * n.x};
-    } else {
-        s = s * (1 / l);
-    }
-    return {s, cross(n, s), n};
 }
 
 double power_heuristic(double a, double b) {
@@ -117,24 +97,10 @@ void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]
         const Material *mat = scene.material_of(hit.mesh);
         if (!mat) break;
 
-        // Shading: the scale texture may swap in the gap BSDF, tilt the normal (bump) and
-        // change the film thickness of this scale.
-        const RenderBSDF *rb = &mat->surface;
-        Query q;
-        ShadingFrame frame = frame_around(hit.ns, hit.dpdu);
-        if (mat->scales) {
-            ScaleSample ss = mat->scales->lookup(hit.u, hit.v);
-            if (ss.gap) {
-                if (mat->has_gap) rb = &mat->gap;
-            } else {
-                // Slopes are along (T_u, T_v); t = n x s is T_v only for right-handed (u, v)
-                // parameterisations (the snake's and the sphere's are left-handed).
-                const double handed = dot(cross(hit.dpdu, hit.dpdv), frame.n) < 0 ? -1.0 : 1.0;
-                Vec3 nb = normalized(frame.n - frame.s * ss.slope_u - frame.t * (handed * ss.slope_v));
-                if (length(nb) > 0) frame = frame_around(nb, frame.s);
-                if (mat->film_thickness_nm > 0) q.film_thickness_nm = mat->film_thickness_nm * ss.thickness_factor;
-            }
-        }
+        const ShadingPoint sp = mat->shade(hit);
+        const RenderBSDF *rb = sp.bsdf;
+        const ShadingFrame &frame = sp.frame;
+        const Query &q = sp.query;
         const BSDF &bsdf = *rb->bsdf;
         const Vec3 wi = frame.to_local(-d);
 

@@ -13,6 +13,7 @@
 #include "bsdflab/render/camera.h"
 #include "bsdflab/render/distribution.h"
 #include "bsdflab/render/environment.h"
+#include "bsdflab/render/shading.h"
 #include "bsdflab/scale_texture.h"
 
 namespace bsdflab {
@@ -32,6 +33,9 @@ struct Material {
     bool has_gap = false;
     std::shared_ptr<const ScaleTexture> scales; // may be null
     double film_thickness_nm = -1;              // base thickness the scales modulate; < 0: none
+
+    // The BSDF, shading frame and query at a hit (see shading.h).
+    ShadingPoint shade(const SurfaceHit &hit) const;
 };
 
 struct MeshInput {
