@@ -12,6 +12,17 @@ from bsdflab.render import render
 from bsdflab.scenes import scene
 
 
+def rough_tables(s):
+    from dataclasses import replace
+
+    materials = {}
+    for name, m in s.materials.items():
+        if m.bsdf.get("type") == "tabulated":
+            m = replace(m, bsdf={**m.bsdf, "rel_error": 0.5, "min_samples": 8})
+        materials[name] = m
+    return replace(s, materials=materials)
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__)
     p.add_argument("scene", choices=("basic-materials", "snake"))
@@ -19,8 +30,18 @@ def main() -> None:
     p.add_argument("--height", type=int, default=90)
     p.add_argument("--spp", type=int, default=16)
     p.add_argument("--spectral", action="store_true")
+    p.add_argument("--rough-table", action="store_true",
+                   help="tabulate the snake at 50 %% error with 8 walks per cell (seconds instead of minutes): "
+                        "the render's cost does not depend on the table's accuracy")
+    p.add_argument("--exact-top", action="store_true", help="tables: evaluate the top film spectrally (no lookup)")
     args = p.parse_args()
+    if args.exact_top:
+        from bsdflab.tables import table_bsdf
+
+        table_bsdf.FILM_LOOKUP = False
     s = scene(args.scene, width=args.width, height=args.height)
+    if args.rough_table:
+        s = rough_tables(s)
     kwargs = {"spectral": True} if args.spectral else {}
     r = render(s, spp=args.spp, seed=1, progress=False, **kwargs)
     print(f"{args.scene}: {r.samples_per_second / 1e3:.0f} k samples/s ({r.seconds:.2f} s)")

@@ -27,6 +27,9 @@ def register(sub) -> None:
     p.add_argument("--save-scene", default=None, help="also write the scene as a scene file (.json)")
     p.add_argument("--cache-dir", default=None, help="table cache folder (default: the user cache)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.add_argument("--denoise", action="store_true",
+                   help="also write a denoised preview (Intel Open Image Denoise via pyoidn) beside the EXR "
+                        "as <out>.denoised.exr / .png; the EXR itself is unchanged")
     p.set_defaults(run=run)
 
 
@@ -78,6 +81,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--exposure must be a number of stops in [-64, 64], got {args.exposure}")
     if not args.out.lower().endswith(".exr"):
         raise ValueError(f"--out must end in .exr, got {args.out!r}")
+    if args.denoise and args.scene in SCENE_SETS:
+        raise ValueError("--denoise works on a single scene, not a scene set")
     scenes, base_dir = _scenes(args)
     prepared = []
     for label, s in scenes:
@@ -97,13 +102,21 @@ def run(args: argparse.Namespace) -> int:
         if label and not args.quiet:
             print(f"rendering {label}")
         results.append((label, render(s, spp=args.spp, seed=args.seed, progress=not args.quiet,
-                                      base_dir=base_dir, cache_dir=args.cache_dir)))
+                                      base_dir=base_dir, cache_dir=args.cache_dir, aovs=args.denoise)))
     png = os.path.splitext(args.out)[0] + ".png"
     if len(results) == 1:
         result = results[0][1]
         summary = result.summary()
         write_exr(args.out, result.mean, summary)
         write_png(png, result.mean, args.exposure)
+        if args.denoise:
+            from ..render.denoise import denoise
+
+            stem = os.path.splitext(args.out)[0] + ".denoised"
+            preview = denoise(result)
+            write_exr(stem + ".exr", preview, dict(summary, denoised="Intel Open Image Denoise (pyoidn)"))
+            write_png(stem + ".png", preview, args.exposure)
+            print(f"wrote the denoised preview {stem}.exr and {stem}.png")
     else:
         mosaic = contact_sheet([(label, r.mean) for label, r in results], png, args.exposure,
                                title=args.scene)

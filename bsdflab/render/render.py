@@ -32,6 +32,10 @@ class RenderResult:
     seconds: float
     invalid_samples: int
     settings: dict[str, Any] = field(default_factory=dict)
+    rays_traced: int = 0
+    # First-hit auxiliary images when render(aovs=True): "albedo" and "normal" (H, W, 3),
+    # "mesh_id" (H, W) (-1: nothing hit); they never change mean or variance.
+    aovs: dict[str, np.ndarray] | None = None
 
     @property
     def samples_per_second(self) -> float:
@@ -53,13 +57,15 @@ def _spp(value) -> int:
 
 
 def render(scene: Scene, spp: int = 16, seed: int = 0, progress: bool = True, pass_spp: int | None = None,
-           base_dir: str | None = None, cache_dir=None, strategy: str = "mis") -> RenderResult:
+           base_dir: str | None = None, cache_dir=None, strategy: str = "mis", aovs: bool = False) -> RenderResult:
     """Path-trace ``scene`` with ``spp`` samples per pixel.
 
     The image does not depend on the number of threads. ``pass_spp`` sets how many samples
     each progressive pass adds (default: about 16 passes). Ctrl-C stops the render and
     raises KeyboardInterrupt; nothing is written anywhere by this function.
     Tables a material asks for (``"tabulated"``) are built or reused before rendering.
+    ``aovs=True`` also returns first-hit albedo, normal and mesh-id images (for a denoiser),
+    computed after the render by separate rays: the image itself is the same either way.
     """
     if not isinstance(scene, Scene):
         raise ValueError(f"scene must be a bsdflab.render.Scene, got {type(scene).__name__}")
@@ -76,7 +82,11 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, progress: bool = True, pa
     run_with_progress(job, progress, unit="tile", desc="rendering")
     seconds = time.perf_counter() - start
     mean, variance = job.image()
+    aux = None
+    if aovs:
+        albedo, normal, mesh_id = job.aovs(16)
+        aux = {"albedo": albedo, "normal": normal, "mesh_id": mesh_id}
     return RenderResult(mean=mean, variance=variance, spp=job.spp_done, seconds=seconds,
-                        invalid_samples=job.invalid_samples,
+                        invalid_samples=job.invalid_samples, rays_traced=job.rays_traced, aovs=aux,
                         settings={"scene": scene.name, "seed": int(seed), "max_depth": scene.max_depth,
                                   "rr_depth": scene.rr_depth})

@@ -95,6 +95,16 @@ void bind_render(py::module_ &m) {
                                                         scale));
              })
         .def("commit", &RenderScene::commit, py::call_guard<py::gil_scoped_release>())
+        .def("embree_seconds",
+             [](const RenderScene &sc, py::array_t<float, py::array::c_style | py::array::forcecast> rays) {
+                 if (rays.ndim() != 2 || rays.shape(1) != 8) throw std::invalid_argument("rays must be (N, 8)");
+                 if (!sc.committed()) throw std::invalid_argument("commit() the scene first");
+                 const float *p = rays.data();
+                 std::size_t n = rays.shape(0);
+                 py::gil_scoped_release release;
+                 return sc.trace_recorded(p, n);
+             },
+             py::arg("rays"), "wall seconds Embree alone takes to trace recorded rays on all cores")
         .def("environment_eval",
              [](const RenderScene &s, const Darr &d) {
                  require_rows3(d, "d");
@@ -164,5 +174,33 @@ void bind_render(py::module_ &m) {
                  j.radiance(px, py, seed, L);
                  return std::vector<double>{L[0], L[1], L[2]};
              },
-             "one camera sample's radiance at film position (px, py): for tests");
+             "one camera sample's radiance at film position (px, py): for tests")
+        .def_property_readonly("rays_traced", &RenderJob::rays_traced)
+        .def("record_rays",
+             [](const RenderJob &j, std::size_t max_rays) {
+                 std::vector<float> r;
+                 {
+                     py::gil_scoped_release release;
+                     r = j.record_rays(max_rays);
+                 }
+                 py::array_t<float> out({r.size() / 8, std::size_t(8)});
+                 std::copy(r.begin(), r.end(), out.mutable_data());
+                 return out;
+             },
+             py::arg("max_rays"), "(N, 8) rays of the first pass: origin, direction, tmax, shadow flag")
+        .def("aovs",
+             [](const RenderJob &j, int samples) {
+                 if (samples < 1) throw std::invalid_argument("aovs: samples must be >= 1");
+                 std::size_t h = j.height(), w = j.width();
+                 py::array_t<double> albedo({h, w, std::size_t(3)}), normal({h, w, std::size_t(3)});
+                 py::array_t<int> mesh({h, w});
+                 double *a = albedo.mutable_data(), *n = normal.mutable_data();
+                 int *id = mesh.mutable_data();
+                 {
+                     py::gil_scoped_release release;
+                     j.aovs(samples, a, n, id);
+                 }
+                 return py::make_tuple(albedo, normal, mesh);
+             },
+             py::arg("samples") = 16, "(albedo, normal, mesh id) first-hit images for a denoiser and masks");
 }

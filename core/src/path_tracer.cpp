@@ -56,7 +56,21 @@ RenderJob::RenderJob(std::shared_ptr<const RenderScene> scene, const RenderSetti
     max_channels_ = scene_->max_channels();
 }
 
+void RenderJob::RayLog::add(const Vec3 &o, const Vec3 &d, double tmax, bool shadow) {
+    ++rays;
+    if (!record || record->size() >= 8 * max_record) return;
+    const float r[8] = {float(o.x), float(o.y), float(o.z), float(d.x), float(d.y), float(d.z),
+                        std::isinf(tmax) ? std::numeric_limits<float>::infinity() : float(tmax),
+                        shadow ? 1.0f : 0.0f};
+    record->insert(record->end(), r, r + 8);
+}
+
 void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]) const {
+    RayLog log;
+    trace_path(px, py, sample_seed, L, log);
+}
+
+void RenderJob::trace_path(double px, double py, uint64_t sample_seed, double L[3], RayLog &log) const {
     PCG32 rng(sample_seed);
     const RenderScene &scene = *scene_;
     const Environment &env = scene.environment();
@@ -78,6 +92,7 @@ void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]
 
     for (int depth = 1;; ++depth) { // depth: index of the vertex this ray finds
         SurfaceHit hit;
+        log.add(o, d, kInf, false);
         if (!scene.intersect(o, d, kInf, hit)) {
             if (env.active()) {
                 double Le[3];
@@ -128,6 +143,7 @@ void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]
                         if (aimed) dir = to * (1 / len);
                         tmax = len * (1 - kShadowEpsilon);
                     }
+                    if (aimed) log.add(origin, dir, tmax, true);
                     if (aimed && !scene.occluded(origin, dir, tmax)) {
                         double w = (s_.strategy == LightStrategy::kMIS ? power_heuristic(es.pdf, bsdf.pdf(wi, wo, kAll, q))
                                                                         : 1.0) / es.pdf;
@@ -167,6 +183,7 @@ void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
     const int x0 = int(tile % tiles_x_) * s_.tile, y0 = int(tile / tiles_x_) * s_.tile;
     const int x1 = std::min(x0 + s_.tile, W), y1 = std::min(y0 + s_.tile, H);
     std::size_t bad = 0;
+    RayLog log;
     for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
             const std::size_t pixel = std::size_t(y) * W + x;
@@ -175,9 +192,9 @@ void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
             for (int k = 0; k < spp; ++k) {
                 const uint64_t hi = pixel_rng.next(), lo = pixel_rng.next(); // in this order
                 const uint64_t sample_seed = (hi << 32) | lo;
-                double px = x + pixel_rng.uniform(), py = y + pixel_rng.uniform();
+                const double jx = pixel_rng.uniform(), jy = pixel_rng.uniform(); // in this order
                 double L[3];
-                radiance(px, py, sample_seed, L);
+                trace_path(x + jx, y + jy, sample_seed, L, log);
                 if (!(std::isfinite(L[0]) && std::isfinite(L[1]) && std::isfinite(L[2]))) {
                     ++bad; // counted, and black: a NaN must not poison the pixel
                     continue;
@@ -193,6 +210,59 @@ void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
             }
         }
     invalid_ += bad;
+    rays_ += log.rays;
+}
+
+std::vector<float> RenderJob::record_rays(std::size_t max_rays) const {
+    std::vector<float> out;
+    out.reserve(8 * max_rays);
+    RayLog log;
+    log.record = &out;
+    log.max_record = max_rays;
+    const std::size_t pixels = std::size_t(width()) * height();
+    const std::size_t stride = 7919; // a prime: successive samples land far apart
+    for (std::size_t k = 0; k < pixels && out.size() < 8 * max_rays; ++k) {
+        const std::size_t pixel = (k * stride) % pixels;
+        const int x = int(pixel % width()), y = int(pixel / width());
+        PCG32 pixel_rng(mix64(mix64(s_.seed) ^ pixel) ^ mix64(0x51ed2705ULL));
+        const uint64_t hi = pixel_rng.next(), lo = pixel_rng.next();
+        const double jx = pixel_rng.uniform(), jy = pixel_rng.uniform();
+        double L[3];
+        trace_path(x + jx, y + jy, (hi << 32) | lo, L, log);
+    }
+    return out;
+}
+
+void RenderJob::aovs(int samples, double *albedo, double *normal, int *mesh_id) const {
+    const int W = width(), H = height();
+    const RenderScene &scene = *scene_;
+    parallel_for(std::size_t(W) * H, 256, [&](std::size_t begin, std::size_t end) {
+        std::vector<double> buf(std::max(max_channels_, 3));
+        for (std::size_t pixel = begin; pixel < end; ++pixel) {
+            double *a = &albedo[3 * pixel], *n = &normal[3 * pixel];
+            a[0] = a[1] = a[2] = n[0] = n[1] = n[2] = 0;
+            mesh_id[pixel] = -1;
+            const int x = int(pixel % W), y = int(pixel / W);
+            SurfaceHit hit;
+            const Vec3 d = scene.camera().direction(x + 0.5, y + 0.5);
+            if (!scene.intersect(scene.camera().origin(), d, kInf, hit)) continue;
+            mesh_id[pixel] = hit.mesh;
+            const Material *mat = scene.material_of(hit.mesh);
+            if (!mat) { a[0] = a[1] = a[2] = 1; continue; } // emitters: white albedo
+            const ShadingPoint sp = mat->shade(hit);
+            n[0] = sp.frame.n.x; n[1] = sp.frame.n.y; n[2] = sp.frame.n.z;
+            const Vec3 wi = sp.frame.to_local(-d);
+            PCG32 rng(mix64(pixel) ^ 0xa0a5ULL);
+            for (int k = 0; k < samples; ++k) {
+                const double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+                BSDFSample bs = sp.bsdf->bsdf->sample(wi, u0, u1, u2, kAll, sp.query, buf.data());
+                if (!bs.lobe) continue;
+                double rgb[3];
+                sp.bsdf->to_rgb(buf.data(), rgb);
+                for (int c = 0; c < 3; ++c) a[c] += std::clamp(rgb[c], 0.0, 1.0) / samples;
+            }
+        }
+    });
 }
 
 void RenderJob::run() {

@@ -87,6 +87,9 @@ public:
 
     bool intersect(const Vec3 &o, const Vec3 &d, double tmax, SurfaceHit &hit) const;
     bool occluded(const Vec3 &o, const Vec3 &d, double tmax) const;
+    // Embree alone: traces recorded rays (8 floats each, see RenderJob::record_rays) on all
+    // cores with rtcIntersect1 / rtcOccluded1 and nothing else; returns the wall seconds.
+    double trace_recorded(const float *rays, std::size_t n) const;
 
     // Radiance a surface emits at `hit` towards direction `w` (unit, away from the surface).
     void emitted(const SurfaceHit &hit, const Vec3 &w, double rgb[3]) const;
