@@ -27,6 +27,9 @@ def register(sub) -> None:
     p.add_argument("--save-scene", default=None, help="also write the scene as a scene file (.json)")
     p.add_argument("--cache-dir", default=None, help="table cache folder (default: the user cache)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.add_argument("--spectral", action="store_true",
+                   help="spectral transport over 81 wavelength bins instead of RGB (slower; spectra multiply "
+                        "at every bounce, see docs/spectral_rendering.md)")
     p.add_argument("--denoise", action="store_true",
                    help="also write a denoised preview (Intel Open Image Denoise via pyoidn) beside the EXR "
                         "as <out>.denoised.exr / .png; the EXR itself is unchanged")
@@ -102,7 +105,8 @@ def run(args: argparse.Namespace) -> int:
         if label and not args.quiet:
             print(f"rendering {label}")
         results.append((label, render(s, spp=args.spp, seed=args.seed, progress=not args.quiet,
-                                      base_dir=base_dir, cache_dir=args.cache_dir, aovs=args.denoise)))
+                                      base_dir=base_dir, cache_dir=args.cache_dir, aovs=args.denoise,
+                                      spectral=args.spectral)))
     png = os.path.splitext(args.out)[0] + ".png"
     if len(results) == 1:
         result = results[0][1]

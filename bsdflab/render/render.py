@@ -57,13 +57,18 @@ def _spp(value) -> int:
 
 
 def render(scene: Scene, spp: int = 16, seed: int = 0, progress: bool = True, pass_spp: int | None = None,
-           base_dir: str | None = None, cache_dir=None, strategy: str = "mis", aovs: bool = False) -> RenderResult:
+           base_dir: str | None = None, cache_dir=None, strategy: str = "mis", aovs: bool = False,
+           spectral: bool = False) -> RenderResult:
     """Path-trace ``scene`` with ``spp`` samples per pixel.
 
     The image does not depend on the number of threads. ``pass_spp`` sets how many samples
     each progressive pass adds (default: about 16 passes). Ctrl-C stops the render and
     raises KeyboardInterrupt; nothing is written anywhere by this function.
     Tables a material asks for (``"tabulated"``) are built or reused before rendering.
+    ``spectral=True`` transports light over the 81 bins of the default 380-780 nm grid
+    instead of RGB (docs/spectral_rendering.md): spectra multiply at every bounce and become
+    sRGB through the project's colour weights only when light reaches the camera. RGB
+    parameters (emission, Diffuse, RGB tables) are lifted by Mallett & Yuksel's basis.
     ``aovs=True`` also returns first-hit albedo, normal and mesh-id images (for a denoiser),
     computed after the render by separate rays: the image itself is the same either way.
     """
@@ -74,10 +79,12 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, progress: bool = True, pa
         raise ValueError(f"seed must be an integer in [0, 2^64), got {seed!r}")
     if strategy not in STRATEGIES:
         raise ValueError(f"unknown strategy {strategy!r}; known: {', '.join(STRATEGIES)}")
+    if not isinstance(spectral, (bool, np.bool_)):
+        raise ValueError(f"spectral must be True or False, got {spectral!r}")
     pass_spp = _spp(pass_spp) if pass_spp is not None else max(1, spp // 16)
     core_scene = build_render_scene(scene, base_dir=base_dir, progress=progress, cache_dir=cache_dir)
     job = _core.RenderJob(core_scene, spp, pass_spp, scene.max_depth, scene.rr_depth, int(seed), 16,
-                          STRATEGIES[strategy])
+                          STRATEGIES[strategy], bool(spectral))
     start = time.perf_counter()
     run_with_progress(job, progress, unit="tile", desc="rendering")
     seconds = time.perf_counter() - start
@@ -89,4 +96,4 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, progress: bool = True, pa
     return RenderResult(mean=mean, variance=variance, spp=job.spp_done, seconds=seconds,
                         invalid_samples=job.invalid_samples, rays_traced=job.rays_traced, aovs=aux,
                         settings={"scene": scene.name, "seed": int(seed), "max_depth": scene.max_depth,
-                                  "rr_depth": scene.rr_depth})
+                                  "rr_depth": scene.rr_depth, "mode": "spectral" if spectral else "rgb"})

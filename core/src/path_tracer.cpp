@@ -41,6 +41,50 @@ double *channel_buffer(int n) {
 bool any_positive(const double v[3]) { return v[0] > 0 || v[1] > 0 || v[2] > 0; }
 } // namespace
 
+// How a path carries colour. RGB: three channels, BSDFs projected by their P per
+// evaluation. Spectral: the kSpectralBins bins of the default grid, BSDFs lifted by their U
+// (spectral models answer in the bins themselves), RGB emission lifted by the scene's U,
+// and every contribution taken to RGB by the sensor W (illuminant folded in) as it is
+// added. RGB keeps its original arithmetic order (images unchanged bit for bit).
+template <> struct PathColour<3> {
+    static void bsdf(const RenderBSDF &rb, const double *ch, double out[3]) { rb.to_rgb(ch, out); }
+    static void light(const RenderScene &, const double rgb[3], double out[3]) {
+        for (int c = 0; c < 3; ++c) out[c] = rgb[c];
+    }
+    static void add_emitted(const RenderScene &, double L[3], const double beta[3], double w, const double Le[3]) {
+        for (int c = 0; c < 3; ++c) L[c] += beta[c] * w * Le[c];
+    }
+    static void add_connected(const RenderScene &, double L[3], const double beta[3], const double f[3],
+                              const double Le[3], double w) {
+        for (int c = 0; c < 3; ++c) L[c] += beta[c] * f[c] * Le[c] * w;
+    }
+};
+
+template <> struct PathColour<kSpectralBins> {
+    static constexpr int N = kSpectralBins;
+    static void bsdf(const RenderBSDF &rb, const double *ch, double out[N]) { rb.to_spectrum(ch, out); }
+    static void light(const RenderScene &scene, const double rgb[3], double out[N]) { scene.lift(rgb, out); }
+    static void sense(const RenderScene &scene, double L[3], const double v[N]) {
+        const double *W = scene.sensor();
+        for (int r = 0; r < 3; ++r) {
+            double s = 0;
+            for (int l = 0; l < N; ++l) s += W[r * N + l] * v[l];
+            L[r] += s;
+        }
+    }
+    static void add_emitted(const RenderScene &scene, double L[3], const double beta[N], double w, const double Le[N]) {
+        double v[N];
+        for (int l = 0; l < N; ++l) v[l] = beta[l] * w * Le[l];
+        sense(scene, L, v);
+    }
+    static void add_connected(const RenderScene &scene, double L[3], const double beta[N], const double f[N],
+                              const double Le[N], double w) {
+        double v[N];
+        for (int l = 0; l < N; ++l) v[l] = beta[l] * f[l] * Le[l] * w;
+        sense(scene, L, v);
+    }
+};
+
 RenderJob::RenderJob(std::shared_ptr<const RenderScene> scene, const RenderSettings &settings)
     : scene_(std::move(scene)), s_(settings) {
     if (!scene_) throw std::invalid_argument("render: no scene");
@@ -48,6 +92,9 @@ RenderJob::RenderJob(std::shared_ptr<const RenderScene> scene, const RenderSetti
     if (s_.spp < 1 || s_.pass_spp < 1) throw std::invalid_argument("render: spp must be >= 1");
     if (s_.max_depth < 1 || s_.rr_depth < 1) throw std::invalid_argument("render: depths must be >= 1");
     if (s_.tile < 1) throw std::invalid_argument("render: tile size must be >= 1");
+    if (s_.spectral && !scene_->spectral_ready())
+        throw std::invalid_argument("render: spectral mode needs a spectral form of every material "
+                                    "and the scene's spectral matrices");
     tiles_x_ = (width() + s_.tile - 1) / s_.tile;
     tiles_y_ = (height() + s_.tile - 1) / s_.tile;
     passes_ = (s_.spp + s_.pass_spp - 1) / s_.pass_spp;
@@ -71,11 +118,19 @@ void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]
 }
 
 void RenderJob::trace_path(double px, double py, uint64_t sample_seed, double L[3], RayLog &log) const {
+    if (s_.spectral) trace_path_in<kSpectralBins>(px, py, sample_seed, L, log);
+    else trace_path_in<3>(px, py, sample_seed, L, log);
+}
+
+template <int N>
+void RenderJob::trace_path_in(double px, double py, uint64_t sample_seed, double L[3], RayLog &log) const {
+    using Colour = PathColour<N>;
     PCG32 rng(sample_seed);
     const RenderScene &scene = *scene_;
     const Environment &env = scene.environment();
     L[0] = L[1] = L[2] = 0;
-    double beta[3] = {1, 1, 1}, eta = 1, prev_pdf = 0;
+    double beta[N], eta = 1, prev_pdf = 0;
+    std::fill(beta, beta + N, 1.0);
     bool prev_delta = true;
     Vec3 prev_p;
     Vec3 o = scene.camera().origin(), d = scene.camera().direction(px, py);
@@ -95,18 +150,21 @@ void RenderJob::trace_path(double px, double py, uint64_t sample_seed, double L[
         log.add(o, d, kInf, false);
         if (!scene.intersect(o, d, kInf, hit)) {
             if (env.active()) {
-                double Le[3];
-                env.eval(d, Le);
+                double rgb[3], Le[N];
+                env.eval(d, rgb);
+                Colour::light(scene, rgb, Le);
                 double w = prev_delta ? 1.0 : mis_hit(prev_pdf, scene.environment_pdf(d));
-                for (int c = 0; c < 3; ++c) L[c] += beta[c] * w * Le[c];
+                Colour::add_emitted(scene, L, beta, w, Le);
             }
             break;
         }
-        double Le[3];
-        scene.emitted(hit, -d, Le);
-        if (any_positive(Le)) {
+        double Le_rgb[3];
+        scene.emitted(hit, -d, Le_rgb);
+        if (any_positive(Le_rgb)) {
+            double Le[N];
+            Colour::light(scene, Le_rgb, Le);
             double w = prev_delta ? 1.0 : mis_hit(prev_pdf, scene.emitter_pdf(prev_p, hit));
-            for (int c = 0; c < 3; ++c) L[c] += beta[c] * w * Le[c];
+            Colour::add_emitted(scene, L, beta, w, Le);
         }
         if (depth >= s_.max_depth) break;
         const Material *mat = scene.material_of(hit.mesh);
@@ -125,10 +183,10 @@ void RenderJob::trace_path(double px, double py, uint64_t sample_seed, double L[
             EmitterSample es = scene.sample_emitter(hit.p, u0, u1, u2);
             if (es.pdf > 0 && any_positive(es.radiance)) {
                 Vec3 wo = frame.to_local(es.wo);
-                double f[3];
+                double f[N];
                 bsdf.eval(wi, wo, kAll, q, buf);
-                rb->to_rgb(buf, f);
-                if (f[0] != 0 || f[1] != 0 || f[2] != 0) {
+                Colour::bsdf(*rb, buf, f);
+                if (std::any_of(f, f + N, [](double x) { return x != 0; })) {
                     // Aim from the offset origin at the light point itself, so the ray
                     // meets the light's plane at exactly its length (aiming along es.wo from
                     // the offset origin would cross it early, and the light would shadow
@@ -147,7 +205,9 @@ void RenderJob::trace_path(double px, double py, uint64_t sample_seed, double L[
                     if (aimed && !scene.occluded(origin, dir, tmax)) {
                         double w = (s_.strategy == LightStrategy::kMIS ? power_heuristic(es.pdf, bsdf.pdf(wi, wo, kAll, q))
                                                                         : 1.0) / es.pdf;
-                        for (int c = 0; c < 3; ++c) L[c] += beta[c] * f[c] * es.radiance[c] * w;
+                        double Le[N];
+                        Colour::light(scene, es.radiance, Le);
+                        Colour::add_connected(scene, L, beta, f, Le, w);
                     }
                 }
             }
@@ -157,10 +217,10 @@ void RenderJob::trace_path(double px, double py, uint64_t sample_seed, double L[
         double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
         BSDFSample bs = bsdf.sample(wi, u0, u1, u2, kAll, q, buf);
         if (bs.lobe == 0) break;
-        double wrgb[3];
-        rb->to_rgb(buf, wrgb);
-        for (int c = 0; c < 3; ++c) beta[c] *= wrgb[c];
-        double beta_max = std::max({beta[0], beta[1], beta[2]});
+        double weight[N];
+        Colour::bsdf(*rb, buf, weight);
+        for (int c = 0; c < N; ++c) beta[c] *= weight[c];
+        const double beta_max = *std::max_element(beta, beta + N);
         if (!(beta_max > 0) || !std::isfinite(beta_max)) break;
         prev_delta = (bs.lobe & kDelta) != 0;
         prev_pdf = bs.pdf;

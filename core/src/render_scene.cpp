@@ -41,6 +41,33 @@ void RenderBSDF::to_rgb(const double *channels, double rgb[3]) const {
     }
 }
 
+void RenderBSDF::to_spectrum(const double *channels, double out[kSpectralBins]) const {
+    if (U.empty()) {
+        for (int l = 0; l < kSpectralBins; ++l) out[l] = channels[l];
+        return;
+    }
+    const int C = bsdf->channels();
+    for (int l = 0; l < kSpectralBins; ++l) {
+        const double *row = &U[std::size_t(l) * C];
+        double s = 0;
+        for (int c = 0; c < C; ++c) s += row[c] * channels[c];
+        out[l] = s;
+    }
+}
+
+void RenderScene::set_spectral(std::vector<double> U, std::vector<double> W) {
+    if (committed_) throw std::logic_error("scene already committed: set the spectral matrices before commit()");
+    if (U.size() != 3u * kSpectralBins || W.size() != 3u * kSpectralBins)
+        throw std::invalid_argument("spectral matrices must be (81 x 3) and (3 x 81)");
+    U_ = std::move(U);
+    W_ = std::move(W);
+}
+
+void RenderScene::lift(const double rgb[3], double out[kSpectralBins]) const {
+    for (int l = 0; l < kSpectralBins; ++l)
+        out[l] = U_[3 * l] * rgb[0] + U_[3 * l + 1] * rgb[1] + U_[3 * l + 2] * rgb[2];
+}
+
 struct RenderScene::Mesh {
     MeshInput in;
     std::vector<double> area; // per triangle
@@ -75,6 +102,9 @@ int RenderScene::add_material(Material m) {
         const std::size_t C = b->bsdf->channels();
         if (b->P.empty() ? C != 3 : b->P.size() != 3 * C)
             throw std::invalid_argument("material: the RGB projection does not match the BSDF's channels");
+        if (!b->U.empty() && b->U.size() != std::size_t(kSpectralBins) * C)
+            throw std::invalid_argument("material: the spectral lift does not match the BSDF's channels");
+        if (b->U.empty() && C != std::size_t(kSpectralBins)) spectral_capable_ = false;
         b->lobes = b->bsdf->lobes();
         max_channels_ = std::max(max_channels_, int(C));
     }

@@ -31,7 +31,11 @@ struct RenderSettings {
     int rr_depth = 5;
     uint64_t seed = 0;
     int tile = 16;
+    // Spectral transport over the default grid's bins instead of RGB (see path_tracer.cpp).
+    bool spectral = false;
 };
+
+template <int N> struct PathColour;
 
 class RenderJob {
 public:
@@ -75,6 +79,8 @@ private:
         void add(const Vec3 &o, const Vec3 &d, double tmax, bool shadow);
     };
     void trace_path(double px, double py, uint64_t sample_seed, double L[3], RayLog &log) const;
+    template <int N>
+    void trace_path_in(double px, double py, uint64_t sample_seed, double L[3], RayLog &log) const;
     void render_tile(std::size_t tile, int pass, int spp);
 
     std::shared_ptr<const RenderScene> scene_;
