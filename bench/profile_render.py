@@ -7,6 +7,8 @@ tracer and not the build. See bench/README.md for the profile commands.
 from __future__ import annotations
 
 import argparse
+import os
+import time
 
 from bsdflab.render import render
 from bsdflab.scenes import scene
@@ -43,8 +45,16 @@ def main() -> None:
     if args.rough_table:
         s = rough_tables(s)
     kwargs = {"spectral": True} if args.spectral else {}
+    render(s.with_resolution(8, 8), spp=1, progress=False, **kwargs)  # builds / reads tables
+    cpu = time.process_time()
     r = render(s, spp=args.spp, seed=1, progress=False, **kwargs)
-    print(f"{args.scene}: {r.samples_per_second / 1e3:.0f} k samples/s ({r.seconds:.2f} s)")
+    cpu = time.process_time() - cpu
+    samples = r.mean.shape[0] * r.mean.shape[1] * r.spp
+    # CPU time counts every thread's work: on a loaded machine samples per CPU-second is the
+    # steadier measure (x cores = the rate an idle machine would reach).
+    print(f"{args.scene}: {r.samples_per_second / 1e3:.0f} k samples/s wall ({r.seconds:.2f} s), "
+          f"{samples / cpu / 1e3:.0f} k samples per CPU-second ({cpu:.2f} CPU-s), "
+          f"{r.rays_traced / cpu / 1e6:.2f} M rays per CPU-second; load {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

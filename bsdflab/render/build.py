@@ -81,14 +81,30 @@ def spectral_lift(core, P) -> list[float]:
     raise ValueError(f"a render core with {core.channels} channels has no spectral form")
 
 
-def _add_material(core_scene, material: Material, progress: bool, cache_dir) -> int:
+def _resolver(progress: bool, cache_dir):
+    """resolve_bsdf memoised by the BSDF dict for one scene build: materials that share a
+    BSDF (the snake's body and head) share its core object and its precomputation."""
+    import json
+
+    memo: dict[str, BSDF] = {}
+
+    def resolve(d: dict[str, Any]) -> BSDF:
+        key = json.dumps(d, sort_keys=True, default=repr)
+        if key not in memo:
+            memo[key] = resolve_bsdf(d, progress, cache_dir)
+        return memo[key]
+
+    return resolve
+
+
+def _add_material(core_scene, material: Material, resolve) -> int:
     from .textures import ScaleTexture
 
-    surface = resolve_bsdf(material.bsdf, progress, cache_dir)
+    surface = resolve(material.bsdf)
     core, P = surface.render_core()
     gap_core, gap_P, gap_U = None, None, []
     if material.gap_bsdf is not None:
-        gap_core, gap_P = resolve_bsdf(material.gap_bsdf, progress, cache_dir).render_core()
+        gap_core, gap_P = resolve(material.gap_bsdf).render_core()
         gap_U = spectral_lift(gap_core, gap_P)
     scales = ScaleTexture.from_dict(material.scales).to_core() if material.scales is not None else None
     return core_scene.add_material(core, _projection(P), gap_core, _projection(gap_P), scales,
@@ -102,9 +118,10 @@ def build_render_scene(scene: Scene, base_dir: str | None = None, progress: bool
 
     core_scene = _core.RenderScene()
     material_ids = {}
+    resolve = _resolver(progress, cache_dir)
     for name, material in scene.materials.items():
         try:
-            material_ids[name] = _add_material(core_scene, material, progress, cache_dir)
+            material_ids[name] = _add_material(core_scene, material, resolve)
         except ValueError as e:
             raise ValueError(f"material {name!r}: {e}") from None
     for shape in scene.shapes:

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include "bsdflab/parallel.h"
 
 namespace bsdflab {
 
@@ -18,27 +19,30 @@ ProjectedFresnelTerm::ProjectedFresnelTerm(std::shared_ptr<const FresnelTerm> ex
     if (lo_ >= 0 && !(hi_ >= lo_)) throw std::invalid_argument("projected term: thickness_hi < thickness_lo");
     if (lo_ >= 0 && hi_ > lo_ && n_thickness_ < 2) throw std::invalid_argument("projected term: need >= 2 thickness nodes");
     if (hi_ == lo_) n_thickness_ = 1;
-    std::vector<double> R(C), T(C);
     table_.resize(std::size_t(n_thickness_) * n_cos_ * 2 * K);
-    for (int t = 0; t < n_thickness_; ++t) {
-        Query q;
-        q.film_thickness_nm = lo_ < 0 ? -1.0 : (n_thickness_ > 1 ? lo_ + (hi_ - lo_) * t / (n_thickness_ - 1) : lo_);
-        for (int c = 0; c < n_cos_; ++c) {
-            // The grazing node (cos 0) is evaluated just inside: a term may be undefined at 0.
-            double cos_i = std::max(double(c) / (n_cos_ - 1), 1e-9);
-            exact_->eval(cos_i, q, R.data(), T.data());
-            float *out = &table_[(std::size_t(t) * n_cos_ + c) * 2 * K];
-            for (int k = 0; k < K; ++k) {
-                double r = 0, tr = 0;
-                for (int l = 0; l < C; ++l) {
-                    r += P_[std::size_t(k) * C + l] * R[l];
-                    tr += P_[std::size_t(k) * C + l] * T[l];
+    // Nodes are independent (and the exact term is thread-safe): build them on all cores.
+    parallel_for(std::size_t(n_thickness_), 1, [&](std::size_t t_begin, std::size_t t_end) {
+        std::vector<double> R(C), T(C);
+        for (int t = int(t_begin); t < int(t_end); ++t) {
+            Query q;
+            q.film_thickness_nm = lo_ < 0 ? -1.0 : (n_thickness_ > 1 ? lo_ + (hi_ - lo_) * t / (n_thickness_ - 1) : lo_);
+            for (int c = 0; c < n_cos_; ++c) {
+                // The grazing node (cos 0) is evaluated just inside: a term may be undefined at 0.
+                double cos_i = std::max(double(c) / (n_cos_ - 1), 1e-9);
+                exact_->eval(cos_i, q, R.data(), T.data());
+                float *out = &table_[(std::size_t(t) * n_cos_ + c) * 2 * K];
+                for (int k = 0; k < K; ++k) {
+                    double r = 0, tr = 0;
+                    for (int l = 0; l < C; ++l) {
+                        r += P_[std::size_t(k) * C + l] * R[l];
+                        tr += P_[std::size_t(k) * C + l] * T[l];
+                    }
+                    out[k] = float(r);
+                    out[K + k] = float(tr);
                 }
-                out[k] = float(r);
-                out[K + k] = float(tr);
             }
         }
-    }
+    });
 }
 
 void ProjectedFresnelTerm::project(const double *spectral, double *out) const {
