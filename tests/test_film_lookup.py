@@ -135,3 +135,16 @@ def test_06_transmitted_samples_report_the_stack_eta():
     trans = s.wo[:, 2] < 0
     assert trans.sum() > 100 and (~trans).sum() > 100
     assert np.allclose(s.eta[trans], 1.2) and np.allclose(s.eta[~trans], 1.0)
+
+
+def test_07_golden_value_fixed_seed_fixed_result():
+    """The table's mixture weights come from a seeded estimate of the top's glossy albedo;
+    its uniforms are drawn into named locals (argument evaluation order is unspecified in
+    C++: GCC and Clang differ), so the pdf is the same number with every compiler. The
+    value was recorded with GCC 12 after the change; the old code (draws passed as
+    arguments, evaluated right to left by GCC) gave another albedo estimate and pdf."""
+    t = TableBSDF(synthetic_table())
+    wi, wo = sph(0.5, 0.0), sph(0.6, 2.5)
+    assert t.pdf(wi, wo)[0] == pytest.approx(0.25121721990782353, rel=1e-12)
+    assert np.allclose(t.eval(wi, wo)[0], [0.24041650843511675, 0.24186559043376119, 0.22542321324352904],
+                       rtol=1e-12, atol=0)
