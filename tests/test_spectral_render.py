@@ -16,16 +16,13 @@ spectra become sRGB only when light reaches the camera.
 """
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
 from bsdflab import Conductor
 from bsdflab.render import Camera, Environment, Material, Scene, Shape, render
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, rgb_to_spectrum, srgb_weights
+from thread_images import images_per_thread_count
 
 ENV_RGB = (0.15, 0.45, 0.9)                 # a blue sky
 FILM = [{"material": 1.45, "thickness_nm": 350.0}]
@@ -90,16 +87,8 @@ def test_02_grey_world_spectral_equals_rgb_to_round_off():
 
 
 def test_03_spectral_image_does_not_depend_on_thread_count(tmp_path):
-    code = ("import numpy as np, sys; sys.path.insert(0, %r); from test_spectral_render import film_mirror_scene,"
-            " grey_world; from bsdflab.render import render;"
-            "np.save(sys.argv[1], render(grey_world(size=12), spp=4, seed=2, progress=False, spectral=True).mean)")
-    code = code % os.path.dirname(__file__)
-    out = {}
-    for threads in ("1", "2"):
-        path = tmp_path / f"t{threads}.npy"
-        subprocess.run([sys.executable, "-c", code, str(path)], check=True,
-                       env=dict(os.environ, BSDFLAB_THREADS=threads))
-        out[threads] = np.load(path)
+    out = images_per_thread_count(tmp_path, "from test_spectral_render import grey_world; from bsdflab.render import render",
+                                  "render(grey_world(size=12), spp=4, seed=2, progress=False, spectral=True).mean")
     assert np.array_equal(out["1"], out["2"])
 
 
