@@ -88,7 +88,7 @@ def test_02_grey_world_spectral_equals_rgb_to_round_off():
 
 def test_03_spectral_image_does_not_depend_on_thread_count(tmp_path):
     out = images_per_thread_count(tmp_path, "from test_spectral_render import grey_world; from bsdflab.render import render",
-                                  "render(grey_world(size=12), spp=4, seed=2, progress=False, spectral=True).mean")
+                                  "render(grey_world(size=8), spp=2, seed=2, progress=False, spectral=True).mean")
     assert np.array_equal(out["1"], out["2"])
 
 
