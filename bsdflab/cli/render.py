@@ -27,6 +27,12 @@ def register(sub) -> None:
     p.add_argument("--save-scene", default=None, help="also write the scene as a scene file (.json)")
     p.add_argument("--cache-dir", default=None, help="table cache folder (default: the user cache)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.add_argument("--spectral", action="store_true",
+                   help="spectral transport over 81 wavelength bins instead of RGB (slower; spectra multiply "
+                        "at every bounce, see docs/spectral_rendering.md)")
+    p.add_argument("--denoise", action="store_true",
+                   help="also write a denoised preview (Intel Open Image Denoise via pyoidn) beside the EXR "
+                        "as <out>.denoised.exr / .png; the EXR itself is unchanged")
     p.set_defaults(run=run)
 
 
@@ -86,6 +92,8 @@ def run(args: argparse.Namespace) -> int:
     check_writable(png, "--out (its PNG)")
     if args.save_scene:
         check_writable(args.save_scene, "--save-scene")
+    if args.denoise and args.scene in SCENE_SETS:
+        raise ValueError("--denoise works on a single scene, not a scene set")
     scenes, base_dir = _scenes(args)
     prepared = []
     for label, s in scenes:
@@ -105,11 +113,20 @@ def run(args: argparse.Namespace) -> int:
         if label and not args.quiet:
             print(f"rendering {label}")
         results.append((label, render(s, spp=args.spp, seed=args.seed, progress=not args.quiet,
-                                      base_dir=base_dir, cache_dir=args.cache_dir)))
+                                      base_dir=base_dir, cache_dir=args.cache_dir, aovs=args.denoise,
+                                      spectral=args.spectral)))
     if len(results) == 1:  # the EXR and the PNG appear together or not at all
         result = results[0][1]
         summary = result.summary()
         write_exr_and_png(args.out, png, result.mean, summary, args.exposure)
+        if args.denoise:  # a preview beside the unbiased EXR, never instead of it
+            from ..render.denoise import denoise
+
+            stem = os.path.splitext(args.out)[0] + ".denoised"
+            preview = denoise(result)
+            write_exr_and_png(stem + ".exr", stem + ".png", preview,
+                              dict(summary, denoised="Intel Open Image Denoise (pyoidn)"), args.exposure)
+            print(f"wrote the denoised preview {stem}.exr and {stem}.png")
     else:
         items = [(label, r.mean) for label, r in results]
         summary = {"scene": args.scene, "images": [dict(r.summary(), label=label) for label, r in results]}

@@ -10,6 +10,7 @@ import numpy as np
 from .. import _core
 from .. import _validate as check
 from ..bsdfs.base import BSDF, from_dict
+from ..spectra import DEFAULT_WAVELENGTHS, rgb_to_spectrum, srgb_weights
 from .environment import environment_image
 from .scene import Material, Scene
 
@@ -63,17 +64,50 @@ def _projection(P) -> list[float]:
     return [] if P is None else np.asarray(P, dtype=float).ravel().tolist()
 
 
-def _add_material(core_scene, material: Material, progress: bool, cache_dir) -> int:
+def spectral_lift(core, P) -> list[float]:
+    """The (81 x C) lift of a render core's channels to the spectral bins of the default grid
+    ([] when its channels are those bins): RGB cores (P None) through Mallett & Yuksel's
+    linear basis -- exact for Diffuse, whose spectral reflectance is that lift; for RGB
+    tables an approximation (the table was integrated to RGB) --, one-channel (spectrally
+    flat) cores by broadcasting."""
+    n = len(DEFAULT_WAVELENGTHS)
+    if P is None:
+        return rgb_to_spectrum(np.eye(3), DEFAULT_WAVELENGTHS).T.ravel().tolist()
+    if core.channels == n:
+        return []
+    if core.channels == 1:
+        return [1.0] * n
+    raise ValueError(f"a render core with {core.channels} channels has no spectral form")
+
+
+def _resolver(progress: bool, cache_dir):
+    """resolve_bsdf memoised by the BSDF dict for one scene build: materials that share a
+    BSDF (the snake's body and head) share its core object and its precomputation."""
+    import json
+
+    memo: dict[str, BSDF] = {}
+
+    def resolve(d: dict[str, Any]) -> BSDF:
+        key = json.dumps(d, sort_keys=True, default=repr)
+        if key not in memo:
+            memo[key] = resolve_bsdf(d, progress, cache_dir)
+        return memo[key]
+
+    return resolve
+
+
+def _add_material(core_scene, material: Material, resolve) -> int:
     from .textures import ScaleTexture
 
-    surface = resolve_bsdf(material.bsdf, progress, cache_dir)
+    surface = resolve(material.bsdf)
     core, P = surface.render_core()
-    gap_core, gap_P = None, None
+    gap_core, gap_P, gap_U = None, None, []
     if material.gap_bsdf is not None:
-        gap_core, gap_P = resolve_bsdf(material.gap_bsdf, progress, cache_dir).render_core()
+        gap_core, gap_P = resolve(material.gap_bsdf).render_core()
+        gap_U = spectral_lift(gap_core, gap_P)
     scales = ScaleTexture.from_dict(material.scales).to_core() if material.scales is not None else None
     return core_scene.add_material(core, _projection(P), gap_core, _projection(gap_P), scales,
-                                   film_thickness(surface))
+                                   film_thickness(surface), spectral_lift(core, P), gap_U)
 
 
 def build_render_scene(scene: Scene, base_dir: str | None = None, progress: bool = False, cache_dir=None):
@@ -88,9 +122,10 @@ def build_render_scene(scene: Scene, base_dir: str | None = None, progress: bool
     core_scene = _core.RenderScene()
     material_ids = {}
     triangles = 0
+    resolve = _resolver(progress, cache_dir)
     for name, material in scene.materials.items():
         try:
-            material_ids[name] = _add_material(core_scene, material, progress, cache_dir)
+            material_ids[name] = _add_material(core_scene, material, resolve)
         except ValueError as e:
             raise ValueError(f"material {name!r}: {e}") from None
     for shape in scene.shapes:
@@ -108,6 +143,8 @@ def build_render_scene(scene: Scene, base_dir: str | None = None, progress: bool
                             None if mesh.uvs is None else np.asarray(mesh.uvs, dtype=np.float32),
                             material_ids.get(shape.material, -1),
                             list(shape.emission or (0.0, 0.0, 0.0)))
+    wl = DEFAULT_WAVELENGTHS
+    core_scene.set_spectral(rgb_to_spectrum(np.eye(3), wl).T.ravel().tolist(), srgb_weights(wl).ravel().tolist())
     c = scene.camera
     core_scene.set_camera(list(c.origin), list(c.target), list(c.up), c.fov_deg, c.width, c.height)
     env = scene.environment

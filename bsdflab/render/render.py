@@ -37,6 +37,10 @@ class RenderResult:
     invalid_samples: int
     settings: dict[str, Any] = field(default_factory=dict)
     variance_defined: bool = True
+    rays_traced: int = 0
+    # First-hit auxiliary images when render(aovs=True): "albedo" and "normal" (H, W, 3),
+    # "mesh_id" (H, W) (-1: nothing hit); they never change mean or variance.
+    aovs: dict[str, np.ndarray] | None = None
 
     @property
     def samples_per_second(self) -> float:
@@ -57,13 +61,20 @@ def _spp(value, name: str = "spp") -> int:
 
 
 def render(scene: Scene, spp: int = 16, seed: int = 0, progress: bool = True, pass_spp: int | None = None,
-           base_dir: str | None = None, cache_dir=None, strategy: str = "mis") -> RenderResult:
+           base_dir: str | None = None, cache_dir=None, strategy: str = "mis", aovs: bool = False,
+           spectral: bool = False) -> RenderResult:
     """Path-trace ``scene`` with ``spp`` samples per pixel.
 
     The image does not depend on the number of threads. ``pass_spp`` sets how many samples
     each progressive pass adds (default: about 16 passes). Ctrl-C stops the render and
     raises KeyboardInterrupt; nothing is written anywhere by this function.
     Tables a material asks for (``"tabulated"``) are built or reused before rendering.
+    ``spectral=True`` transports light over the 81 bins of the default 380-780 nm grid
+    instead of RGB (docs/spectral_rendering.md): spectra multiply at every bounce and become
+    sRGB through the project's colour weights only when light reaches the camera. RGB
+    parameters (emission, Diffuse, RGB tables) are lifted by Mallett & Yuksel's basis.
+    ``aovs=True`` also returns first-hit albedo, normal and mesh-id images (for a denoiser),
+    computed after the render by separate rays: the image itself is the same either way.
     """
     if not isinstance(scene, Scene):
         raise ValueError(f"scene must be a bsdflab.render.Scene, got {type(scene).__name__}")
@@ -71,13 +82,15 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, progress: bool = True, pa
     seed = check.seed(seed)
     if not isinstance(strategy, str) or strategy not in STRATEGIES:
         raise ValueError(f"unknown strategy {check.brief(strategy)}; known: {', '.join(STRATEGIES)}")
+    if not isinstance(spectral, (bool, np.bool_)):
+        raise ValueError(f"spectral must be True or False, got {check.brief(spectral)}")
     pass_spp = _spp(pass_spp, "pass_spp") if pass_spp is not None else max(1, spp // 16)
     c = scene.camera
     limits.check_count("width x height", c.width * c.height, "BSDFLAB_MAX_PIXELS")
     limits.check_bytes(f"a {c.width} x {c.height} render", limits.render_bytes(c.width, c.height))
     core_scene = build_render_scene(scene, base_dir=base_dir, progress=progress, cache_dir=cache_dir)
     job = _core.RenderJob(core_scene, spp, pass_spp, scene.max_depth, scene.rr_depth, int(seed), 16,
-                          STRATEGIES[strategy])
+                          STRATEGIES[strategy], bool(spectral))
     start = time.perf_counter()
     run_with_progress(job, progress, unit="tile", desc="rendering")
     seconds = time.perf_counter() - start
@@ -85,7 +98,12 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, progress: bool = True, pa
     defined = job.spp_done >= 2
     if not defined:  # one sample per pixel: no spread to estimate
         variance = np.zeros_like(mean)
+    aux = None
+    if aovs:
+        albedo, normal, mesh_id = job.aovs(16)
+        aux = {"albedo": albedo, "normal": normal, "mesh_id": mesh_id}
     return RenderResult(mean=mean, variance=variance, spp=job.spp_done, seconds=seconds,
                         invalid_samples=job.invalid_samples, variance_defined=defined,
+                        rays_traced=job.rays_traced, aovs=aux,
                         settings={"scene": scene.name, "seed": int(seed), "max_depth": scene.max_depth,
-                                  "rr_depth": scene.rr_depth})
+                                  "rr_depth": scene.rr_depth, "mode": "spectral" if spectral else "rgb"})
