@@ -29,6 +29,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .._validate import brief
 from . import curves
 from .mesh import MAX_SEGMENTS, Mesh, grid_indices, normalise as _normalise, reserve
 from .mesh import Params as _Params
