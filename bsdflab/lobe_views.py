@@ -18,7 +18,6 @@ from . import _validate as check
 from .bsdfs.base import BSDF
 from .lobes import Lobe
 from .tables.channels import LUMINANCE_RGB
-from .testing.directions import spherical_directions
 
 
 @dataclass(frozen=True)
@@ -48,9 +47,10 @@ def directions_from_angles(theta_i_deg, theta_o_deg, phi_deg) -> tuple[np.ndarra
     ti = check.real_array("theta_i", theta_i_deg, 0.0, 90.0)
     to = check.real_array("theta_o", theta_o_deg, 0.0, 180.0)
     ph = check.real_array("phi", phi_deg, -360.0, 360.0)
-    ti, to, ph = (np.ravel(a) for a in np.broadcast_arrays(ti, to, ph))
-    wi = spherical_directions(np.radians(ti), np.zeros_like(ti)).reshape(-1, 3)
-    wo = spherical_directions(np.radians(to), np.radians(ph)).reshape(-1, 3)
+    ti, to, ph = (np.radians(np.ravel(a)) for a in np.broadcast_arrays(ti, to, ph))
+    # (bsdflab.testing.directions.spherical_directions, without importing the testing kit)
+    wi = np.stack([np.sin(ti), np.zeros_like(ti), np.cos(ti)], axis=1)
+    wo = np.stack([np.sin(to) * np.cos(ph), np.sin(to) * np.sin(ph), np.cos(to)], axis=1)
     return wi, wo
 
 

@@ -30,7 +30,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import _validate as check
 from .bsdfs import Diffuse, RoughDielectric
+from .bsdfs.interface_term import MAX_FILM_LAYERS
 from .layered import Layered, Slab
 from .spectra import Spectrum
 
@@ -44,18 +46,36 @@ ROUGHNESS = 0.08
 BASE_RGB = (0.05, 0.035, 0.025)
 
 
+# A platelet and the gap below it are two film layers; the last platelet has no gap.
+MAX_PLATELETS = (MAX_FILM_LAYERS + 1) // 2
+
+
 def melanin_absorption(sigma_550: float = 1.2, exponent: float = 3.33) -> Spectrum:
-    """sigma_a(lambda) = sigma_550 (lambda / 550 nm)^-exponent in 1/um, on 380-780 nm."""
+    """sigma_a(lambda) = sigma_550 (lambda / 550 nm)^-exponent in 1/um, on 380-780 nm.
+
+    sigma_550 in [0, 1e6] 1/um (the slab's range); exponent in [0, 10] (melanins: 2.5-4)."""
+    sigma_550 = check.real_scalar("sigma_550", sigma_550, 0.0, 1e6)
+    exponent = check.real_scalar("exponent", exponent, 0.0, 10.0)
     wl = np.linspace(380.0, 780.0, 81)
-    return Spectrum.tabulated(wl, sigma_550 * (wl / 550.0) ** -exponent, name="sigma_a")
+    values = sigma_550 * (wl / 550.0) ** -exponent
+    check.real_array("sigma_a", values, 0.0, 1e6)  # the slab's range over the whole grid
+    return Spectrum.tabulated(wl, values, name="sigma_a")
 
 
 def guanine_film(thickness_nm: float = FILM_THICKNESS_NM, ior: float = GUANINE_IOR) -> list[dict]:
-    return [{"material": ior, "thickness_nm": thickness_nm}]
+    """One film of ``thickness_nm`` in [0, 1e9] nm and index ``ior`` (guanine by default)."""
+    return [{"material": check.real_scalar("ior", ior, 1e-3, 1e3),
+             "thickness_nm": check.film_thickness("thickness_nm", thickness_nm)}]
 
 
 def iridophore_stack(platelets: int = 5, platelet_nm: float = 80.0, gap_nm: float = 100.0) -> list[dict]:
-    """Alternating guanine platelets and cytoplasm gaps (a multilayer reflector)."""
+    """Alternating guanine platelets and cytoplasm gaps (a multilayer reflector).
+
+    platelets: an integer in [1, 16] (2 platelets - 1 layers fit the core's 32-layer film);
+    platelet_nm, gap_nm: thicknesses in [0, 1e9] nm."""
+    platelets = check.integer("platelets", platelets, 1, MAX_PLATELETS)
+    platelet_nm = check.film_thickness("platelet_nm", platelet_nm)
+    gap_nm = check.film_thickness("gap_nm", gap_nm)
     layers = []
     for i in range(platelets):
         layers.append({"material": GUANINE_IOR, "thickness_nm": platelet_nm})
@@ -117,10 +137,10 @@ PRESETS = {
 
 
 def preset(name: str, **kwargs):
-    """A preset by name (see PRESETS); ``kwargs`` override its keyword parameters."""
-    if name not in PRESETS:
-        raise ValueError(f"unknown preset {name!r}; known presets: {', '.join(PRESETS)}")
+    """A preset by name (see PRESETS)."""
+    if not isinstance(name, str) or name not in PRESETS:
+        raise ValueError(f"unknown preset {check.brief(name)}; known presets: {', '.join(PRESETS)}")
     try:
         return PRESETS[name](**kwargs)
-    except TypeError as e:  # a keyword the preset does not take
-        raise ValueError(f"preset {name!r}: {e}") from None
+    except TypeError as e:  # an option the preset does not take
+        raise ValueError(f"preset {name!r}: {check.one_line(e)}") from None

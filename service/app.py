@@ -40,4 +40,20 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     for module in (meta, catalog, bsdf, thinfilm, tables, renders, jobs, page):
         app.include_router(module.router)
     app.mount("/static", StaticFiles(directory=page.STATIC_DIR), name="static")
+    if settings.api_key is None:
+        app.openapi = lambda: _without_security(app)
     return app
+
+
+def _without_security(app: FastAPI) -> dict:
+    """The OpenAPI schema with the API-key requirements taken out: without a configured key
+    no endpoint asks for one, and the schema should say so."""
+    if app.openapi_schema is None:
+        schema = FastAPI.openapi(app)
+        for path in schema.get("paths", {}).values():
+            for operation in path.values():
+                operation.pop("security", None)
+                operation.get("responses", {}).pop("401", None)
+        schema.get("components", {}).pop("securitySchemes", None)
+        app.openapi_schema = schema
+    return app.openapi_schema

@@ -8,13 +8,15 @@ import json
 from fastapi import FastAPI, HTTPException, Request
 from fastapi.responses import JSONResponse
 
+from .models import Error
 from .settings import limit_variable
 from .store import QueueFull
 
 CLIENT_ERRORS = (ValueError, TypeError, OverflowError)
 # Documented on every route that takes a body or parameters (FastAPI adds 422's schema).
 ERRORS = {400: {"description": "malformed request"},
-          413: {"description": "request body over the size limit"}}
+          413: {"description": "request body over the size limit"},
+          422: {"model": Error, "description": "invalid request: the field, the valid range or the limit"}}
 KEY_ERRORS = {401: {"description": "missing or wrong API key"}}
 NOT_FOUND = {404: {"description": "no such job, table or render"}}
 

@@ -145,6 +145,9 @@ def test_thinfilm_spectrum_equals_the_optics(client):
     r = client.post("/v1/thinfilm/spectrum", json={"angles": [100]})
     assert r.status_code == 422 and "angles" in detail(r)
     assert client.post("/v1/thinfilm/spectrum", json={"film_ior": -1}).status_code == 422
+    # found by the long schemathesis run: a tiny index gave NaN spectra (a 200 with nulls)
+    r = client.post("/v1/thinfilm/spectrum", json={"film_ior": 2.632460067801165e-162})
+    assert r.status_code == 422 and "film_ior" in detail(r)
 
 
 # -- catalogues and meta ---------------------------------------------------------------------

@@ -10,7 +10,8 @@ from .render_units import DEFAULT_UNIT_SAMPLES, job_settings, plan_units, render
 
 
 def render_on_cluster(client, scene, spp: int, seed: int, pass_spp: int, strategy: int,
-                      progress: bool = True, cache_dir=None, unit_samples: int = DEFAULT_UNIT_SAMPLES,
+                      spectral: bool = False, progress: bool = True, cache_dir=None,
+                      unit_samples: int = DEFAULT_UNIT_SAMPLES,
                       progress_callback=None, cancelled=None):
     """Render ``scene`` (validated by the caller) on ``client``'s workers; returns the
     RenderResult the local renderer would, bit for bit (see render_units)."""
@@ -18,7 +19,7 @@ def render_on_cluster(client, scene, spp: int, seed: int, pass_spp: int, strateg
     from ..render.render import RenderResult
 
     scene_dict, tables = resolve_tables(scene, progress, cache_dir)
-    settings = job_settings(scene_dict, spp, pass_spp, seed, strategy)
+    settings = job_settings(scene_dict, spp, pass_spp, seed, strategy, spectral)
     width, height = scene.camera.width, scene.camera.height
     units = plan_units(width, height, spp, pass_spp, unit_samples)
     passes = units[-1].pass_index + 1
@@ -51,7 +52,12 @@ def render_on_cluster(client, scene, spp: int, seed: int, pass_spp: int, strateg
     if any(n != passes for n in next_pass.values()):
         raise RuntimeError("distributed render: a band is missing passes")  # a driver bug, never input
     mean, variance = _core.RenderJob.finish_image(total[0], total[1], float(spp))
+    defined = spp >= 2  # as the in-process renderer says it
+    if not defined:
+        variance = np.zeros_like(mean)
     return RenderResult(mean=mean, variance=variance, spp=spp, seconds=seconds, invalid_samples=invalid,
+                        variance_defined=defined,
                         settings={"scene": scene.name, "seed": int(seed), "max_depth": scene.max_depth,
-                                  "rr_depth": scene.rr_depth, "units": len(units),
+                                  "rr_depth": scene.rr_depth, "mode": "spectral" if spectral else "rgb",
+                                  "units": len(units),
                                   "workers": len(client.scheduler_info().get("workers", {}))})

@@ -55,9 +55,11 @@ def plan_units(width: int, height: int, spp: int, pass_spp: int,
     return units
 
 
-def job_settings(scene_dict: dict[str, Any], spp: int, pass_spp: int, seed: int, strategy: int) -> dict[str, Any]:
+def job_settings(scene_dict: dict[str, Any], spp: int, pass_spp: int, seed: int, strategy: int,
+                 spectral: bool = False) -> dict[str, Any]:
     return {"spp": int(spp), "pass_spp": int(pass_spp), "seed": int(seed), "strategy": int(strategy),
-            "max_depth": int(scene_dict["max_depth"]), "rr_depth": int(scene_dict["rr_depth"])}
+            "spectral": bool(spectral), "max_depth": int(scene_dict["max_depth"]),
+            "rr_depth": int(scene_dict["rr_depth"])}
 
 
 def resolve_tables(scene, progress: bool, cache_dir) -> tuple[dict[str, Any], dict[str, bytes]]:
@@ -124,7 +126,8 @@ def _job_for(scene_dict: dict[str, Any], tables: dict[str, bytes], settings: dic
                     m[name] = {"type": "table", "path": _local_table(b["sha256"], tables[b["sha256"]])}
         core_scene = build_render_scene(Scene.from_dict(d), progress=False)
         job = _core.RenderJob(core_scene, settings["spp"], settings["pass_spp"], settings["max_depth"],
-                              settings["rr_depth"], settings["seed"], 16, settings["strategy"])
+                              settings["rr_depth"], settings["seed"], 16, settings["strategy"],
+                              settings["spectral"])
         _built.clear()
         _built[key] = job
         return job

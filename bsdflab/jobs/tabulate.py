@@ -25,6 +25,7 @@ from ..tables import TableGrid, cache_key, cached_table, read_attributes, read_t
 from ..tables.channels import table_channels
 from ..tables.file_format import HASH_ATTRIBUTE
 from ..tables.summary import relative_error_summary
+from ..tables.tabulate import _count   # the tabulator's own check of walk counts
 
 DEFAULT_MIN_SAMPLES = 512
 FIELDS = {"model", "preset", "overrides", "grid", "rel_error", "wavelengths", "min_samples",
@@ -64,17 +65,18 @@ def cells(request: dict[str, Any]) -> int:
 
 
 def _key_arguments(request: dict[str, Any]):
+    """(model, grid, rel_error, channels) and the effort and seed, as the cache keys them
+    (defaults spelled out share the entry of requests that leave them out)."""
     names = table_channels(request["wavelengths"])[0]
-    min_samples = request["min_samples"]
-    # The cache key leaves the default first-pass effort out (as render's tables do).
-    return (request["model"], TableGrid.from_dict(request["grid"]), request["rel_error"], names,
-            None if min_samples == DEFAULT_MIN_SAMPLES else min_samples)
+    effort = {"min_samples": request["min_samples"], "max_samples": request["max_samples"],
+              "seed": request["seed"]}
+    return request["model"], TableGrid.from_dict(request["grid"]), request["rel_error"], names, effort
 
 
 def key(request: dict[str, Any]) -> str:
     """The table cache's key (``bsdflab.tables.cache_key``) of this request."""
-    model, grid, rel_error, names, min_samples = _key_arguments(request)
-    return cache_key(model, grid, rel_error, names, min_samples)
+    model, grid, rel_error, names, effort = _key_arguments(request)
+    return cache_key(model, grid, rel_error, names, **effort)
 
 
 def existing(request: dict[str, Any], out_dir: Path) -> dict[str, Any] | None:
@@ -90,7 +92,7 @@ def existing(request: dict[str, Any], out_dir: Path) -> dict[str, Any] | None:
 def run(request: dict[str, Any], out_dir: Path, progress, cancelled, client=None) -> dict[str, Any]:
     from ..bsdfs import from_dict
 
-    model_dict, grid, rel_error, names, min_samples = _key_arguments(request)
+    model_dict, grid, rel_error, names, effort = _key_arguments(request)
     model = from_dict(model_dict)
     extra = {} if client is None else {"client": client}
 
@@ -100,8 +102,7 @@ def run(request: dict[str, Any], out_dir: Path, progress, cancelled, client=None
                             min_samples=request["min_samples"], max_samples=request["max_samples"],
                             seed=request["seed"], progress=False, **extra)
 
-    table, path, hit = cached_table(model_dict, grid, rel_error, names, make, directory=out_dir,
-                                    min_samples=min_samples)
+    table, path, hit = cached_table(model_dict, grid, rel_error, names, make, directory=out_dir, **effort)
     if path is None:
         raise OSError(f"could not write the table into {out_dir}")
     return {"hash": path.stem, "files": {"exr": path.name}, "from_cache": hit, **describe(path, table)}
@@ -119,9 +120,3 @@ def describe(path: str | os.PathLike, table=None) -> dict[str, Any]:
                         "max": int(samples.max()), "mean": float(samples.mean())},
             "content_hash": read_attributes(path).get(HASH_ATTRIBUTE, ""),
             "bytes": os.path.getsize(path)}
-
-
-def _count(name: str, value) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= 1 << 24:
-        raise ValueError(f"{name} must be an integer in [1, {1 << 24}], got {value!r}")
-    return int(value)

@@ -34,6 +34,8 @@ from .slab import Slab
 INTERFACE_TYPES = (Dielectric, RoughDielectric)
 MAX_SLABS = 16
 IOR_TOLERANCE = 1e-9
+MAX_WALKS = 1 << 24
+MAX_DEPTH = 1 << 16
 
 
 @dataclass(frozen=True)
@@ -62,11 +64,11 @@ class Layered(BSDF):
     slabs : list of Slab (or dicts), one below each interface
     base : BSDF or dict
         What lies below the last slab.
-    samples : int >= 1
+    samples : int in [1, 2^24]
         Random walks per eval() of one direction pair. Default 256.
-    seed : int >= 0
+    seed : int in [0, 2^64)
         Seed of the walks (combined with the directions). Default 0.
-    max_depth : int >= 1
+    max_depth : int in [1, 2^16]
         Scattering events per walk before it is cut (Russian roulette ends most walks
         much earlier). Default 256.
     """
@@ -130,7 +132,7 @@ class Layered(BSDF):
         the top interface's own reflection (what a table stores, see `exact_part`)."""
         a, b = check.direction_pair(wi, wo)
         wl, to_rgb = self._channels(wavelengths)
-        t = check.per_row("thickness", thickness, len(a), lo=0.0)
+        t = check.per_row("thickness", thickness, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
         n = self.samples if samples is None else _positive_int("samples", samples)
         s = self.seed if seed is None else check.seed(seed)
         core = self._core(wl)
@@ -164,7 +166,7 @@ class Layered(BSDF):
         """Reflectance of the top interface's delta lobe toward the mirror direction, (N, C)."""
         a = check.directions("wi", wi)
         wl, to_rgb = self._channels(wavelengths)
-        t = check.per_row("thickness", thickness, len(a), lo=0.0)
+        t = check.per_row("thickness", thickness, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
         r = self._core(wl).delta_reflectance(a, t)
         return r @ to_rgb.T if to_rgb is not None else r
 
@@ -176,7 +178,6 @@ class Layered(BSDF):
 
 
 def _positive_int(name: str, value) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
-    return int(value)
+    # walks and depths are the core's int32; 2^24 walks per query is already minutes of work
+    return check.count(name, value, MAX_WALKS if name == "samples" else MAX_DEPTH)
 

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .mesh import Mesh, Params, grid_indices, normalise
+from .mesh import Mesh, Params, grid_indices, normalise, reserve
 
 SNAKE_DEFAULTS = {
     "length": 100.0,
@@ -123,6 +123,11 @@ def snake_layout(p) -> SnakeLayout:
     center = p.vector("center", 2)
     layout_ints = dict(segments=p.integer("segments", 16, 200000), sides=p.integer("sides", 6, 4096),
                        head_segments=p.integer("head_segments", 8, 20000))
+    # the body's rows (segments, the front cap) or the head's, each (sides + 1) vertices,
+    # plus the dense centreline (16 samples per segment, ~10 doubles each)
+    rows = max(layout_ints["segments"] + max(4, layout_ints["sides"] // 4), layout_ints["head_segments"] + 2) + 1
+    reserve(p.kind, rows * (layout_ints["sides"] + 1) + 4 * layout_ints["segments"],
+            2 * rows * layout_ints["sides"])
     if values["flatten"] > 1.0:
         raise ValueError(f"{p.kind}: flatten must be in (0, 1], got {values['flatten']}")
     cap = 0.6 * values["neck_radius"]

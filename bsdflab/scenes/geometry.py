@@ -29,8 +29,9 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .._validate import brief
 from . import curves
-from .mesh import MAX_SEGMENTS, Mesh, grid_indices, normalise as _normalise
+from .mesh import MAX_SEGMENTS, Mesh, grid_indices, normalise as _normalise, reserve
 from .mesh import Params as _Params
 from .mesh import plane_axes as _orthonormal
 
@@ -43,6 +44,7 @@ def _sphere(p: _Params) -> Mesh:
     radius = p.number("radius", positive=True)
     n_phi = p.integer("subdivisions", 4, MAX_SEGMENTS)
     n_theta = max(2, n_phi // 2)
+    reserve(p.kind, (n_theta + 1) * (n_phi + 1), 2 * n_theta * n_phi)
     theta = np.linspace(0.0, np.pi, n_theta + 1)
     phi = np.linspace(0.0, 2 * np.pi, n_phi + 1)
     th, ph = np.meshgrid(theta, phi, indexing="ij")
@@ -70,6 +72,7 @@ def _torus(p: _Params) -> Mesh:
         n_minor = min(MAX_SEGMENTS, max(8, round(n_major * minor / major)))
     else:
         n_minor = p.integer("minor_resolution", 3, MAX_SEGMENTS)
+    reserve(p.kind, (n_minor + 1) * (n_major + 1), 2 * n_minor * n_major)
     e1, e2 = _orthonormal(axis, None)   # e1 x e2 = axis
     psi = np.linspace(0.0, 2 * np.pi, n_minor + 1)      # around the tube: rows
     phi = np.linspace(0.0, 2 * np.pi, n_major + 1)      # around the axis: columns
@@ -107,6 +110,7 @@ def _disk(p: _Params) -> Mesh:
     normal, t_u, t_v = _plane_axes(p)
     radius = p.number("radius", positive=True)
     n = p.integer("resolution", 3, 65536)
+    reserve(p.kind, n + 1, n)
     a = np.arange(n) * (2 * np.pi / n)
     ring = np.stack([np.cos(a), np.sin(a)], axis=-1)
     local = np.concatenate([[[0.0, 0.0]], ring])
@@ -124,17 +128,34 @@ def _mesh_file(p: _Params, base_dir: str | None) -> Mesh:
         raise ValueError(f"mesh: path must be a file name, got {path!r}")
     smooth = p.flag("smooth")
     full = path if base_dir is None or os.path.isabs(path) else os.path.join(base_dir, path)
+    if not os.path.isfile(full):
+        raise ValueError(f"mesh: cannot read {full}: {'not a file' if os.path.exists(full) else 'no such file'}")
+    from .. import limits
+
+    limits.check_bytes(f"mesh: {full}", limits.MESH_FILE_EXPANSION * os.path.getsize(full))
     try:
         loaded = trimesh.load(full, force="mesh", process=False)
     except Exception as e:   # trimesh raises many types for unreadable files
-        raise ValueError(f"mesh: cannot read {full}: {e}") from None
+        raise ValueError(f"mesh: cannot read {full}: {type(e).__name__}: {e}") from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise ValueError(f"mesh: {full} holds no triangles")
     positions = np.asarray(loaded.vertices, dtype=float)
     indices = np.asarray(loaded.faces, dtype=np.int64)
+    # checked before anything indexes with them (trimesh's normals would raise IndexError)
+    if indices.ndim != 2 or indices.shape[1] != 3:
+        raise ValueError(f"mesh: {full} has faces of shape {indices.shape}, expected triangles")
+    if len(positions) == 0 or indices.min() < 0 or indices.max() >= len(positions):
+        raise ValueError(f"mesh: {full} has face indices outside [0, {len(positions) - 1}] "
+                         f"(found {indices.min()} to {indices.max()})")
+    if not np.all(np.isfinite(positions)):
+        raise ValueError(f"mesh: {full} has vertex positions that are not finite")
+    reserve(f"mesh: {full}", len(positions), len(indices))
     normals = None
     if smooth:
-        normals = np.asarray(loaded.vertex_normals, dtype=float)
+        try:
+            normals = np.asarray(loaded.vertex_normals, dtype=float)
+        except Exception as e:  # degenerate geometry inside trimesh
+            raise ValueError(f"mesh: {full}: cannot compute vertex normals ({type(e).__name__}: {e})") from None
         bad = ~np.isfinite(normals).all(axis=1) | (np.linalg.norm(normals, axis=1) < 0.5)
         if bad.any():
             raise ValueError(f"mesh: {full} has {int(bad.sum())} vertices without a usable normal")
@@ -148,10 +169,10 @@ def _mesh_file(p: _Params, base_dir: str | None) -> Mesh:
 def _matrix(kind: str, value: Any) -> np.ndarray:
     try:
         m = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         m = np.empty(0)
     if m.shape != (4, 4) or not np.all(np.isfinite(m)):
-        raise ValueError(f"{kind}: to_world must be a 4x4 matrix of finite numbers, got {value!r}")
+        raise ValueError(f"{kind}: to_world must be a 4x4 matrix of finite numbers, got {brief(value)}")
     if not np.allclose(m[3], [0, 0, 0, 1]):
         raise ValueError(f"{kind}: to_world must be affine (last row 0 0 0 1), got {m[3].tolist()}")
     if abs(np.linalg.det(m[:3, :3])) < 1e-12:

@@ -12,6 +12,8 @@ from typing import Any
 
 import numpy as np
 
+from .._validate import brief
+
 MAX_SEGMENTS = 4096
 
 
@@ -41,29 +43,29 @@ class Params:
         value = self.get(name)
         try:
             v = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"{self.kind}: {name} must be a number, got {value!r}") from None
+        except (TypeError, ValueError, OverflowError):
+            raise ValueError(f"{self.kind}: {name} must be a finite number, got {brief(value)}") from None
         if isinstance(value, bool) or not math.isfinite(v) or not lo <= v <= hi or (positive and v <= 0):
             bound = "> 0" if positive else f"in [{lo}, {hi}]"
-            raise ValueError(f"{self.kind}: {name} must be a finite number {bound}, got {value!r}")
+            raise ValueError(f"{self.kind}: {name} must be a finite number {bound}, got {brief(value)}")
         return v
 
     def integer(self, name: str, lo: int, hi: int) -> int:
         value = self.get(name)
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
-            raise ValueError(f"{self.kind}: {name} must be an integer in [{lo}, {hi}], got {value!r}")
+            raise ValueError(f"{self.kind}: {name} must be an integer in [{lo}, {hi}], got {brief(value)}")
         return int(value)
 
     def vector(self, name: str, n: int = 3, unit: bool = False, positive: bool = False) -> np.ndarray:
         value = self.get(name)
         try:
             a = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             a = np.empty(0)
         if a.shape != (n,) or not np.all(np.isfinite(a)):
-            raise ValueError(f"{self.kind}: {name} must be {n} finite numbers, got {value!r}")
+            raise ValueError(f"{self.kind}: {name} must be {n} finite numbers, got {brief(value)}")
         if positive and np.any(a <= 0):
-            raise ValueError(f"{self.kind}: {name} must be > 0, got {value!r}")
+            raise ValueError(f"{self.kind}: {name} must be > 0, got {brief(value)}")
         if unit:
             length = np.linalg.norm(a)
             if length == 0:
@@ -74,8 +76,17 @@ class Params:
     def flag(self, name: str) -> bool:
         value = self.get(name)
         if not isinstance(value, bool):
-            raise ValueError(f"{self.kind}: {name} must be true or false, got {value!r}")
+            raise ValueError(f"{self.kind}: {name} must be true or false, got {brief(value)}")
         return value
+
+
+def reserve(kind: str, vertices: int, triangles: int) -> None:
+    """Refuse a mesh whose size would exceed the caps, before building it (bsdflab.limits)."""
+    from .. import limits
+
+    limits.check_count(f"{kind}: triangles", int(triangles), "BSDFLAB_MAX_TRIANGLES")
+    limits.check_bytes(f"{kind} mesh ({int(vertices)} vertices, {int(triangles)} triangles)",
+                       limits.mesh_bytes(vertices, triangles))
 
 
 # -- shared construction helpers -----------------------------------------------------------

@@ -44,7 +44,7 @@ from .. import _validate as check
 from ..bsdfs.base import BSDF
 from ..lobes import Lobe
 from .channels import table_channels
-from .data import LOBES, TableData, TableGrid
+from .data import LOBES, TableData, TableGrid, check_table_memory
 
 ERROR_FLOOR = 0.05
 SIGNIFICANT = 0.01  # cells counted in the achieved-error statistics: f > 1 % of the max
@@ -112,15 +112,16 @@ def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = 0.01
     check.real_scalar("rel_error", rel_error, 0.0, 1.0, lo_open=True)
     if _count("max_samples", max_samples) < _count("min_samples", min_samples):
         raise ValueError(f"max_samples ({max_samples}) must be >= min_samples ({min_samples})")
+    n = cell_count(model, grid)
+    # Before the core allocates (docs/limits.md).
+    check_table_memory(grid, len(table_channels(wavelengths)[0]), len(_lobes(model)))
     if client is not None:
         from ..distributed.tabulate_units import tabulate_on_cluster
 
-        _check_model(model)
         return tabulate_on_cluster(client, model, grid, rel_error=rel_error, wavelengths=wavelengths,
                                    min_samples=min_samples, max_samples=max_samples,
                                    seed=check.seed(seed), progress=progress)
     kw = dict(wavelengths=wavelengths, min_samples=min_samples, seed=seed)
-    n = cell_count(model, grid)
     pilot = pilot_cells(model, grid, range(n), progress=progress, **kw)
     scale = floor_scale(model, grid, pilot, **kw)
     part = finish_cells(model, grid, range(n), pilot, scale, rel_error=rel_error,

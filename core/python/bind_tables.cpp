@@ -3,6 +3,7 @@
 // table BSDF.
 #include <pybind11/stl.h>
 #include "arrays.h"
+#include "bsdflab/projected_term.h"
 #include "bsdflab/table_bsdf.h"
 #include "bsdflab/tabulation.h"
 
@@ -77,12 +78,21 @@ void bind_tables(py::module_ &m) {
         .def(py::init([](std::vector<double> channel_ids, int n_lobes, int n_theta_i, int n_theta_o,
                          int n_phi, std::vector<double> thickness, std::vector<float> values,
                          std::vector<double> luminance, std::shared_ptr<BSDF> direct,
-                         std::vector<double> P, double default_thickness) {
+                         std::vector<double> P, double default_thickness, double transmission_eta) {
                  return std::make_shared<TabulatedBSDF>(
                      std::move(channel_ids), make_grid(n_lobes, n_theta_i, n_theta_o, n_phi, std::move(thickness)),
-                     std::move(values), std::move(luminance), direct, std::move(P), default_thickness);
+                     std::move(values), std::move(luminance), direct, std::move(P), default_thickness,
+                     transmission_eta);
              }),
              py::arg("channel_ids"), py::arg("n_lobes"), py::arg("n_theta_i"), py::arg("n_theta_o"),
              py::arg("n_phi"), py::arg("thickness"), py::arg("values"), py::arg("luminance"),
-             py::arg("direct"), py::arg("P"), py::arg("default_thickness"));
+             py::arg("direct"), py::arg("P"), py::arg("default_thickness"), py::arg("transmission_eta") = 1.0);
+
+    py::class_<ProjectedFresnelTerm, FresnelTerm, std::shared_ptr<ProjectedFresnelTerm>>(m, "ProjectedFresnelTerm")
+        .def(py::init<std::shared_ptr<const FresnelTerm>, std::vector<double>, int, double, double, double, int,
+                      int>(),
+             py::arg("exact"), py::arg("P"), py::arg("out_channels"), py::arg("thickness_lo"),
+             py::arg("thickness_hi"), py::arg("default_thickness"), py::arg("n_cos"), py::arg("n_thickness"))
+        .def_property_readonly("n_cos", &ProjectedFresnelTerm::n_cos)
+        .def_property_readonly("n_thickness", &ProjectedFresnelTerm::n_thickness);
 }

@@ -175,6 +175,7 @@ void LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
                            Walk &wk) const {
     const int K = static_cast<int>(slabs_.size()), C = channels();
     double *beta = wk.beta, *tmp = wk.tmp, *tr = wk.tr, *wgt = wk.wgt, *contrib = wk.contrib;
+    std::fill(beta, beta + C, 1.0); // the entry vertex connects before its own sample
     const bool nee = options_.nee;
 
     auto xb = [&](int j) { return exit == 0 ? j : j + 1; };
@@ -342,7 +343,6 @@ std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_
     const double cos_o = std::abs(wo.z);
     for (int n = 1; n <= samples; ++n) {
         std::fill(wk.contrib, wk.contrib + C, 0.0);
-        for (int c = 0; c < C; ++c) wk.beta[c] = 1.0;
         build_chain(wo, exit, q, rng, wk);
         one_walk(wi, entry, exit, q, rng, wk);
         bool finite = true;

@@ -81,8 +81,11 @@ def evaluate(body: EvalRequest, settings: SettingsDep) -> EvalResponse:
     result = lobe_views.evaluate(bsdf, wi, wo, body.wavelengths, body.samples, body.seed)
     channels = ["R", "G", "B"] if body.wavelengths is None else [f"{w:g}" for w in body.wavelengths]
     wi, wo = np.broadcast_to(wi, (pairs, 3)), np.broadcast_to(wo, (pairs, 3))
-    return EvalResponse(channels=channels, wi=wi.tolist(), wo=wo.tolist(), values=_rows(result.values),
-                        stderr=_rows(result.stderr), stochastic=result.stderr is not None)
+    # model_construct: the fields are built here from numpy arrays, validating them again
+    # would cost ten times the evaluation of a cheap model (bench/bench_service.py)
+    return EvalResponse.model_construct(channels=channels, wi=wi.tolist(), wo=wo.tolist(),
+                                        values=_rows(result.values), stderr=_rows(result.stderr),
+                                        stochastic=result.stderr is not None)
 
 
 @router.post("/lobe", response_model=LobeResponse, summary="A lobe slice and a hemisphere grid as data")
@@ -93,12 +96,13 @@ def lobe(body: LobeRequest, settings: SettingsDep) -> LobeResponse:
     over_limit(settings, "limit_lobe_resolution", body.points, "points")
     over_limit(settings, "limit_lobe_resolution", body.resolution, "resolution")
     wi = lobe_views.incident(body.theta_i)
-    out = LobeResponse(theta_i=body.theta_i, wi=wi.tolist(), model=bsdf.to_dict(),
-                       stochastic=lobe_views.is_stochastic(bsdf))
+    out = LobeResponse.model_construct(theta_i=body.theta_i, wi=wi.tolist(), model=bsdf.to_dict(),
+                                       stochastic=lobe_views.is_stochastic(bsdf), plane=None, hemisphere=None)
     if body.view in ("plane", "both"):
         _check_walks(settings, bsdf, body.points, body.samples)
         angles, v = lobe_views.plane_of_incidence(bsdf, body.theta_i, body.points, body.samples, body.seed)
-        out.plane = PlaneView(angle_deg=angles.tolist(), values=_rows(v.values), stderr=_rows(v.stderr))
+        out.plane = PlaneView.model_construct(angle_deg=angles.tolist(), values=_rows(v.values),
+                                              stderr=_rows(v.stderr))
     if body.view in ("hemisphere", "both"):
         _check_walks(settings, bsdf, body.resolution**2, body.samples)
         x, inside, v = lobe_views.hemisphere(bsdf, body.theta_i, body.resolution, body.samples, body.seed)
@@ -119,8 +123,8 @@ def _hemisphere_view(x: np.ndarray, inside: np.ndarray, v: lobe_views.Values) ->
 
     lum = lobe_views.luminance(v.values)
     lum_err = None if v.stderr is None else lobe_views.luminance(v.stderr)
-    return HemisphereView(x=x.tolist(), y=x.tolist(), rgb=grid(v.values), luminance=grid(lum),
-                          luminance_stderr=grid(lum_err))
+    return HemisphereView.model_construct(x=x.tolist(), y=x.tolist(), rgb=grid(v.values), luminance=grid(lum),
+                                          luminance_stderr=grid(lum_err))
 
 
 def _figure(bsdf, theta_i: float, samples: int, seed: int) -> Response:

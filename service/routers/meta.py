@@ -9,7 +9,7 @@ from fastapi import APIRouter
 import bsdflab
 from bsdflab import _core
 
-from ..deps import SettingsDep
+from ..deps import JobsDep, SettingsDep
 from ..models import Health, VersionInfo
 
 router = APIRouter(tags=["meta"])
@@ -29,7 +29,7 @@ def healthz() -> Health:
 
 
 @router.get("/v1/version", response_model=VersionInfo, summary="Versions, executor and limits")
-def version(settings: SettingsDep) -> VersionInfo:
+def version(settings: SettingsDep, jobs: JobsDep) -> VersionInfo:
     """The package, the C++ core build (module file, threads), Mitsuba's version, the job
     executor and the request limits in force."""
     limits = {name[len("limit_"):]: getattr(settings, name) for name in type(settings).model_fields
@@ -37,5 +37,5 @@ def version(settings: SettingsDep) -> VersionInfo:
     return VersionInfo(bsdflab=bsdflab.__version__,
                        core={"module": _core.__file__.rsplit("/", 1)[-1], "threads": _core.worker_count()},
                        mitsuba=_mitsuba_version(), python=platform.python_version(),
-                       executor=settings.executor, workers=settings.workers or 0,
+                       executor=settings.executor, workers=jobs.executor.workers,
                        api_key_required=settings.api_key is not None, limits=limits)

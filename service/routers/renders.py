@@ -25,6 +25,8 @@ def _links(h: str) -> dict[str, str]:
 def render_info(jobs: JobService, h: str, request: dict[str, Any], result: dict[str, Any] | None) -> RenderInfo:
     job = jobs.store.latest_for(KIND, h)
     live = jobs.job(job["id"]) if job is not None else None
+    if result is None and live is None:   # a record whose files are gone, and no job
+        raise HTTPException(404, f"no render {h}")
     state = "done" if result is not None else live["state"]
     return RenderInfo(hash=h, state=state, request=request, job=job_info(live) if live else None,
                       summary=None if result is None else result["summary"], links=_links(h))

@@ -16,6 +16,11 @@ from ..models import ThinFilmRequest, ThinFilmResponse
 router = APIRouter(prefix="/v1/thinfilm", tags=["thin film"], dependencies=[KEY],
                    responses={**ERRORS, **KEY_ERRORS})
 DEFAULT_ANGLES = np.arange(0.0, 86.0, 5.0)
+# Physical ranges: indices of optical materials (1e-3..1e3), films up to 1 cm, wavelengths
+# from 1 nm to 1 mm; beyond them the film arithmetic loses all precision.
+IOR_RANGE = (1e-3, 1e3)
+MAX_THICKNESS_NM = 1e7
+WAVELENGTH_RANGE_NM = (1.0, 1e6)
 DEFAULT_WAVELENGTHS = np.arange(380.0, 781.0, 5.0)
 
 
@@ -35,15 +40,18 @@ def spectrum(body: ThinFilmRequest, settings: SettingsDep) -> ThinFilmResponse:
     over_limit(settings, "limit_angles", len(angles), "angles")
     over_limit(settings, "limit_wavelengths", len(wavelengths), "wavelengths")
     check.real_array("angles", angles, 0.0, 90.0)
-    film = (check.real_scalar("ext_ior", body.ext_ior, 0.0, lo_open=True),
-            check.real_scalar("film_ior", body.film_ior, 0.0, lo_open=True),
-            check.real_scalar("thickness_nm", body.thickness_nm, 0.0),
-            check.real_scalar("substrate_ior", body.substrate_ior, 0.0, lo_open=True))
+    check.real_array("wavelengths", wavelengths, *WAVELENGTH_RANGE_NM)
+    film = (check.real_scalar("ext_ior", body.ext_ior, *IOR_RANGE),
+            check.real_scalar("film_ior", body.film_ior, *IOR_RANGE),
+            check.real_scalar("thickness_nm", body.thickness_nm, 0.0, MAX_THICKNESS_NM),
+            check.real_scalar("substrate_ior", body.substrate_ior, *IOR_RANGE))
     theta = np.radians(angles)[:, None]
     r = film_reflectance(film, wavelengths[None, :], theta)
     t = film_transmittance(film, wavelengths[None, :], theta)
     rgb = spectral_rgb(film, np.radians(angles))
     exposure = display_exposure(rgb, np.radians(angles))
+    if not all(np.all(np.isfinite(a)) for a in (r, t, rgb)):
+        raise ValueError("the film's reflectance is not finite for these indices and thickness")
     return ThinFilmResponse(angles=angles.tolist(), wavelengths=wavelengths.tolist(), reflectance=r.tolist(),
                             transmittance=t.tolist(), rgb=rgb.tolist(), srgb=_hex(display_srgb(rgb, exposure)),
                             exposure=exposure)

@@ -289,7 +289,7 @@ async function startRender(event) {
   const [width, height] = $("size").value.split("x").map(Number);
   const scene = $("scene").value;
   const request = { scene, width, height, spp: +$("spp").value,
-    options: scene === "sphere" ? { variant: $("variant").value } : {} };
+    options: scene === "sphere" ? { variant: $("variant").value } : { material: $("material").value } };
   $("render-button").disabled = true;
   $("progress-bar").style.width = "0%";
   $("render-image").hidden = true;
@@ -334,7 +334,10 @@ async function main() {
     input.addEventListener("input", () => { showValue(input); scheduleUpdate(); });
   }
   $("quality").addEventListener("change", scheduleUpdate);
-  $("scene").addEventListener("change", () => { $("variant-box").hidden = $("scene").value !== "sphere"; });
+  $("scene").addEventListener("change", () => {
+    $("variant-box").hidden = $("scene").value !== "sphere";
+    $("material-box").hidden = $("scene").value !== "snake";
+  });
   $("render-form").addEventListener("submit", startRender);
   $("cancel-button").addEventListener("click", cancelRender);
   scheduleUpdate();
