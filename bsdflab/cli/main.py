@@ -6,8 +6,10 @@ import sys
 
 from .. import __version__
 from . import info, lobe, render, table, tabulate, thinfilm
+from . import validate
 
 COMMANDS = (render, lobe, thinfilm, tabulate, table, info)
+COMMANDS += (validate,)
 
 
 def build_parser() -> argparse.ArgumentParser:
