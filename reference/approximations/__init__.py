@@ -21,7 +21,7 @@ each is from the exact spectral Airy reflectance (`bsdflab.optics.thin_film`):
 Every function returns linear sRGB (D65) reflectance, shape (..., 3), for unpolarised light,
 so the colour-difference study (``study.py``) compares them all in the same space.
 """
-from .belcour_barla import belcour_barla_rgb, xyz_sensitivity_exact, xyz_sensitivity_gaussian
+from .belcour_barla import belcour_barla_rgb, belcour_barla_xyz, xyz_sensitivity_exact, xyz_sensitivity_gaussian
 from .gltf import gltf_iridescence_rgb
 from .seed_film import seed_reflectance, seed_rgb
 
@@ -31,5 +31,5 @@ MODELS = {
     "seed code (double phase, 3 wavelengths)": seed_rgb,
 }
 
-__all__ = ["MODELS", "belcour_barla_rgb", "gltf_iridescence_rgb", "seed_reflectance", "seed_rgb",
+__all__ = ["MODELS", "belcour_barla_rgb", "belcour_barla_xyz", "gltf_iridescence_rgb", "seed_reflectance", "seed_rgb",
            "xyz_sensitivity_exact", "xyz_sensitivity_gaussian"]

@@ -19,8 +19,10 @@ Integrated against colour-matching functions, each cosine becomes a "sensitivity
 S(m D, m phi) = int cmf(lambda) cos(2 pi m D / lambda + m phi) dlambda, which the paper
 approximates in closed form by Gaussians fitted to the CIE XYZ sensitivities in the Fourier
 domain (``xyz_sensitivity_gaussian``; the constants are the paper's). The series is cut
-after ``terms`` harmonics (MaterialX and glTF: 2). The constant term is added to every RGB
-channel as in the reference shaders, and the s and p results are averaged.
+after ``terms`` harmonics (MaterialX: 2). As in MaterialX's ``mx_fresnel_airy``, the sum is
+accumulated in XYZ (the constant term as C0 (1, 1, 1)), s and p are averaged, and XYZ goes
+to RGB with the CIE 1931 RGB matrix (illuminant E, so white stays white), clamped to [0, 1];
+a renderer then uses those numbers as its working-space (here linear sRGB) reflectance.
 
 ``sensitivity="exact"`` replaces the Gaussian fit with the exact integral on a 1 nm grid
 against bsdflab's D65 -> linear sRGB weights; with many terms the series then equals the
@@ -33,7 +35,12 @@ from functools import lru_cache
 
 import numpy as np
 
-from ._optics import XYZ_TO_SRGB, dielectric_amplitudes, refracted_cos
+from ._optics import dielectric_amplitudes, refracted_cos
+
+# XYZ -> CIE 1931 RGB (equal-energy white), as MaterialX's mx_fresnel_airy uses.
+XYZ_TO_CIE_RGB = np.array([[2.3706743, -0.9000405, -0.4706338],
+                           [-0.5138850, 1.4253036, 0.0885814],
+                           [0.0052982, -0.0146949, 1.0093968]])
 
 # Gaussian fits of the XYZ sensitivities (Belcour & Barla 2017, supplemental code):
 # amplitude, centre (1/m) and variance of each Gaussian; x has a second lobe.
@@ -73,26 +80,42 @@ def xyz_sensitivity_exact(opd_nm, shift) -> np.ndarray:
     return np.cos(arg) @ W.T
 
 
-def _rgb_sensitivity(kind: str):
+def _sensitivity(kind: str):
+    """(sensitivity in the accumulation space, matrix to RGB or None, clamp?)"""
     if kind == "gaussian":
-        return lambda opd, shift: xyz_sensitivity_gaussian(opd, shift) @ XYZ_TO_SRGB.T
+        return xyz_sensitivity_gaussian, XYZ_TO_CIE_RGB, True
     if kind == "exact":
-        return xyz_sensitivity_exact
+        return xyz_sensitivity_exact, None, False
     raise ValueError(f"sensitivity must be 'gaussian' or 'exact', got {kind!r}")
+
+
+def belcour_barla_xyz(n_outer, n_film, n_base, thickness_nm, cos_theta, *, terms: int = 2) -> np.ndarray:
+    """CIE XYZ (illuminant E, Y of a perfect reflector = 1), shape (..., 3), of the film
+    with the paper's Gaussian sensitivities: the quantity the paper integrates in closed
+    form, before any RGB conversion. Arguments as ``belcour_barla_rgb``."""
+    return _series(n_outer, n_film, n_base, thickness_nm, cos_theta, terms, xyz_sensitivity_gaussian)
 
 
 def belcour_barla_rgb(n_outer, n_film, n_base, thickness_nm, cos_theta, *, terms: int = 2,
                       sensitivity: str = "gaussian") -> np.ndarray:
-    """Linear sRGB reflectance (..., 3) of a film of index ``n_film`` and thickness
+    """Linear RGB reflectance (..., 3) of a film of index ``n_film`` and thickness
     ``thickness_nm`` between real media ``n_outer`` (light's side) and ``n_base``, for light
     arriving at ``cos_theta`` (in the outer medium); arguments broadcast.
 
-    terms : harmonics kept (>= 1); sensitivity : "gaussian" (the paper) or "exact".
-    Total internal reflection at the film returns 1.
+    terms : harmonics kept (>= 1); sensitivity : "gaussian" (the paper, MaterialX's RGB) or
+    "exact" (linear sRGB, D65). Total internal reflection at the film returns 1.
     """
+    S, to_rgb, clamp = _sensitivity(sensitivity)
+    rgb = _series(n_outer, n_film, n_base, thickness_nm, cos_theta, terms, S)
+    if to_rgb is not None:
+        rgb = rgb @ to_rgb.T
+    return np.clip(rgb, 0.0, 1.0) if clamp else rgb
+
+
+def _series(n_outer, n_film, n_base, thickness_nm, cos_theta, terms, S) -> np.ndarray:
+    """The Fourier series averaged over s and p, in the space of the sensitivity S."""
     if int(terms) != terms or terms < 1:
         raise ValueError(f"terms must be an integer >= 1, got {terms!r}")
-    S = _rgb_sensitivity(sensitivity)
     n1, n2, n3, d, c1 = np.broadcast_arrays(*(np.asarray(a, float) for a in
                                               (n_outer, n_film, n_base, thickness_nm, cos_theta)))
     c2 = refracted_cos(n1, n2, c1)
@@ -100,7 +123,7 @@ def belcour_barla_rgb(n_outer, n_film, n_base, thickness_nm, cos_theta, *, terms
     tir = np.isnan(c2)
     c2, c3 = np.nan_to_num(c2, nan=1.0), np.nan_to_num(c3, nan=0.0)
     opd = 2.0 * n2 * d * c2
-    rgb = np.zeros(n1.shape + (3,))
+    out = np.zeros(n1.shape + (3,))
     for r12, r23 in zip(dielectric_amplitudes(n1, n2, c1, c2), dielectric_amplitudes(n2, n3, c2, c3)):
         R12, R23 = r12**2, r23**2
         T121 = 1.0 - R12
@@ -113,5 +136,5 @@ def belcour_barla_rgb(n_outer, n_film, n_base, thickness_nm, cos_theta, *, terms
         for m in range(1, int(terms) + 1):
             Cm = Cm * np.sqrt(R123)
             I = I + Cm[..., None] * 2.0 * S(m * opd, m * phi2)
-        rgb += 0.5 * I
-    return np.where(tir[..., None], 1.0, rgb)
+        out += 0.5 * I
+    return np.where(tir[..., None], 1.0, out)

@@ -5,8 +5,8 @@ KHR_materials_iridescence (2022), section "Implementation" (``evalIridescence``)
 simplifications of Belcour & Barla 2017 (see belcour_barla.py): Schlick's approximation
 F0 + (1 - F0)(1 - cos)^5 for both interfaces, unpolarised; reflection phases 0 or pi from
 comparing indices; the base's index recovered from its F0 = ((n - 1) / (n + 1))^2
-(KHR_materials_ior, outside index 1); the film's index blended towards the outside's over
-the first 30 nm of thickness; the same Gaussian XYZ fit, two harmonics, R12 R23 clamped to
+(KHR_materials_ior, outside index 1); the film's index blended towards the outside's for
+thicknesses below 0.03 (the spec's smoothstep(0, 0.03, thickness), thickness in nm); the same Gaussian XYZ fit, two harmonics, R12 R23 clamped to
 [1e-5, 0.9999] and negative colours clamped to 0; total internal reflection in the film
 gives 1.
 """
@@ -36,7 +36,7 @@ def gltf_iridescence_rgb(n_outer, n_film, n_base, thickness_nm, cos_theta) -> np
     ``belcour_barla_rgb``; the base index enters through its F0 as a glTF material's would."""
     n1, n2, n3, d, c1 = np.broadcast_arrays(*(np.asarray(a, float) for a in
                                               (n_outer, n_film, n_base, thickness_nm, cos_theta)))
-    t = np.clip(d / 30.0, 0.0, 1.0)
+    t = np.clip(d / 0.03, 0.0, 1.0)
     eta2 = n1 + (n2 - n1) * t * t * (3.0 - 2.0 * t)      # mix(outside, ior, smoothstep)
     sin2 = (n1 / eta2) ** 2 * (1.0 - c1**2)
     tir = sin2 > 1.0

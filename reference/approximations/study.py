@@ -39,6 +39,25 @@ def exact_rgb(n_outer, n_film, n_base, thickness_nm, cos_theta) -> np.ndarray:
                            SPECTRAL_GRID_NM)
 
 
+def exact_xyz_illuminant_e(n_outer, n_film, n_base, thickness_nm, cos_theta) -> np.ndarray:
+    """CIE XYZ under the equal-energy illuminant (Y of a perfect reflector = 1) on 1 nm."""
+    import colour
+
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    cmf = np.stack([np.interp(SPECTRAL_GRID_NM, cmfs.wavelengths, cmfs.values[:, k]) for k in range(3)])
+    R = exact_spectrum(n_outer, n_film, n_base, thickness_nm, cos_theta)
+    return R @ cmf.T / cmf[1].sum()
+
+
+def delta_e00_xyz_e(xyz_a, xyz_b) -> np.ndarray:
+    """CIEDE2000 between XYZ colours under illuminant E (white (1, 1, 1))."""
+    import colour
+
+    white = np.array([1.0 / 3.0, 1.0 / 3.0])
+    lab = [colour.XYZ_to_Lab(np.asarray(x, float), white) for x in (xyz_a, xyz_b)]
+    return colour.delta_E(*lab, method="CIE 2000")
+
+
 def rgb_to_lab(rgb) -> np.ndarray:
     """CIELAB (D65) of linear sRGB reflectances (..., 3)."""
     import colour
