@@ -70,14 +70,11 @@ def furnace_outcome(ctx: Context, angles_deg, expected: float | None, *, wavelen
     z = z_limit(2 * len(rows) * len(wavelengths))
     worst = 0.0
     for _, u, s in rows:
-        sigma = np.hypot(u.stderr, s.stderr)
-        worst = max(worst, float(np.max(np.abs(u.mean - s.mean) / sigma)))
-        target = expected if expected is not None else None
-        if target is not None:
-            worst = max(worst, float(np.max(np.abs(s.mean - target) / s.stderr)),
-                        float(np.max(np.abs(u.mean - target) / u.stderr)))
+        worst = max(worst, _z(np.abs(u.mean - s.mean), np.hypot(u.stderr, s.stderr)))
+        if expected is not None:
+            worst = max(worst, _z(np.abs(s.mean - expected), s.stderr), _z(np.abs(u.mean - expected), u.stderr))
         else:  # <= 1: only an excess counts
-            worst = max(worst, float(np.max((s.mean - 1.0) / s.stderr)))
+            worst = max(worst, _z(s.mean - 1.0, s.stderr))
     fig, ax = new_figure(6.5, 3.0)
     t = [r[0] for r in rows]
     for label, idx, fmt in (("uniform eval", 1, "o"), ("mean sample weight", 2, "s")):
@@ -93,6 +90,15 @@ def furnace_outcome(ctx: Context, angles_deg, expected: float | None, *, wavelen
     details = {"albedo_sampled": {f"{a:g} deg": s.mean for a, _, s in rows},
                "albedo_uniform": {f"{a:g} deg": u.mean for a, u, _ in rows}}
     return Outcome(worst < z, worst, z, "<", f"largest |z| {worst:.2f} (limit {z:.2f})", details)
+
+
+def _z(diff, se, exact: float = 1e-12) -> float:
+    """Largest diff / se; where se is 0 (a deterministic estimator, e.g. a Lambertian's
+    constant sample weight) any difference beyond rounding counts as infinitely many sigma."""
+    diff, se = np.broadcast_arrays(np.asarray(diff, float), np.asarray(se, float))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.where(se > 0, diff / se, np.where(diff > exact, np.inf, 0.0))
+    return float(np.max(z))
 
 
 def reciprocity_outcome(ctx: Context, limit: float) -> Outcome:
