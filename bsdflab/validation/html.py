@@ -151,6 +151,23 @@ def _provenance(doc) -> str:
     return "<table class='kv'>" + "".join(f"<tr><td>{_e(k)}</td><td>{_e(v)}</td></tr>" for k, v in rows) + "</table>"
 
 
+def _dashboard(doc, sections) -> str:
+    """One line per family: counts, and links to anything that failed."""
+    rows = ["<table><tr><th>family</th><th>pass</th><th>fail / error</th><th>skipped</th><th>studies</th>"
+            "<th>failed checks</th></tr>"]
+    for f in sections:
+        c = [r for r in doc["checks"] if r["family"] == f]
+        n = {s: sum(r["status"] == s for r in c) for s in ("pass", "fail", "error", "skipped", "study")}
+        bad = [r["name"] for r in c if r["status"] in ("fail", "error")]
+        links = ", ".join(f'<a href="#{_e(b)}">{_e(b)}</a>' for b in bad) or "-"
+        cls = "fail" if bad else "pass"
+        rows.append(f'<tr class="row {cls}"><td class="status"><a href="#family-{f}">{f}</a></td><td class="num">'
+                    f'{n["pass"]}</td><td class="num">{n["fail"] + n["error"]}</td><td class="num">{n["skipped"]}</td>'
+                    f'<td class="num">{n["study"]}</td><td>{links}</td></tr>')
+    rows.append("</table>")
+    return "<h2>Summary</h2>" + "".join(rows)
+
+
 def render_html(doc: dict, results) -> str:
     by_name = {r.check.name: r for r in results}
     s = doc["summary"]
@@ -159,7 +176,7 @@ def render_html(doc: dict, results) -> str:
     sections = [f for f in FAMILIES if any(c["family"] == f for c in doc["checks"])]
     nav = "".join(f'<a href="#family-{f}">{f}</a>' for f in sections)
     nav += '<a href="#approximations">approximations</a><a href="#performance">performance</a><a href="#provenance">provenance</a>'
-    body = []
+    body = [_dashboard(doc, sections)]
     for f in sections:
         rows = [c for c in doc["checks"] if c["family"] == f]
         body.append(f'<h2 id="family-{f}">{f} <span class="small">({sum(c["status"] == "pass" for c in rows)} of '

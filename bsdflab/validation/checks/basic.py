@@ -26,7 +26,7 @@ def _register_mitsuba_cases():
         REGISTRY.add(Check(
             name=f"basic/mitsuba/{name}", family="basic", title=f"{name} against Mitsuba 3",
             model=repr(bsdf), reference="Mitsuba 3 (diffuse / conductor / dielectric / twosided)",
-            statistic="max relative error of eval, pdf, sample weight, direction, pdf and eta",
+            statistic="largest error of eval, pdf, sample weight, direction, pdf, eta in units of its allowance",
             tolerance=MITSUBA_TOLERANCE, run=run, effort=MITSUBA_EFFORT,
             make_model=lambda bsdf=bsdf: bsdf, seed=0, requires=("mitsuba",)))
 

@@ -22,7 +22,7 @@ def _register_mitsuba_cases():
         REGISTRY.add(Check(
             name=f"rough/mitsuba/{name}", family="rough", title=f"{name} against Mitsuba 3",
             model=repr(bsdf), reference="Mitsuba 3 roughconductor / roughdielectric (GGX, visible normals)",
-            statistic="max relative error of eval, pdf, samples and cross-evaluated samples",
+            statistic="largest error of eval, pdf, samples and cross-evaluated samples in units of its allowance",
             tolerance=MITSUBA_TOLERANCE + "; samples compared through the mapping between the two "
                       "codes' visible-normal warps (reference/visible_normals.py)",
             run=run, effort=ROUGH_MITSUBA_EFFORT, make_model=lambda bsdf=bsdf: bsdf, requires=("mitsuba",)))
