@@ -3,6 +3,8 @@
 rows red and the exit status non-zero: the proof that the report has power."""
 from __future__ import annotations
 
+import importlib.util
+
 import numpy as np
 
 import bsdflab
@@ -79,9 +81,7 @@ def checks():
             lambda: double_counted_film, "films/tmm/single-film [broken: double-counted phase]",
             "the seed's double-counted phase (broken on purpose)"),
     ]
-    try:
-        import mitsuba  # noqa: F401
-    except ImportError:
+    if importlib.util.find_spec("mitsuba") is None:
         return out
     return out + [REGISTRY["basic/mitsuba/diffuse-grey"].with_model(
         lambda: ScaledBSDF(bsdflab.Diffuse(0.5), 1.03), "basic/mitsuba/diffuse-grey [broken: 3% high]", bright)]

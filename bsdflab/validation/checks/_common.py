@@ -101,6 +101,32 @@ def _z(diff, se, exact: float = 1e-12) -> float:
     return float(np.max(z))
 
 
+def log_error_histogram(ax, errors, limit, xlabel) -> None:
+    """Histogram of log10 errors with the tolerance marked."""
+    ax.hist(np.log10(np.maximum(np.ravel(errors), 1e-18)), bins=40)
+    ax.axvline(np.log10(limit), color="r", label="tolerance")
+    ax.set_xlabel(xlabel)
+    ax.legend(fontsize=7)
+
+
+def register_mitsuba_cases(family, cases, compare_name, reference, tolerance, effort, statistic):
+    """One registered check per (name, BSDF, wavelength) case of a reference.mitsuba_* module;
+    ``compare_name`` is "module.function" inside bsdflab.reference (imported when run)."""
+    import importlib
+
+    from ..registry import REGISTRY, Check
+
+    module, function = compare_name.rsplit(".", 1)
+    for name, bsdf, wavelength in cases:
+        def run(ctx, wavelength=wavelength):
+            compare = getattr(importlib.import_module(f"bsdflab.reference.{module}"), function)
+            return mitsuba_outcome(ctx, compare, wavelength)
+
+        REGISTRY.add(Check(name=f"{family}/mitsuba/{name}", family=family, title=f"{name} against Mitsuba 3",
+                           model=repr(bsdf), reference=reference, statistic=statistic, tolerance=tolerance,
+                           run=run, effort=effort, make_model=lambda bsdf=bsdf: bsdf, requires=("mitsuba",)))
+
+
 def reciprocity_outcome(ctx: Context, limit: float) -> Outcome:
     from ...testing import random_unit_vectors, reciprocity_error
 
@@ -109,10 +135,7 @@ def reciprocity_outcome(ctx: Context, limit: float) -> Outcome:
     wo = random_unit_vectors(n, seed=ctx.seed + 1, hemisphere="upper")
     err = reciprocity_error(ctx.model, wi, wo, wavelengths=[450.0, 550.0, 650.0])
     fig, ax = new_figure(6.0, 2.8)
-    ax.hist(np.log10(np.maximum(err.ravel(), 1e-18)), bins=40)
-    ax.axvline(np.log10(limit), color="r", label="limit")
-    ax.set_xlabel("log10 relative asymmetry |f(wi,wo) - f(wo,wi)| / max")
-    ax.legend(fontsize=7)
+    log_error_histogram(ax, err, limit, "log10 relative asymmetry |f(wi,wo) - f(wo,wi)| / max")
     ctx.figure(fig, "reciprocity: relative asymmetry over random pairs")
     worst = float(err.max())
     return Outcome(worst <= limit, worst, limit, "<=", f"max asymmetry {worst:.2e} over {n} pairs")

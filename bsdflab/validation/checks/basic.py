@@ -3,35 +3,29 @@ white furnace, eval/pdf consistency."""
 from __future__ import annotations
 
 from ...bsdfs import Diffuse
-from ..registry import REGISTRY, Check, effort
-from ._common import CHI2_TOLERANCE, FURNACE_TOLERANCE, chi2_outcome, furnace_outcome, mitsuba_outcome
+from ..registry import REGISTRY, effort
+from ._common import (CHI2_TOLERANCE, FURNACE_TOLERANCE, chi2_outcome, furnace_outcome,
+                      register_mitsuba_cases)
 
 MITSUBA_TOLERANCE = ("relative error 1e-5 on pairs float32 can resolve (Mitsuba computes in float32, "
                      "both codes get bit-identical float32 inputs and uniforms); pairs it cannot "
                      "(near the critical angle, grazing) within their own float32 error bound "
                      "(reference/conditioning.py); sRGB cases add the documented RGB->spectrum "
                      "round trip (<= 3e-4); every lobe choice and sample validity must agree")
+MITSUBA_STATISTIC = ("largest error of eval, pdf, sample weight, direction, sample pdf and eta, in units "
+                     "of its allowance (<= 1 passes)")
 MITSUBA_EFFORT = effort({"pairs": 300}, {"pairs": 1000}, {"pairs": 4000})
 
 
-def _register_mitsuba_cases():
-    from ...reference import mitsuba_bsdf
+def _register():
+    from ...reference.mitsuba_bsdf import standard_cases
 
-    for name, bsdf, wavelength in mitsuba_bsdf.standard_cases():
-        def run(ctx, wavelength=wavelength):
-            from ...reference.mitsuba_bsdf import compare_bsdf
-
-            return mitsuba_outcome(ctx, compare_bsdf, wavelength)
-
-        REGISTRY.add(Check(
-            name=f"basic/mitsuba/{name}", family="basic", title=f"{name} against Mitsuba 3",
-            model=repr(bsdf), reference="Mitsuba 3 (diffuse / conductor / dielectric / twosided)",
-            statistic="largest error of eval, pdf, sample weight, direction, pdf, eta in units of its allowance",
-            tolerance=MITSUBA_TOLERANCE, run=run, effort=MITSUBA_EFFORT,
-            make_model=lambda bsdf=bsdf: bsdf, seed=0, requires=("mitsuba",)))
+    register_mitsuba_cases("basic", standard_cases(), "mitsuba_bsdf.compare_bsdf",
+                           "Mitsuba 3 (diffuse / conductor / dielectric / twosided)", MITSUBA_TOLERANCE,
+                           MITSUBA_EFFORT, MITSUBA_STATISTIC)
 
 
-_register_mitsuba_cases()
+_register()
 
 SAMPLING = effort({"samples": 100_000}, {"samples": 1_000_000}, {"samples": 4_000_000})
 

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..figures import new_figure
 from ..registry import REGISTRY, Outcome, effort
+from ._common import log_error_histogram
 
 ROUND_OFF = 1e-10
 ROUND_OFF_TOLERANCE = ("1e-10 absolute on R and T: both sides are exact closed forms in double "
@@ -50,10 +51,7 @@ def _single_film(ctx):
     a.plot([0, 1], [0, 1], "k--", lw=0.8)
     a.set_xlabel("R (tmm)")
     a.set_ylabel("R (model)")
-    b.hist(np.log10(np.maximum(err, 1e-18)), bins=40)
-    b.axvline(np.log10(ROUND_OFF), color="r", label="tolerance")
-    b.set_xlabel("log10 |R - R_tmm|")
-    b.legend(fontsize=7)
+    log_error_histogram(b, err, ROUND_OFF, "log10 |R - R_tmm|")
     ctx.figure(fig, "reflectance of random single films against tmm")
     worst = float(err.max())
     return Outcome(worst <= ROUND_OFF, worst, ROUND_OFF, "<=", f"max |dR| {worst:.2e} over {len(err)} evaluations")

@@ -59,7 +59,7 @@ def _form_factor(ctx):
         zs[strategy] = (mean - expected) / err
     worst = float(max(np.max(np.abs(z)) for z in zs.values()))
     limit = z_limit(9)
-    return Outcome(worst < limit, worst, limit, "<", f"z per strategy: " + ", ".join(
+    return Outcome(worst < limit, worst, limit, "<", "z per strategy: " + ", ".join(
         f"{k} {np.round(v, 2).tolist()}" for k, v in zs.items()), {"expected": expected, "z": zs})
 
 

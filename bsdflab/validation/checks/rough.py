@@ -3,32 +3,25 @@ white furnace (<= 1, single scattering), reciprocity of reflection."""
 from __future__ import annotations
 
 from ...bsdfs import RoughConductor, RoughDielectric
-from ..registry import REGISTRY, Check, effort
-from ._common import CHI2_TOLERANCE, FURNACE_TOLERANCE, chi2_outcome, furnace_outcome, mitsuba_outcome, reciprocity_outcome
-from .basic import MITSUBA_TOLERANCE
+from ..registry import REGISTRY, effort
+from ._common import (CHI2_TOLERANCE, FURNACE_TOLERANCE, chi2_outcome, furnace_outcome, reciprocity_outcome,
+                      register_mitsuba_cases)
+from .basic import MITSUBA_STATISTIC, MITSUBA_TOLERANCE
 
 ROUGH_MITSUBA_EFFORT = effort({"pairs": 200}, {"pairs": 1000}, {"pairs": 4000})
 
 
-def _register_mitsuba_cases():
-    from ...reference import mitsuba_rough
+def _register():
+    from ...reference.mitsuba_rough import rough_cases
 
-    for name, bsdf, wavelength in mitsuba_rough.rough_cases():
-        def run(ctx, wavelength=wavelength):
-            from ...reference.mitsuba_rough import compare_rough
-
-            return mitsuba_outcome(ctx, compare_rough, wavelength)
-
-        REGISTRY.add(Check(
-            name=f"rough/mitsuba/{name}", family="rough", title=f"{name} against Mitsuba 3",
-            model=repr(bsdf), reference="Mitsuba 3 roughconductor / roughdielectric (GGX, visible normals)",
-            statistic="largest error of eval, pdf, samples and cross-evaluated samples in units of its allowance",
-            tolerance=MITSUBA_TOLERANCE + "; samples compared through the mapping between the two "
-                      "codes' visible-normal warps (reference/visible_normals.py)",
-            run=run, effort=ROUGH_MITSUBA_EFFORT, make_model=lambda bsdf=bsdf: bsdf, requires=("mitsuba",)))
+    register_mitsuba_cases("rough", rough_cases(), "mitsuba_rough.compare_rough",
+                           "Mitsuba 3 roughconductor / roughdielectric (GGX, visible normals)",
+                           MITSUBA_TOLERANCE + "; samples compared through the mapping between the two codes' "
+                           "visible-normal warps (reference/visible_normals.py), and each code's samples "
+                           "evaluated by the other", ROUGH_MITSUBA_EFFORT, MITSUBA_STATISTIC)
 
 
-_register_mitsuba_cases()
+_register()
 
 SAMPLING = effort({"samples": 100_000}, {"samples": 1_000_000}, {"samples": 4_000_000})
 

@@ -7,7 +7,7 @@ import numpy as np
 from ...testing import random_unit_vectors, spherical_directions
 from ..figures import new_figure
 from ..registry import REGISTRY, Outcome, effort
-from ._common import CHI2_TOLERANCE, chi2_outcome, z_limit, z_outcome
+from ._common import CHI2_TOLERANCE, chi2_outcome, z_outcome
 from .layered import Z_TOLERANCE
 
 WAVELENGTHS = [450.0, 550.0, 650.0]
@@ -95,5 +95,3 @@ def _table_chi2(ctx):
     ctx.model = tb
     return chi2_outcome(ctx, (0.0, 40.0, 85.0), quadrature_order=10)
 
-
-__all__ = ["z_limit"]
