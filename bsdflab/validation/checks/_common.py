@@ -96,6 +96,7 @@ def _z(diff, se, exact: float = 1e-12) -> float:
     """Largest diff / se; where se is 0 (a deterministic estimator, e.g. a Lambertian's
     constant sample weight) any difference beyond rounding counts as infinitely many sigma."""
     diff, se = np.broadcast_arrays(np.asarray(diff, float), np.asarray(se, float))
+    se = np.where(se > exact, se, 0.0)  # rounding-level spreads of a constant are no noise
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.where(se > 0, diff / se, np.where(diff > exact, np.inf, 0.0))
     return float(np.max(z))
