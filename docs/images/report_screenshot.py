@@ -5,6 +5,7 @@ and the approximations map (three screenshots of the real page, stacked).
 """
 import io
 import sys
+from pathlib import Path
 
 from PIL import Image
 from playwright.sync_api import sync_playwright
@@ -14,7 +15,7 @@ shots = []
 with sync_playwright() as p:
     b = p.chromium.launch(executable_path="/usr/bin/chromium", args=["--no-sandbox"])
     page = b.new_page(viewport={"width": 1400, "height": 1000})
-    page.goto("file://" + html)
+    page.goto(Path(html).resolve().as_uri())
     shots.append(page.screenshot(clip={"x": 0, "y": 0, "width": 1400, "height": 520}))
     row = page.locator('tr[id="renderer/mitsuba/sphere-on-floor"]')
     details = row.locator("xpath=following-sibling::tr[1]//details").first
