@@ -27,6 +27,8 @@ from .seed_film import seed_reflectance, seed_rgb
 
 MODELS = {
     "Belcour-Barla (MaterialX, OpenPBR, Standard Surface, Cycles)": belcour_barla_rgb,
+    "Belcour-Barla fit alone (XYZ to sRGB with E to D65)":
+        lambda *a: belcour_barla_rgb(*a, sensitivity="gaussian-srgb"),
     "glTF KHR_materials_iridescence": gltf_iridescence_rgb,
     "seed code (double phase, 3 wavelengths)": seed_rgb,
 }

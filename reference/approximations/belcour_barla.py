@@ -80,13 +80,28 @@ def xyz_sensitivity_exact(opd_nm, shift) -> np.ndarray:
     return np.cos(arg) @ W.T
 
 
+@lru_cache(maxsize=1)
+def _xyz_e_to_srgb() -> np.ndarray:
+    """XYZ under illuminant E -> linear sRGB (D65) with a Bradford adaptation E -> D65."""
+    import colour
+
+    from bsdflab.spectra.colour_weights import rgb_colourspace
+
+    cs = rgb_colourspace()
+    cat = colour.adaptation.matrix_chromatic_adaptation_VonKries(
+        np.ones(3), colour.xy_to_XYZ(cs.whitepoint), transform="Bradford")
+    return cs.matrix_XYZ_to_RGB @ cat
+
+
 def _sensitivity(kind: str):
     """(sensitivity in the accumulation space, matrix to RGB or None, clamp?)"""
     if kind == "gaussian":
         return xyz_sensitivity_gaussian, XYZ_TO_CIE_RGB, True
+    if kind == "gaussian-srgb":
+        return xyz_sensitivity_gaussian, _xyz_e_to_srgb(), False
     if kind == "exact":
         return xyz_sensitivity_exact, None, False
-    raise ValueError(f"sensitivity must be 'gaussian' or 'exact', got {kind!r}")
+    raise ValueError(f"sensitivity must be 'gaussian', 'gaussian-srgb' or 'exact', got {kind!r}")
 
 
 def belcour_barla_xyz(n_outer, n_film, n_base, thickness_nm, cos_theta, *, terms: int = 2) -> np.ndarray:
@@ -102,7 +117,9 @@ def belcour_barla_rgb(n_outer, n_film, n_base, thickness_nm, cos_theta, *, terms
     ``thickness_nm`` between real media ``n_outer`` (light's side) and ``n_base``, for light
     arriving at ``cos_theta`` (in the outer medium); arguments broadcast.
 
-    terms : harmonics kept (>= 1); sensitivity : "gaussian" (the paper, MaterialX's RGB) or
+    terms : harmonics kept (>= 1); sensitivity : "gaussian" (the paper's fit, MaterialX's
+    CIE RGB), "gaussian-srgb" (the same fit, XYZ taken to linear sRGB with a Bradford
+    adaptation E -> D65: the fit's error without MaterialX's colour-space shortcut) or
     "exact" (linear sRGB, D65). Total internal reflection at the film returns 1.
     """
     S, to_rgb, clamp = _sensitivity(sensitivity)
