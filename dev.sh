@@ -9,10 +9,9 @@ set -euo pipefail
 cd "$(dirname "$0")"
 
 # libembree-dev: ray intersection for the renderer; libllvm19: Mitsuba's llvm_ad_* variants
-# (the default LLVM 15 crashes them); python3-venv/-dev: a venv and headers on Debian's Python.
-SYSTEM_PACKAGES=(build-essential python3-dev python3-venv libembree-dev libllvm19)
-# chromium: the headless browser the report tests open bsdflab validate's HTML in (via playwright).
-SYSTEM_PACKAGES+=(chromium)
+# (the default LLVM 15 crashes them); python3-venv/-dev: a venv and headers on Debian's Python;
+# chromium: the service page's real-browser test (driven by pip playwright, no browser download).
+SYSTEM_PACKAGES=(build-essential python3-dev python3-venv libembree-dev libllvm19 chromium)
 VENV=.venv
 
 install_system_packages() {

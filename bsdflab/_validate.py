@@ -9,14 +9,37 @@ import numpy as np
 # are accepted; anything further off is a caller's bug, not rounding).
 UNIT_TOLERANCE = 1e-4
 
+# Physical ranges (docs/limits.md). Refractive indices (the real part n, and a
+# conductor's eta) from 1e-3 to 1e3 cover every optical material, metals' n < 1 and
+# metamaterials included; beyond them the Fresnel and Snell arithmetic loses all precision
+# (n = 1e-200 samples NaN directions, 1e200 overflows the microfacet terms). Extinction
+# k is bounded the same way; two indices in range have a ratio within [1e-6, 1e6].
+MIN_IOR, MAX_IOR = 1e-3, 1e3
+MAX_EXTINCTION = 1e3
+# Wavelengths from 1 nm (soft X-ray; shorter ones -- denormals gave NaN -- break the
+# phase arithmetic) to 1e12 nm: long wavelengths only make phases vanish, and the
+# scaled-stack identity of plots/film_colour evaluates at lambda / s up to ~1e12 nm.
+MIN_WAVELENGTH_NM, MAX_WAVELENGTH_NM = 1.0, 1e12
+# Film thicknesses: 0 to 1 m (an opaque absorbing layer may be thick; phases 2 pi n d / lambda
+# stay below 1e13 rad, finite in double precision; 1e308 gave NaN).
+MAX_FILM_THICKNESS_NM = 1e9
+# Seeds are the core's uint64; counts of work (walks, depths) its int32 and far below.
+MAX_SEED = (1 << 64) - 1
+MAX_COUNT = 1 << 24
+_NUMBER_ERRORS = (TypeError, ValueError, OverflowError)
+
 
 def real_scalar(name: str, value: Any, lo: float | None = None, hi: float | None = None,
                 lo_open: bool = False, hi_open: bool = False) -> float:
     """A finite real number in [lo, hi] (or open ends when asked)."""
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{name} must be a real number, got {brief(value)}")
     try:
         v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
+    except OverflowError:
+        raise ValueError(f"{name} must be finite, got {brief(value)}") from None
+    except _NUMBER_ERRORS:
+        raise ValueError(f"{name} must be a real number, got {brief(value)}") from None
     if not np.isfinite(v):
         raise ValueError(f"{name} must be finite, got {v}")
     _check_range(name, np.array([v]), lo, hi, lo_open, hi_open)
@@ -26,10 +49,7 @@ def real_scalar(name: str, value: Any, lo: float | None = None, hi: float | None
 def real_array(name: str, value: Any, lo: float | None = None, hi: float | None = None,
                lo_open: bool = False, hi_open: bool = False, ndim: int | None = None) -> np.ndarray:
     """A finite float64 array with every entry in the given range."""
-    try:
-        a = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an array of real numbers") from None
+    a = _float_array(name, value, "an array of real numbers")
     if ndim is not None and a.ndim != ndim:
         raise ValueError(f"{name} must be {ndim}-dimensional, got shape {a.shape}")
     if a.size == 0:
@@ -52,17 +72,15 @@ def directions(name: str, value: Any) -> np.ndarray:
 
     A single direction of shape (3,) is promoted to (1, 3).
     """
-    try:
-        a = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an array of shape (N, 3)") from None
+    a = _float_array(name, value, "an array of shape (N, 3)")
     if a.ndim == 1:
         a = a[None, :]
     if a.ndim != 2 or a.shape[1] != 3:
         raise ValueError(f"{name} must have shape (N, 3) or (3,), got {np.shape(value)}")
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be finite (found NaN or infinity)")
-    length = np.linalg.norm(a, axis=1)
+    with np.errstate(over="ignore"):  # huge entries: an infinite length, refused below
+        length = np.linalg.norm(a, axis=1)
     bad = np.abs(length - 1.0) > UNIT_TOLERANCE
     if np.any(bad):
         raise ValueError(f"{name} must be unit vectors (|w| = 1 within {UNIT_TOLERANCE}); "
@@ -93,28 +111,113 @@ def uniforms(name: str, value: Any, shape: tuple[int, ...]) -> np.ndarray:
 
 
 def lobe_mask(value: Any) -> int:
+    if isinstance(value, (str, bytes, float, np.floating)):
+        raise ValueError(f"lobes must be a Lobe flag, got {brief(value)}")
     try:
         v = int(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"lobes must be a Lobe flag, got {value!r}") from None
+    except _NUMBER_ERRORS:
+        raise ValueError(f"lobes must be a Lobe flag, got {brief(value)}") from None
     if v < 0 or v > 63:
-        raise ValueError(f"lobes must be a combination of Lobe flags (0..63), got {v}")
+        raise ValueError(f"lobes must be a combination of Lobe flags (0..63), got {brief(v)}")
     return v
 
 
-def seed(value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {value!r}")
+def seed(value: Any, name: str = "seed") -> int:
+    return integer(name, value, 0, MAX_SEED)
+
+
+def integer(name: str, value: Any, lo: int, hi: int) -> int:
+    """An int (or numpy integer; not a bool) in [lo, hi]."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
+        raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {brief(value)}")
     return int(value)
 
 
-def per_row(name: str, value: Any, n: int, lo: float | None = None) -> np.ndarray | None:
+def flag(name: str, value: Any) -> bool:
+    """A boolean: True or False (numpy bools too); not 0/1, strings or other truthy things."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be true or false, got {brief(value)}")
+    return bool(value)
+
+
+def count(name: str, value: Any, hi: int = MAX_COUNT) -> int:
+    """A positive amount of work (walks, depth): an integer in [1, hi]."""
+    return integer(name, value, 1, hi)
+
+
+def ior(name: str, value: Any) -> float:
+    """A real refractive index in [MIN_IOR, MAX_IOR]."""
+    return real_scalar(name, value, MIN_IOR, MAX_IOR)
+
+
+def wavelengths_nm(name: str, value: Any) -> np.ndarray:
+    """Vacuum wavelengths in nm within [MIN_WAVELENGTH_NM, MAX_WAVELENGTH_NM]."""
+    return real_array(name, value, MIN_WAVELENGTH_NM, MAX_WAVELENGTH_NM)
+
+
+def film_thickness(name: str, value: Any, array: bool = False):
+    """Film thickness(es) in nm within [0, MAX_FILM_THICKNESS_NM]."""
+    if array:
+        return real_array(name, value, 0.0, MAX_FILM_THICKNESS_NM)
+    return real_scalar(name, value, 0.0, MAX_FILM_THICKNESS_NM)
+
+
+def _float_array(name: str, value: Any, what: str) -> np.ndarray:
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{name} must be {what}, got {brief(value)}")
+    try:
+        return np.asarray(value, dtype=np.float64)
+    except OverflowError:
+        raise ValueError(f"{name} must be finite (an integer too large for a float)") from None
+    except _NUMBER_ERRORS:
+        raise ValueError(f"{name} must be {what}") from None
+
+
+def one_line(text: str, limit: int = 200) -> str:
+    """A message squeezed to one line of at most ``limit`` characters."""
+    text = " ".join(str(text).split())
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def brief(value: Any, limit: int = 60) -> str:
+    """repr(value) cut to one short line (huge or nested inputs stay readable)."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 64:
+        return f"an integer of {value.bit_length()} bits"
+    try:
+        text = repr(value)
+    except Exception:  # a hostile __repr__ must not replace the real error
+        text = f"<{type(value).__name__}>"
+    return one_line(text, limit)
+
+
+def per_row(name: str, value: Any, n: int, lo: float | None = None,
+            hi: float | None = None) -> np.ndarray | None:
     """None, a number, or one value per row: a float64 array of shape (n,) or None."""
     if value is None:
         return None
-    a = real_array(name, value, lo)
+    a = real_array(name, value, lo, hi)
     if a.ndim == 0:
         return np.full(n, float(a))
     if a.shape != (n,):
         raise ValueError(f"{name} must be a number or have shape ({n},), got {a.shape}")
     return np.ascontiguousarray(a)
+
+
+MAX_NESTING = 64  # dicts and lists inside each other in a request (a scene needs ~8)
+
+
+def nesting(name: str, value: Any, limit: int = MAX_NESTING) -> None:
+    """Refuse JSON-like data nested more than ``limit`` levels deep (checked without
+    recursion, so hostile depth cannot exhaust the stack)."""
+    stack = [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, dict):
+            children = item.values()
+        elif isinstance(item, (list, tuple)):
+            children = item
+        else:
+            continue
+        if depth > limit:
+            raise ValueError(f"{name} is nested more than {limit} levels deep")
+        stack.extend((child, depth + 1) for child in children)

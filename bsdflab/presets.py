@@ -7,8 +7,12 @@ absorbs light on the way down and back up; a diffuse base gives the natural dark
 Parameters and where they come from
 -----------------------------------
 * Outer medium: keratin, n = 1.532 + 5890 / lambda^2 (lambda in nm), Leertouwer, Wilts &
-  Stavenga 2011 (Opt. Express 19:24061). The interface needs one real index to bend rays,
-  so the slab uses keratin's value at 550 nm (1.5515); the film sees the full dispersion.
+  Stavenga 2011 (Opt. Express 19:24061). An interface needs one real index to bend rays,
+  so the slab *and* the film's substrate use keratin's value at 550 nm (1.5515, computed
+  from KERATIN_CAUCHY): keratin's dispersion (n falls from 1.569 at 400 nm to 1.544 at
+  700 nm) is not modelled, and the guanine film's index is constant too. The film's
+  colours come from interference, whose phase 4 pi n d cos / lambda the ~1 % index change
+  would shift by well under the spread of film thicknesses the paper sweeps.
 * Iridophore film: guanine crystals, n ~ 1.83 (same literature as the digest); no measured
   film thickness exists for Xenopeltis -- the paper sweeps 300-1200 nm; we default to the
   seed implementation's 400 nm. The stack variant uses guanine platelets of 80 nm (within
@@ -26,12 +30,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import _validate as check
 from .bsdfs import Diffuse, RoughDielectric
+from .bsdfs.interface_term import MAX_FILM_LAYERS
 from .layered import Layered, Slab
 from .spectra import Spectrum
 
 KERATIN_CAUCHY = {"model": "cauchy", "A": 1.532, "B": 5890.0}
-KERATIN_IOR_550 = 1.532 + 5890.0 / 550.0**2
+KERATIN_IOR_550 = KERATIN_CAUCHY["A"] + KERATIN_CAUCHY["B"] / 550.0**2
 GUANINE_IOR = 1.83
 CYTOPLASM_IOR = 1.33
 AIR_IOR = 1.000277
@@ -40,18 +46,36 @@ ROUGHNESS = 0.08
 BASE_RGB = (0.05, 0.035, 0.025)
 
 
+# A platelet and the gap below it are two film layers; the last platelet has no gap.
+MAX_PLATELETS = (MAX_FILM_LAYERS + 1) // 2
+
+
 def melanin_absorption(sigma_550: float = 1.2, exponent: float = 3.33) -> Spectrum:
-    """sigma_a(lambda) = sigma_550 (lambda / 550 nm)^-exponent in 1/um, on 380-780 nm."""
+    """sigma_a(lambda) = sigma_550 (lambda / 550 nm)^-exponent in 1/um, on 380-780 nm.
+
+    sigma_550 in [0, 1e6] 1/um (the slab's range); exponent in [0, 10] (melanins: 2.5-4)."""
+    sigma_550 = check.real_scalar("sigma_550", sigma_550, 0.0, 1e6)
+    exponent = check.real_scalar("exponent", exponent, 0.0, 10.0)
     wl = np.linspace(380.0, 780.0, 81)
-    return Spectrum.tabulated(wl, sigma_550 * (wl / 550.0) ** -exponent, name="sigma_a")
+    values = sigma_550 * (wl / 550.0) ** -exponent
+    check.real_array("sigma_a", values, 0.0, 1e6)  # the slab's range over the whole grid
+    return Spectrum.tabulated(wl, values, name="sigma_a")
 
 
-def guanine_film(thickness_nm: float = FILM_THICKNESS_NM) -> list[dict]:
-    return [{"material": GUANINE_IOR, "thickness_nm": thickness_nm}]
+def guanine_film(thickness_nm: float = FILM_THICKNESS_NM, ior: float = GUANINE_IOR) -> list[dict]:
+    """One film of ``thickness_nm`` in [0, 1e9] nm and index ``ior`` (guanine by default)."""
+    return [{"material": check.real_scalar("ior", ior, 1e-3, 1e3),
+             "thickness_nm": check.film_thickness("thickness_nm", thickness_nm)}]
 
 
 def iridophore_stack(platelets: int = 5, platelet_nm: float = 80.0, gap_nm: float = 100.0) -> list[dict]:
-    """Alternating guanine platelets and cytoplasm gaps (a multilayer reflector)."""
+    """Alternating guanine platelets and cytoplasm gaps (a multilayer reflector).
+
+    platelets: an integer in [1, 16] (2 platelets - 1 layers fit the core's 32-layer film);
+    platelet_nm, gap_nm: thicknesses in [0, 1e9] nm."""
+    platelets = check.integer("platelets", platelets, 1, MAX_PLATELETS)
+    platelet_nm = check.film_thickness("platelet_nm", platelet_nm)
+    gap_nm = check.film_thickness("gap_nm", gap_nm)
     layers = []
     for i in range(platelets):
         layers.append({"material": GUANINE_IOR, "thickness_nm": platelet_nm})
@@ -60,37 +84,48 @@ def iridophore_stack(platelets: int = 5, platelet_nm: float = 80.0, gap_nm: floa
     return layers
 
 
-def _top(film) -> RoughDielectric:
-    return RoughDielectric(ROUGHNESS, int_ior=KERATIN_IOR_550, ext_ior=AIR_IOR, film=film)
+PIGMENT_SIGMA_550 = 1.2
 
 
-def _pigment_slab() -> Slab:
-    return Slab(thickness_um=4.0, sigma_a=melanin_absorption(), sigma_s=0.2,
+def _top(film, roughness: float = ROUGHNESS) -> RoughDielectric:
+    return RoughDielectric(roughness, int_ior=KERATIN_IOR_550, ext_ior=AIR_IOR, film=film)
+
+
+def _pigment_slab(sigma_550: float = PIGMENT_SIGMA_550) -> Slab:
+    return Slab(thickness_um=4.0, sigma_a=melanin_absorption(sigma_550), sigma_s=0.2,
                 phase={"type": "hg", "g": 0.6})
 
 
-def xenopeltis(film_thickness_nm: float = FILM_THICKNESS_NM, samples: int = 256, seed: int = 0) -> Layered:
+# Keyword overrides (the lobe explorer's sliders and `preset(name, **overrides)`):
+# film_ior: the iridophore film's index; roughness: GGX alpha of the top; pigment_absorption:
+# the melanin slab's sigma_a at 550 nm in 1/um; base_albedo: linear-sRGB albedo of the base.
+def xenopeltis(film_thickness_nm: float = FILM_THICKNESS_NM, samples: int = 256, seed: int = 0,
+               film_ior: float = GUANINE_IOR, roughness: float = ROUGHNESS,
+               pigment_absorption: float = PIGMENT_SIGMA_550, base_albedo=BASE_RGB) -> Layered:
     """The full model: guanine thin film on keratin, melanin slab, dark diffuse base."""
-    return Layered([_top(guanine_film(film_thickness_nm))], [_pigment_slab()],
-                   Diffuse(BASE_RGB), samples=samples, seed=seed)
+    return Layered([_top(guanine_film(film_thickness_nm, film_ior), roughness)], [_pigment_slab(pigment_absorption)],
+                   Diffuse(base_albedo), samples=samples, seed=seed)
 
 
-def xenopeltis_iridophore_stack(samples: int = 256, seed: int = 0) -> Layered:
+def xenopeltis_iridophore_stack(samples: int = 256, seed: int = 0, roughness: float = ROUGHNESS,
+                                pigment_absorption: float = PIGMENT_SIGMA_550,
+                                base_albedo=BASE_RGB) -> Layered:
     """As `xenopeltis` with a 5-platelet guanine/cytoplasm stack as the iridophore."""
-    return Layered([_top(iridophore_stack())], [_pigment_slab()], Diffuse(BASE_RGB),
-                   samples=samples, seed=seed)
+    return Layered([_top(iridophore_stack(), roughness)], [_pigment_slab(pigment_absorption)],
+                   Diffuse(base_albedo), samples=samples, seed=seed)
 
 
-def xenopeltis_diffuse() -> Diffuse:
+def xenopeltis_diffuse(base_albedo=BASE_RGB) -> Diffuse:
     """Ablation: the base colour alone (no film, no pigment slab, no gloss)."""
-    return Diffuse(BASE_RGB)
+    return Diffuse(base_albedo)
 
 
 def xenopeltis_thin_film(film_thickness_nm: float = FILM_THICKNESS_NM, samples: int = 256,
-                         seed: int = 0) -> Layered:
+                         seed: int = 0, film_ior: float = GUANINE_IOR, roughness: float = ROUGHNESS,
+                         base_albedo=BASE_RGB) -> Layered:
     """Ablation: the thin-film interface over the diffuse base, without the pigment slab."""
-    return Layered([_top(guanine_film(film_thickness_nm))], [Slab(thickness_um=0.0)],
-                   Diffuse(BASE_RGB), samples=samples, seed=seed)
+    return Layered([_top(guanine_film(film_thickness_nm, film_ior), roughness)], [Slab(thickness_um=0.0)],
+                   Diffuse(base_albedo), samples=samples, seed=seed)
 
 
 PRESETS = {
@@ -103,6 +138,9 @@ PRESETS = {
 
 def preset(name: str, **kwargs):
     """A preset by name (see PRESETS)."""
-    if name not in PRESETS:
-        raise ValueError(f"unknown preset {name!r}; known presets: {', '.join(PRESETS)}")
-    return PRESETS[name](**kwargs)
+    if not isinstance(name, str) or name not in PRESETS:
+        raise ValueError(f"unknown preset {check.brief(name)}; known presets: {', '.join(PRESETS)}")
+    try:
+        return PRESETS[name](**kwargs)
+    except TypeError as e:  # an option the preset does not take
+        raise ValueError(f"preset {name!r}: {check.one_line(e)}") from None

@@ -1,6 +1,6 @@
 """Cross-check bsdflab's BSDFs against Mitsuba 3, query by query.
 
-    python3 -m bsdflab.reference.mitsuba_bsdf     # reports for the standard materials
+    python3 -m bsdflab.reference     # reports for the standard materials (__main__.py)
 
 ``to_mitsuba`` turns a bsdflab BSDF into a Mitsuba plugin dict; ``compare_bsdf`` draws
 random queries (query_sets.py), answers them in both codes from identical float32
@@ -19,9 +19,14 @@ dielectric,twosided}.cpp, include/mitsuba/render/fresnel.h):
     Mitsuba scales transmitted weights by eta_ti^2 = (n_i / n_t)^2, as bsdflab does;
     sample eta is n_t / n_i in both.
   * two-sided: Mitsuba's ``twosided`` mirrors wi and wo to the upper side, as bsdflab.
-  * rough (GGX) interfaces go over as ``roughconductor`` / ``roughdielectric`` with
-    distribution 'ggx', the same alpha and sample_visible; mitsuba_rough.py compares
-    them, since the two codes warp uniforms to visible normals differently.
+  * rough interfaces go over as ``roughconductor`` / ``roughdielectric`` with their
+    distribution ('ggx' or 'beckmann'), the same alpha and sample_visible; mitsuba_rough.py
+    compares them, since the two codes warp uniforms to visible normals differently. The
+    energy-compensated (multiscatter) models have no Mitsuba counterpart.
+
+The helpers the rough comparison shares (``comparison_setup``, ``critical_side``,
+``comparison_notes``, ``summarise``) are public here; this module imports nothing of
+mitsuba_rough.py.
 """
 from __future__ import annotations
 
@@ -106,6 +111,8 @@ def to_mitsuba(bsdf, wavelength: float | None = None) -> dict[str, Any]:
     kind = d["type"]
     if d.get("film"):
         raise ValueError(f"a thin-film coated {kind} has no Mitsuba counterpart")
+    if d.get("multiscatter"):
+        raise ValueError(f"an energy-compensated (multiscatter) {kind} has no Mitsuba counterpart")
     if kind == "diffuse":
         plugin = {"type": "diffuse",
                   "reflectance": _value(Spectrum.from_dict(d["reflectance"]), wl, "reflectance")}
@@ -118,8 +125,9 @@ def to_mitsuba(bsdf, wavelength: float | None = None) -> dict[str, Any]:
     else:
         raise ValueError(f"no Mitsuba counterpart for bsdflab BSDF type {kind!r} (supported: "
                          "diffuse, conductor, dielectric, roughconductor, roughdielectric)")
-    if kind.startswith("rough"):  # GGX, separable Smith G, visible-normal sampling
-        plugin.update(distribution="ggx", alpha=float(d["alpha"]), sample_visible=True)
+    if kind.startswith("rough"):  # separable Smith G, visible-normal sampling
+        plugin.update(distribution=d.get("distribution", "ggx"), alpha=float(d["alpha"]),
+                      sample_visible=True)
     if d.get("two_sided"):
         plugin = {"type": "twosided", "bsdf": plugin}
     return plugin
@@ -145,7 +153,7 @@ def _rgb_round_trip(d: dict, wavelength) -> tuple[float, str]:
                    f"relative {worst:.1e}; added to the target")
 
 
-def _notes(d: dict) -> tuple[str, ...]:
+def comparison_notes(d: dict) -> tuple[str, ...]:
     if d["type"] in ("conductor", "roughconductor"):
         return (f"Mitsuba's conductor takes the relative index: (eta, k) / ext_ior, "
                 f"ext_ior = {d['ext_ior']:g}",)
@@ -154,7 +162,7 @@ def _notes(d: dict) -> tuple[str, ...]:
     return ()
 
 
-def _critical(d: dict) -> tuple[float, int] | None:
+def critical_side(d: dict) -> tuple[float, int] | None:
     """(eta_ti > 1, side) of the dense side of a refracting interface, else None."""
     if d["type"] not in ("dielectric", "roughdielectric") or d["int_ior"] == d["ext_ior"]:
         return None
@@ -162,7 +170,7 @@ def _critical(d: dict) -> tuple[float, int] | None:
     return (eta, -1) if eta > 1 else (1 / eta, 1)
 
 
-def _setup(bsdf, n_pairs, wavelength, target):
+def comparison_setup(bsdf, n_pairs, wavelength, target):
     """Checked arguments of a comparison: (BSDF dict, wavelength, target, text of the
     model difference that widened the default target, or '')."""
     d = _bsdf_dict(bsdf)
@@ -185,11 +193,11 @@ def compare_bsdf(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | N
     Mitsuba's RGB instead. target: relative error allowed on well-conditioned pairs;
     default TARGET (1e-5), plus the spectral round trip of RGB parameters in sRGB mode.
     """
-    d, wl, target, round_trip_text = _setup(bsdf, n_pairs, wavelength, target)
+    d, wl, target, round_trip_text = comparison_setup(bsdf, n_pairs, wavelength, target)
     # The object itself answers (so a model that differs from its dict, e.g. one injected by
     # bsdflab.validation to prove the check has power, is what gets compared).
     b = bsdf if _is_model(bsdf) else from_dict(d)
-    q = draw_queries(int(n_pairs), seed, _critical(d))
+    q = draw_queries(int(n_pairs), seed, critical_side(d))
     channels = None if wl is None else [wl]
     ours = bsdflab_answers(b, q, channels)
     theirs = mitsuba_answers(to_mitsuba(d, wl), q)
@@ -197,14 +205,14 @@ def compare_bsdf(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | N
     err = errors_between(ours, theirs, same_lobe & (ours["lobe"] != 0))
 
     sens, flips = sensitivity(d, q, ours, channels)
-    return _summarise(
+    return summarise(
         repr(b), wl, err, sens, flips, lambda idx: reasons(d, q, ours, idx, flips),
         same_lobe=same_lobe, sampled=same_lobe & (ours["lobe"] != 0),
         validity_mismatch=(ours["lobe"] != 0) != (theirs["lobe"] != 0), target=target,
-        model_difference=round_trip_text, notes=_notes(d))
+        model_difference=round_trip_text, notes=comparison_notes(d))
 
 
-def _summarise(label: str, wl, err: dict, sens: dict, flips: np.ndarray, why, *,
+def summarise(label: str, wl, err: dict, sens: dict, flips: np.ndarray, why, *,
                same_lobe: np.ndarray, sampled: np.ndarray, validity_mismatch: np.ndarray,
                target: float, model_difference: str, notes: tuple[str, ...],
                quantities: tuple[str, ...] = QUANTITIES) -> Comparison:
@@ -265,23 +273,3 @@ def standard_cases() -> list[tuple[str, BSDF, float | None]]:
         ("dielectric-int-lt-ext", Dielectric(1.0, 1.33), 550.0),
         ("dielectric-diamond", Dielectric(2.419, 1.000277), 550.0),
     ]
-
-
-def main() -> int:
-    from .mitsuba_rough import compare_rough, rough_cases  # it builds on this module
-
-    failed = []
-    cases = [(*c, compare_bsdf) for c in standard_cases()]
-    cases += [(*c, compare_rough) for c in rough_cases()]
-    for name, bsdf, wl, compare in cases:
-        c = compare(bsdf, n_pairs=1000, seed=0, wavelength=wl)
-        print(f"[{name}]\n{c.report()}\n")
-        if not c.passed:
-            failed.append(name)
-    print(f"{len(cases) - len(failed)}/{len(cases)} agree with Mitsuba"
-          + (f"; FAILED: {', '.join(failed)}" if failed else ""))
-    return 1 if failed else 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -1,6 +1,7 @@
-"""Cross-check bsdflab's rough (GGX) interfaces against Mitsuba 3, query by query.
+"""Cross-check bsdflab's rough (GGX and Beckmann) interfaces against Mitsuba 3, query by
+query.
 
-    python3 -m bsdflab.reference.mitsuba_bsdf     # reports, rough materials included
+    python3 -m bsdflab.reference     # reports, rough materials included
 
 ``RoughConductor`` / ``RoughDielectric`` go over as Mitsuba's ``roughconductor`` /
 ``roughdielectric`` (mitsuba_bsdf.to_mitsuba). Both codes warp uniforms to visible
@@ -20,6 +21,15 @@ totally) the checks are:
 
 Errors are relative to Mitsuba's value (comparison.py); which queries float32 cannot
 resolve, and their bounds, come from rough_conditioning.py.
+
+Beckmann: Mitsuba 3 evaluates Smith's G1 by a rational approximation (relative error up
+to ~0.35 %; Walter et al. 2007, eq. 27) in eval, pdf and the sample weight, while bsdflab
+uses the exact Lambda. Mitsuba's answers are converted to the exact G1 per direction
+(``exact_g1_factor``: eval by the factors of wi and wo, pdf and sample pdf by wi's, the
+sample weight by its wo's) before they are compared; everything else -- D, the warp, the
+Fresnel terms, the Jacobians -- is compared as is. The sampled slopes of both codes come
+from the same uniforms (u_x along the incident azimuth, u_y across it), which Mitsuba
+clamps to [1e-6, 1 - 1e-6].
 """
 from __future__ import annotations
 
@@ -28,10 +38,11 @@ from dataclasses import replace
 import numpy as np
 
 from bsdflab.bsdfs import BSDF, from_dict
+from bsdflab.oracles.microsurface import smith_lambda
 
 from .comparison import QUANTITIES, Comparison, errors_between, rel_error
 from .conditioning import ILL_CONDITIONED, INPUT_PERTURBATION
-from .mitsuba_bsdf import _critical, _notes, _setup, _summarise, to_mitsuba
+from .mitsuba_bsdf import comparison_notes, comparison_setup, critical_side, summarise, to_mitsuba
 from .mitsuba_calls import mitsuba_answers
 from .query_sets import bsdflab_answers, draw_queries
 from .rough_conditioning import pair_values, rough_reasons, rough_sensitivity
@@ -45,6 +56,40 @@ WARP_NOTE = ("visible-normal warps differ (bsdflab: polar disk; Mitsuba: concent
              "Mitsuba's disk point; each code's own samples cross-evaluated by the other")
 
 
+BECKMANN_WARP_NOTE = ("visible slopes: both codes invert the same CDFs (Heitz & d'Eon 2014) "
+                      "from the same uniforms (Mitsuba's clamp to [1e-6, 1 - 1e-6] applied); "
+                      "each code's own samples cross-evaluated by the other")
+BECKMANN_NOTE = ("Mitsuba's Beckmann G1 is a rational approximation (<= 0.35 %): its eval, "
+                 "pdf and weights are converted to the exact Smith G1 per direction")
+
+
+def mitsuba_g1(alpha: float, w: np.ndarray) -> np.ndarray:
+    """Mitsuba 3's Beckmann G1 of directions w (N, 3) (the rational fit of Walter et al.
+    2007, eq. 27, in a = 1 / (alpha tan theta); 1 at and beyond a = 1.6)."""
+    sin = np.hypot(w[:, 0], w[:, 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.abs(w[:, 2]) / (alpha * sin)
+        fit = (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
+    return np.where((sin == 0) | (a >= 1.6), 1.0, fit)
+
+
+def exact_g1_factor(d: dict, w: np.ndarray) -> np.ndarray:
+    """Exact Smith G1 over Mitsuba's G1 for directions w (N, 3): 1 for GGX (both exact)."""
+    if d.get("distribution", "ggx") != "beckmann":
+        return np.ones(len(w))
+    up = w * np.where(w[:, 2] < 0, -1.0, 1.0)[:, None]
+    exact = 1.0 / (1.0 + smith_lambda("beckmann", d["alpha"], up))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(exact > 0, exact / mitsuba_g1(d["alpha"], up), 1.0)
+
+
+def exact_g1_answers(d: dict, answers: dict, q) -> dict:
+    """Mitsuba's answers to queries q with its G1 replaced by the exact one (module doc)."""
+    ci, co, cs = (exact_g1_factor(d, w) for w in (q.wi, q.wo, answers["wo"]))
+    return {**answers, "eval": answers["eval"] * (ci * co)[:, None], "pdf": answers["pdf"] * ci,
+            "weight": answers["weight"] * cs[:, None], "sample_pdf": answers["sample_pdf"] * ci}
+
+
 def _ratio(value: np.ndarray, pdf: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(pdf[:, None] > 0, value / pdf[:, None], 0.0)
@@ -55,16 +100,16 @@ def compare_rough(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | 
     """Compare a bsdflab rough interface with Mitsuba 3 on ``n_pairs`` random queries
     (arguments as mitsuba_bsdf.compare_bsdf); the record's quantities are
     ROUGH_QUANTITIES (module doc)."""
-    d, wl, target, model_difference = _setup(bsdf, n_pairs, wavelength, target)
+    d, wl, target, model_difference = comparison_setup(bsdf, n_pairs, wavelength, target)
     if d["type"] not in ROUGH_TYPES:
         raise ValueError(f"compare_rough compares {', '.join(ROUGH_TYPES)}, got {d['type']!r}")
     b, plugin = from_dict(d), to_mitsuba(d, wl)
     channels = None if wl is None else [wl]
-    q = draw_queries(int(n_pairs), seed, _critical(d))
+    q = draw_queries(int(n_pairs), seed, critical_side(d))
     mapped = replace(q, u2=bsdflab_uniforms(d, q.u2, q.wi))
 
     ours = bsdflab_answers(b, mapped, channels)   # eval / pdf of (wi, wo); mapped samples
-    theirs = mitsuba_answers(plugin, q)
+    theirs = exact_g1_answers(d, mitsuba_answers(plugin, q), q)
     own = b.sample(q.wi, q.u1, q.u2, wavelengths=channels)  # bsdflab's own warp
     ok = {"ours": ours["lobe"] != 0, "theirs": theirs["lobe"] != 0, "own": own.lobe != 0}
     # Sampled directions; the pair's wo where there is no sample (results there unused).
@@ -72,7 +117,8 @@ def compare_rough(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | 
     wo = {"ours": fill(ok["ours"], ours["wo"]), "theirs": fill(ok["theirs"], theirs["wo"]),
           "own": fill(ok["own"], own.wo),
           "own32": fill(ok["own"], own.wo.astype(np.float32).astype(np.float64))}
-    at_own = mitsuba_answers(plugin, replace(q, wo=wo["own32"]))
+    own_q = replace(q, wo=wo["own32"])
+    at_own = exact_g1_answers(d, mitsuba_answers(plugin, own_q), own_q)
     at = {k: pair_values(b, q.wi, v, channels) for k, v in wo.items()}  # bsdflab's eval / pdf
     sens = rough_sensitivity(d, mapped, (q.wo, wo["own32"], wo["theirs"]), ours, channels)
 
@@ -113,12 +159,14 @@ def compare_rough(bsdf, n_pairs: int = 1000, seed: int = 0, wavelength: float | 
                          | (ok["theirs"] & ~(at["theirs"].pdf > 0)))
     steep = np.any([v > ILL_CONDITIONED for v in moved.values()], axis=0)
     all_wo = (q.wo, wo["own32"], wo["theirs"], wo["ours"])
-    return _summarise(
+    return summarise(
         repr(b), wl, err, s, sens.flips,
         lambda idx: rough_reasons(d, q.wi, all_wo, idx, sens.flips, steep),
         same_lobe=same_lobe, sampled=sampled,
         validity_mismatch=validity_mismatch, target=target, model_difference=model_difference,
-        notes=_notes(d) + (WARP_NOTE,), quantities=ROUGH_QUANTITIES)
+        notes=comparison_notes(d) + ((BECKMANN_WARP_NOTE, BECKMANN_NOTE)
+                                     if d.get("distribution") == "beckmann" else (WARP_NOTE,)),
+        quantities=ROUGH_QUANTITIES)
 
 
 def rough_cases() -> list[tuple[str, BSDF, float | None]]:
@@ -133,6 +181,15 @@ def rough_cases() -> list[tuple[str, BSDF, float | None]]:
             (f"roughconductor-custom-a{a:g}", RoughConductor(a, eta=1.7, k=2.3, ext_ior=1.33), 550.0),
             (f"roughdielectric-glass-a{a:g}", RoughDielectric(a, 1.5, 1.0), 550.0),
             (f"roughdielectric-int-lt-ext-a{a:g}", RoughDielectric(a, 1.0, 1.33), 550.0),
+        ]
+    for a in (0.05, 0.3, 0.8):
+        cases += [
+            (f"roughconductor-Au-beckmann-a{a:g}",
+             RoughConductor(a, material="Au", distribution="beckmann"), 550.0),
+            (f"roughdielectric-glass-beckmann-a{a:g}",
+             RoughDielectric(a, 1.5, 1.0, distribution="beckmann"), 550.0),
+            (f"roughdielectric-int-lt-ext-beckmann-a{a:g}",
+             RoughDielectric(a, 1.0, 1.33, distribution="beckmann"), 550.0),
         ]
     return cases + [
         ("roughconductor-mirror-a0.3", RoughConductor(0.3), 550.0),

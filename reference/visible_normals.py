@@ -54,7 +54,14 @@ def _flip(d: dict, wi: np.ndarray) -> np.ndarray:
 
 def bsdflab_uniforms(d: dict, u2: np.ndarray, wi: np.ndarray) -> np.ndarray:
     """bsdflab's direction uniforms (N, 2) that select the visible normal Mitsuba's warp
-    selects for u2 (N, 2) and incident directions wi (N, 3), for the rough BSDF dict d."""
+    selects for u2 (N, 2) and incident directions wi (N, 3), for the rough BSDF dict d.
+
+    Beckmann: both codes invert the same slope CDFs (u_x along the incident azimuth, u_y
+    across it; Heitz & d'Eon 2014), so the uniforms are Mitsuba's own, float32-rounded and
+    clamped to its [1e-6, 1 - 1e-6]."""
+    if d.get("distribution", "ggx") == "beckmann":
+        u = np.asarray(u2, dtype=np.float32).astype(np.float64)
+        return np.clip(u, np.float32(1e-6), np.float32(1 - 1e-6)).astype(np.float64)
     x, y = mitsuba_disk_points(u2).T
     # Mitsuba's frame azimuth is that of the stretched wi, except where its float32
     # sin^2 theta is at most 4 epsilon: there it takes azimuth 0 (Frame3f::sincos_phi).

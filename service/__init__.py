@@ -1,5 +1,10 @@
-"""bsdflab.service: the HTTP API (FastAPI) over the Python API.
+"""bsdflab.service: the HTTP API (FastAPI) over the Python API and bsdflab.jobs.
 
-Ships inside the wheel as ``bsdflab.service`` (see pyproject.toml, wheel.packages). The
-application itself arrives with the service issue; nothing here computes physics.
+Ships inside the wheel as ``bsdflab.service`` (see pyproject.toml, wheel.packages); run it
+with ``bsdflab serve``. ``create_app(Settings(...))`` builds the application; nothing here
+computes physics (docs/service.md).
 """
+from .app import create_app
+from .settings import Settings
+
+__all__ = ["Settings", "create_app"]

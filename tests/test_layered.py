@@ -13,15 +13,14 @@ from scipy import stats
 import bsdflab as bl
 from bsdflab import Lobe
 from bsdflab.reference.mitsuba_calls import query
-from bsdflab.testing import albedo_uniform, random_unit_vectors
+from bsdflab.testing import albedo_uniform, random_unit_vectors, sidak_z_limit
 from conftest import directions_at
 
 SIGNIFICANCE = 0.01
 
 
 def z_limit(n: int, alpha: float = SIGNIFICANCE) -> float:
-    per_test = 1 - (1 - alpha) ** (1 / n)
-    return stats.norm.isf(per_test / 2)
+    return sidak_z_limit(alpha, n)
 
 
 def assert_agrees(value, err, ref, what="", model_error=None):
@@ -74,7 +73,11 @@ def test_02_matches_mitsuba_plastic_nonlinear(rho):
     ref = query(plugin, wi, wo, np.zeros(n), np.zeros((n, 2))).eval[:, 0]
     # Mitsuba works in float32 with a fitted F_dr: allow 2e-3 relative as model error
     assert_agrees(value[:, 0], err[:, 0], ref, "PFMC vs Mitsuba plastic", model_error=2e-3 * ref)
-    assert np.max(np.abs(value[:, 0] / ref - 1)) < 0.01
+    # The mean relative deviation over the pairs (no bias), against its own noise: a
+    # single pair's relative standard error is ~0.4 % here, so a fixed per-pair bound
+    # (formerly 1 %) is crossed by chance (1.26 % at z = -3.3 with another stream).
+    rel, rel_se = value[:, 0] / ref - 1, err[:, 0] / ref
+    assert abs(rel.mean()) < z_limit(1) * np.sqrt(np.sum(rel_se ** 2)) / n + 2e-3, rel.mean()
 
 
 def test_03_convergence_is_inverse_square_root():
@@ -207,5 +210,9 @@ def test_11_never_nan_and_terminates():
                    bl.Diffuse(1.0), samples=32, max_depth=1000)
     wi = random_unit_vectors(200, seed=12)
     wo = random_unit_vectors(200, seed=13)
-    v, e = m.eval_with_error(wi, wo, wavelengths=[550.0])
+    est = m.estimate(wi, wo, wavelengths=[550.0])
+    v, e = est.value, est.stderr
     assert np.all(np.isfinite(v)) and np.all(v >= 0) and np.all(np.isfinite(e))
+    # non-finite walks are counted, not zeroed in silence (test_layered_estimator.py
+    # shows the count catching them): a sound model has none
+    assert est.nonfinite == 0

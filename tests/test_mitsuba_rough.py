@@ -46,7 +46,9 @@ def test_01_standard_rough_materials_agree_with_mitsuba(name, bsdf, wavelength):
     assert c.target == TARGET
     # not vacuous: most random pairs resolve eval and pdf to the target, and a good share
     # of each code's samples is cross-evaluated at the target
-    assert min(c.n_well["eval"], c.n_well["pdf"]) >= 800, c.report()
+    # (Beckmann's exp(-tan^2 / alpha^2) amplifies float32 rounding on steep facets more)
+    beckmann = getattr(bsdf, "distribution", "ggx") == "beckmann"
+    assert min(c.n_well["eval"], c.n_well["pdf"]) >= (750 if beckmann else 800), c.report()
     assert min(c.n_well["weight@bsdflab_wo"], c.n_well["weight@mitsuba_wo"]) >= 600, c.report()
     # the mapped samples exist from both sides exactly when the model scatters there
     one_sided = isinstance(bsdf, RoughConductor) and not bsdf.two_sided
@@ -59,7 +61,9 @@ def test_02_required_rough_materials_are_in_the_standard_set():
     names = {c[0] for c in CASES}
     for alpha in ("0.05", "0.3", "0.8"):
         for material in ("roughconductor-Au", "roughconductor-Cu", "roughconductor-custom",
-                         "roughdielectric-glass", "roughdielectric-int-lt-ext"):
+                         "roughdielectric-glass", "roughdielectric-int-lt-ext",
+                         "roughconductor-Au-beckmann", "roughdielectric-glass-beckmann",
+                         "roughdielectric-int-lt-ext-beckmann"):
             assert f"{material}-a{alpha}" in names
     custom = dict((n, b) for n, b, _ in CASES)["roughconductor-custom-a0.3"]
     assert custom.ext_ior != 1.0  # the relative index Mitsuba takes is really exercised
@@ -123,6 +127,8 @@ def test_05_the_visible_normal_warps_differ_but_map_onto_each_other():
 
 def test_06_to_mitsuba_rough_dicts():
     ggx = {"distribution": "ggx", "alpha": 0.3, "sample_visible": True}
+    assert mb.to_mitsuba(RoughConductor(0.3, distribution="beckmann"), 550) == {
+        "type": "roughconductor", **ggx, "distribution": "beckmann"}
     assert mb.to_mitsuba(RoughConductor(0.3), 550) == {"type": "roughconductor", **ggx}
     assert mb.to_mitsuba(RoughDielectric(0.3, 1.5, 1.0)) == {
         "type": "roughdielectric", "int_ior": 1.5, "ext_ior": 1.0, **ggx}
@@ -143,6 +149,8 @@ def test_07_to_mitsuba_rejects_coated_rough_models_and_others():
                    RoughDielectric(0.3, 1.5, 1.0, film=FILM)):
         with pytest.raises(ValueError, match="thin-film"):
             mb.to_mitsuba(coated, 550)
+    with pytest.raises(ValueError, match="multiscatter"):
+        mb.to_mitsuba(RoughDielectric(0.3, 1.5, 1.0, multiscatter=True), 550)
     with pytest.raises(ValueError, match="tabulated"):
         mb.to_mitsuba(RoughConductor(0.3, material="Cu"))  # a measured spectrum needs a wavelength
     with pytest.raises(ValueError, match="compare_rough"):
@@ -154,8 +162,13 @@ def test_07_to_mitsuba_rejects_coated_rough_models_and_others():
 @pytest.mark.parametrize("break_it, bsdf, expect", [
     # a 1e-4 change of alpha
     (lambda p: {**p, "alpha": p["alpha"] * (1 + 1e-4)}, RoughDielectric(0.05, 1.5, 1.0), "eval"),
-    # Beckmann instead of GGX
+    # Beckmann instead of GGX, and back
     (lambda p: {**p, "distribution": "beckmann"}, RoughConductor(0.3, material="Au"), "eval"),
+    (lambda p: {**p, "distribution": "ggx"},
+     RoughDielectric(0.3, 1.5, 1.0, distribution="beckmann"), "eval"),
+    # a 1e-4 change of a Beckmann alpha
+    (lambda p: {**p, "alpha": p["alpha"] * (1 + 1e-4)},
+     RoughConductor(0.3, material="Cu", distribution="beckmann"), "eval"),
     # sampling all normals instead of the visible ones: another pdf
     (lambda p: {**p, "sample_visible": False}, RoughConductor(0.3, material="Cu"), "pdf"),
     # forgetting that Mitsuba's conductor index is relative to the outside medium
@@ -206,3 +219,37 @@ def test_10_report_names_the_checks():
         assert q in text
     assert "visible-normal warps differ" in text and "relative index" in text
     assert text.endswith("PASS")
+
+
+def test_11_beckmann_g1_conversion_is_needed_and_exact():
+    """Mitsuba's Beckmann G1 is a rational fit: without converting its answers to the
+    exact G1 the comparison fails (up to ~0.35 % per G1); with it, all agree to 1e-5
+    (test_01). The conversion factor is 1 for GGX and at normal incidence."""
+    b = RoughConductor(0.3, material="Au", distribution="beckmann")
+    q = draw_queries(1000, seed=0)
+    d = b.to_dict()
+    raw = mitsuba_answers(mb.to_mitsuba(b, 550.0), q)
+    ours = bsdflab_answers(b, q, [550.0])
+    ok = (raw["pdf"] > 0) & (ours["pdf"] > 0)
+    rel = np.abs(raw["pdf"][ok] / ours["pdf"][ok] - 1)
+    assert rel.max() > 1e-3  # the fit's error shows
+    fixed = mr.exact_g1_answers(d, raw, q)
+    rel_fixed = np.abs(fixed["pdf"][ok] / ours["pdf"][ok] - 1)
+    assert np.median(rel_fixed) < 1e-5
+    assert np.all(mr.exact_g1_factor(RoughConductor(0.3).to_dict(), q.wi) == 1.0)
+    assert mr.exact_g1_factor(d, np.array([[0.0, 0.0, 1.0]]))[0] == 1.0
+
+
+def test_12_no_import_cycle_and_a_package_main():
+    """mitsuba_bsdf.py imports nothing of mitsuba_rough.py (the shared helpers are public
+    in mitsuba_bsdf); the report runner lives in bsdflab.reference.__main__."""
+    import ast
+    import importlib
+    import inspect
+
+    tree = ast.parse(inspect.getsource(mb))
+    imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    imported |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    assert not any(name and "mitsuba_rough" in name for name in imported)
+    runner = importlib.import_module("bsdflab.reference.__main__")
+    assert callable(runner.main)

@@ -7,9 +7,6 @@ means whose variance the renderer estimates per pixel."""
 from __future__ import annotations
 
 import math
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -19,6 +16,7 @@ from bsdflab import _core
 from bsdflab.render import Camera, Environment, Material, Scene, Shape, render
 from bsdflab.render.build import build_render_scene
 from bsdflab.testing import ChiSquareTest
+from thread_images import images_per_thread_count
 
 Z = 3.9  # two-sided 1e-4
 
@@ -163,16 +161,8 @@ def test_08_same_seed_same_image_other_seed_other_image():
 
 
 def test_09_image_does_not_depend_on_thread_count(tmp_path):
-    code = ("import numpy as np, sys; sys.path.insert(0, %r); from test_render import light_over_plane;"
-            "from bsdflab.render import render;"
-            "np.save(sys.argv[1], render(light_over_plane(size=20), spp=6, seed=2, progress=False).mean)")
-    code = code % os.path.dirname(__file__)
-    out = {}
-    for threads in ("1", "2"):
-        path = tmp_path / f"t{threads}.npy"
-        env = dict(os.environ, BSDFLAB_THREADS=threads)
-        subprocess.run([sys.executable, "-c", code, str(path)], check=True, env=env)
-        out[threads] = np.load(path)
+    out = images_per_thread_count(tmp_path, "from test_render import light_over_plane; from bsdflab.render import render",
+                                  "render(light_over_plane(size=20), spp=6, seed=2, progress=False).mean")
     assert np.array_equal(out["1"], out["2"])
 
 

@@ -64,7 +64,10 @@ def test_04_interrupted_render_leaves_no_output(tmp_path):
     out_dir.mkdir()
     proc = subprocess.Popen([*BSDFLAB, "render", "basic-materials", "-o", "width=320", "-o", "height=240",
                              "--spp", "100000", "--out", str(out_dir / "x.exr")],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            # a runner started with SIGINT ignored (a shell background job)
+                            # would pass that on: the child must get the default handler
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     err = bytearray()
     started = threading.Event()
 

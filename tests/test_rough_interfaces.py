@@ -1,4 +1,5 @@
-"""Rough conductor / dielectric (GGX): chi2 of every sampler, consistency, furnace, reciprocity."""
+"""Rough conductor / dielectric (GGX, Beckmann): chi2 of every sampler, consistency, furnace,
+reciprocity, the Smith Lambda against quadrature, index-matched and extreme interfaces."""
 import numpy as np
 import pytest
 
@@ -26,6 +27,15 @@ CHI2_CASES = [
     (lambda: bl.RoughDielectric(0.2, 1.0, 1.33), 0.6),   # interior less dense than exterior
     (lambda: bl.RoughDielectric(0.3, 1.5, 1.0, film=FILM), 0.5),
     (lambda: bl.RoughDielectric(0.3, 1.5, 1.0, film=FILM), -0.5),
+    (lambda: bl.RoughConductor(0.5, material="Cu", distribution="beckmann"), 0.05),
+    (lambda: bl.RoughDielectric(0.3, 1.5, 1.0, distribution="beckmann"), -0.3),  # TIR
+    (lambda: bl.RoughDielectric(0.8, 1.0, 1.33, distribution="beckmann"), -0.8),
+    pytest.param(lambda: bl.RoughConductor(0.05, material="Au", distribution="beckmann"), 0.9,
+                 marks=pytest.mark.slow),
+    pytest.param(lambda: bl.RoughDielectric(0.3, 1.5, 1.0, distribution="beckmann"), 0.7,
+                 marks=pytest.mark.slow),
+    pytest.param(lambda: bl.RoughDielectric(0.2, 1.5, 1.0, film=FILM, distribution="beckmann"),
+                 0.5, marks=pytest.mark.slow),
 ]
 
 
@@ -44,12 +54,13 @@ def test_02_eval_pdf_consistency(make, cos_theta):
     assert r.max_pdf_error < 1e-8 and r.max_weight_error < 1e-8, r
 
 
+@pytest.mark.parametrize("dist", ["ggx", "beckmann"])
 @pytest.mark.parametrize("alpha", [0.05, 0.3, 0.8])
 @pytest.mark.parametrize("cos_theta", [1.0, 0.5, 0.1])
-def test_03_white_furnace_perfect_mirror_microfacets(alpha, cos_theta):
+def test_03_white_furnace_perfect_mirror_microfacets(dist, alpha, cos_theta):
     """With R = 1 microfacets, the albedo is the single-scattering G1 loss: <= 1, near 1
     for smooth surfaces; the uniform-sampling and importance-sampling estimates agree."""
-    m = bl.RoughConductor(alpha)  # perfect-mirror facets
+    m = bl.RoughConductor(alpha, distribution=dist)  # perfect-mirror facets
     wi = directions_at(cos_theta)
     u = albedo_uniform(m, wi, n=400_000, seed=3, wavelengths=[550.0])
     s = albedo_sampled(m, wi, n=200_000, seed=3, wavelengths=[550.0])
@@ -124,9 +135,83 @@ def test_08_film_thickness_per_query_changes_colour():
     (lambda: bl.RoughConductor(np.nan), "alpha must be finite"),
     (lambda: bl.RoughDielectric(5.0), "alpha must be <= 4"),
     (lambda: bl.RoughDielectric(0.1, 1.0, 1.0), "int_ior must differ"),
+    (lambda: bl.RoughDielectric(0.1, distribution="phong"), "distribution must be one of"),
+    (lambda: bl.RoughConductor(0.1, distribution=3), "distribution must be one of"),
     (lambda: bl.RoughDielectric(0.1, film=[{"material": 1.5}]), "film\\[0\\]"),
     (lambda: bl.RoughDielectric(0.1, film=[{"material": 1.5, "thickness_nm": -3}]), "thickness_nm"),
 ])
 def test_09_bad_input(make, match):
     with pytest.raises(ValueError, match=match):
         make()
+
+
+@pytest.mark.parametrize("dist", ["ggx", "beckmann"])
+@pytest.mark.parametrize("alpha", [0.1, 0.5, 1.5])
+def test_10_smith_lambda_and_ndf_against_quadrature(dist, alpha):
+    """The core's D is normalised (int D cos theta_m = 1) and its Lambda satisfies Smith's
+    relation int D(m) max(0, v.m) dm = v.z (1 + Lambda(v)) (Heitz 2014, eq. 5), by a
+    400 x 400 Gauss-Legendre product quadrature over the normals' hemisphere (theta_m =
+    (pi / 2) s^2 crowds the nodes near the normal) of the oracle's numpy D, which equals
+    the core's to 1e-12. Converged to ~1e-6 (800 nodes move it by that); the kink of
+    max(0, v.m) near grazing allows 1e-5."""
+    from bsdflab import _core
+    from bsdflab.oracles.microsurface import ndf
+    x, w = np.polynomial.legendre.leggauss(400)
+    s = (x + 1) / 2
+    theta, dtheta = 0.5 * np.pi * s**2, 0.5 * np.pi * s  # d theta / dx
+    phi = np.pi * (x + 1)
+    T, P = np.meshgrid(theta, phi, indexing="ij")
+    W = np.outer(w * dtheta, w * np.pi).ravel() * np.sin(T).ravel()
+    m = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], axis=-1).reshape(-1, 3)
+    D = ndf(dist, alpha, m)
+    some = np.random.default_rng(10).choice(len(m), 500, replace=False)
+    core_d = np.array([_core.microfacet_d(dist, alpha, list(v)) for v in m[some]])
+    assert np.allclose(core_d, D[some], rtol=1e-12, atol=0)
+    assert np.sum(D * m[:, 2] * W) == pytest.approx(1.0, abs=1e-6)
+    for deg in (0.0, 30.0, 60.0, 80.0, 89.0):
+        v = np.array([np.sin(np.radians(deg)), 0.0, np.cos(np.radians(deg))])
+        lhs = np.sum(D * np.maximum(0.0, m @ v) * W)
+        lam = _core.microfacet_lambda(dist, alpha, list(v))
+        assert lhs == pytest.approx(v[2] * (1 + lam), rel=1e-5, abs=1e-9), (deg, lhs, lam)
+
+
+def test_11_near_index_matched_rough_dielectric_is_no_interface():
+    """Regression (issue 16): 1.0000000001 vs 1.0 evaluated to 9e19. Within a relative
+    1e-6 the interface passes light straight through: eval and pdf are 0 (delta lobes
+    only), sampling returns -wi with weight 1 (R ~ 1e-21)."""
+    g = bl.RoughDielectric(0.3, 1.0000000001, 1.0)
+    wi = random_unit_vectors(500, seed=11)
+    wo = random_unit_vectors(500, seed=12)
+    assert np.all(g.eval(wi, wo) == 0) and np.all(g.pdf(wi, wo) == 0)
+    assert g.lobes & Lobe.DELTA_TRANSMISSION and not g.lobes & Lobe.GLOSSY
+    s = g.sample(wi, seed=13, wavelengths=[550.0])
+    t = s.lobe == Lobe.DELTA_TRANSMISSION
+    assert np.mean(t) > 0.999
+    assert np.allclose(s.wo[t], -wi[t], atol=1e-6)  # bent by (eta - 1) tan theta
+    assert np.allclose(s.weight[t], 1.0, atol=1e-8)
+    # a relative difference of 1e-4 is still a rough interface
+    assert bl.RoughDielectric(0.3, 1.0001, 1.0).lobes & Lobe.GLOSSY_TRANSMISSION
+
+
+@pytest.mark.parametrize("int_ior, ext_ior", [(1e200, 1.0), (1.0, 1e200), (1e-200, 1.0), (1.5, 1e-200)])
+@pytest.mark.parametrize("dist", ["ggx", "beckmann"])
+def test_12_extreme_indices_give_finite_answers_in_the_core(int_ior, ext_ior, dist):
+    """Regression (issue 16): RoughDielectric(0.3, int_ior=1e200) evaluated to NaN (the
+    Fresnel term at normal incidence formed inf * 0). The core (called directly: Python
+    bounds indices) answers finite values for every direction pair and sample."""
+    from bsdflab import _core
+    for multiscatter in (False, True):
+        r = _core.RoughInterface([550.0], _core.DielectricTerm(1, int_ior, ext_ior), 0.3, False,
+                                 dist, multiscatter)
+        wi = random_unit_vectors(3000, seed=14)
+        wo = random_unit_vectors(3000, seed=15)
+        # include the exact normal and mirror configurations
+        wi[:2] = [[0, 0, 1], [0, 0, -1]]
+        wo[:2] = [[0, 0, -1], [0, 0, 1]]
+        assert np.all(np.isfinite(r.eval(wi, wo)))
+        assert np.all(np.isfinite(r.pdf(wi, wo)))
+        u = np.random.default_rng(16).random((len(wi), 3))
+        wo_s, weight, pdf, lobe, eta = r.sample(wi, u[:, 0], u[:, 1:])
+        for a in (wo_s, weight, pdf, eta):
+            assert np.all(np.isfinite(a))
+        assert np.all((lobe == 0) | (pdf > 0))

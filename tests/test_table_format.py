@@ -20,7 +20,14 @@ BSDFLAB = [sys.executable, "-m", "bsdflab.cli.main"]
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
-def make_table(n_lobes=2, spectral=False, thickness=(), seed=0) -> TableData:
+# A valid model for each lobe count: layered (split) tables reflect only; the transmissive
+# table is of a rough dielectric (loading rebuilds the model and checks it fits the table).
+LAYERED = {"type": "layered", "interfaces": [{"type": "roughdielectric", "alpha": 0.08}],
+           "slabs": [{"thickness_um": 4.0}], "base": {"type": "diffuse"}}
+ROUGH = {"type": "roughdielectric", "alpha": 0.08}
+
+
+def make_table(n_lobes=2, spectral=False, thickness=(), seed=0, model=None) -> TableData:
     rng = np.random.default_rng(seed)
     grid = TableGrid(3, 5, 4, tuple(thickness))
     lobes = ("reflection", "transmission")[:n_lobes]
@@ -28,12 +35,11 @@ def make_table(n_lobes=2, spectral=False, thickness=(), seed=0) -> TableData:
     shape = (n_lobes, max(1, len(thickness)), 3, 5, 4, len(channels))
     values = rng.random(shape, dtype=np.float32) * 3
     values.flat[:4] = [-0.0, np.finfo(np.float32).max, np.float32(1e-45), 0.0]  # bit patterns to keep
+    model = model if model is not None else (LAYERED if n_lobes == 1 else ROUGH)
     return TableData(
-        model={"type": "layered", "interfaces": [{"type": "rough_dielectric", "alpha": 0.08}],
-               "thickness_um": 4.0},
-        grid=grid, lobes=lobes, channels=channels, split_direct=n_lobes == 1,
+        model=model, grid=grid, lobes=lobes, channels=channels, split_direct=model["type"] == "layered",
         values=values, stderr=rng.random(shape, dtype=np.float32) * 0.02,
-        samples=rng.integers(0, 2**31 - 1, shape[:-1]).astype(np.int32),
+        samples=rng.integers(1, 2**31 - 1, shape[:-1]).astype(np.int32),
         rel_error_target=0.01, meta={"preset": "xenopeltis", "seconds": 1.25, "seed": 7})
 
 
@@ -77,7 +83,7 @@ def test_attributes_are_strings_with_the_metadata(table_file):
     assert set(file_format.REQUIRED) <= set(attributes)
     assert all(isinstance(v, str) for v in attributes.values())
     assert attributes["bsdflab.colour_space"] == "linear sRGB (D65)"
-    assert attributes["bsdflab.format_version"] == "1"
+    assert attributes["bsdflab.format_version"] == "2"
     assert len(attributes["bsdflab.content_hash"]) == 64
 
 
@@ -121,11 +127,11 @@ def test_changed_metadata_fails_the_hash(table_file):
 
 
 def test_newer_format_version_is_refused(tmp_path, monkeypatch):
-    monkeypatch.setattr(file_format, "FORMAT_VERSION", 2)
-    write_table(tmp_path / "v2.exr", make_table())
+    monkeypatch.setattr(file_format, "FORMAT_VERSION", 3)
+    write_table(tmp_path / "v3.exr", make_table())
     monkeypatch.undo()
-    with pytest.raises(ValueError, match="written by format version 2, this bsdflab reads version 1"):
-        read_table(tmp_path / "v2.exr")
+    with pytest.raises(ValueError, match="written by format version 3, this bsdflab reads versions 1, 2"):
+        read_table(tmp_path / "v3.exr")
 
 
 def test_foreign_files_are_refused(tmp_path):
@@ -144,7 +150,7 @@ def test_foreign_files_are_refused(tmp_path):
 def test_bad_tables_are_not_written(tmp_path):
     table = make_table()
     table.samples[0, 0, 0, 0, 0] = -1
-    with pytest.raises(ValueError, match="samples must be >= 0"):
+    with pytest.raises(ValueError, match=">= 1 sample"):
         write_table(tmp_path / "t.exr", table)
     table = make_table()
     table.values = table.values[..., :2]
@@ -184,7 +190,7 @@ class Maker:
 
     def __call__(self):
         self.calls += 1
-        return make_table(seed=self.calls)
+        return make_table(n_lobes=1, seed=self.calls, model=REQUEST[0])
 
 
 REQUEST = ({"type": "diffuse", "reflectance": 0.5}, TableGrid(3, 5, 4), 0.01, ("R", "G", "B"))
@@ -247,9 +253,9 @@ def test_table_info_and_plot(tmp_path):
     write_table(path, make_table(2, spectral=True, thickness=(300.0, 400.0)))
     r = cli("table", "info", str(path))
     assert r.returncode == 0, r.stderr
-    for text in ("layered (preset xenopeltis)", "reflection, transmission", "300, 400 nm",
+    for text in ("roughdielectric (preset xenopeltis)", "reflection, transmission", "300, 400 nm",
                  "3 wavelengths", "spectral, nm", "median", "95th pct", "content hash  OK",
-                 "format version 1"):
+                 "format version 2"):
         assert text in r.stdout, text
     out = tmp_path / "figs" / "t.png"
     r = cli("table", "plot", str(path), "--out", str(out), "--thickness-index", "1")

@@ -68,7 +68,7 @@ class BSDF(abc.ABC):
         thickness for this call, e.g. a texture's value at each shading point."""
         a, b = check.direction_pair(wi, wo)
         wl, to_rgb = self._channels(wavelengths)
-        t = check.per_row("thickness", thickness, len(a), lo=0.0)
+        t = check.per_row("thickness", thickness, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
         values = self._core(wl).eval(a, b, check.lobe_mask(lobes), t)
         return values @ to_rgb.T if to_rgb is not None else values
 
@@ -79,7 +79,7 @@ class BSDF(abc.ABC):
         with the mean over its channels: pass the same ``wavelengths`` here (None = the
         default colour grid, as for ``sample``) to get the matching density."""
         a, b = check.direction_pair(wi, wo)
-        t = check.per_row("thickness", thickness, len(a), lo=0.0)
+        t = check.per_row("thickness", thickness, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
         wl, _ = self._channels(wavelengths)
         return self._core(wl).pdf(a, b, check.lobe_mask(lobes), t)
 
@@ -97,7 +97,7 @@ class BSDF(abc.ABC):
         u1 = check.uniforms("u1", u1, (n,))
         u2 = check.uniforms("u2", u2, (n, 2))
         wl, to_rgb = self._channels(wavelengths)
-        t = check.per_row("thickness", thickness, n, lo=0.0)
+        t = check.per_row("thickness", thickness, n, 0.0, check.MAX_FILM_THICKNESS_NM)
         wo, weight, pdf, lobe, eta = self._core(wl).sample(w, u1, u2, check.lobe_mask(lobes), t)
         if to_rgb is not None:
             weight = weight @ to_rgb.T
@@ -130,8 +130,10 @@ class BSDF(abc.ABC):
     def _channels(self, wavelengths):
         if wavelengths is None:
             return DEFAULT_WAVELENGTHS, srgb_weights(DEFAULT_WAVELENGTHS)
-        wl = check.real_array("wavelengths", wavelengths, 0.0, lo_open=True)
-        return np.atleast_1d(wl).ravel(), None
+        wl = np.atleast_1d(check.wavelengths_nm("wavelengths", wavelengths)).ravel()
+        if len(wl) > MAX_CHANNELS:
+            raise ValueError(f"wavelengths must have at most {MAX_CHANNELS} entries, got {len(wl)}")
+        return wl, None
 
     def _core(self, wavelengths: np.ndarray):
         key = tuple(float(x) for x in wavelengths)
@@ -144,6 +146,8 @@ class BSDF(abc.ABC):
 
 
 FLAT_PROBE_NM = 550.0
+# Channels of one evaluation: the core carries per-channel scratch per query.
+MAX_CHANNELS = 4096
 
 
 def _spectrally_flat(core) -> bool:
@@ -167,11 +171,17 @@ def from_dict(d: dict[str, Any]) -> BSDF:
     """Rebuild a BSDF from ``to_dict`` output (also the HTTP and table-file form)."""
     if not isinstance(d, dict) or "type" not in d:
         raise ValueError("a BSDF dict needs a 'type' key; known types: " + ", ".join(sorted(_REGISTRY)))
-    cls = _REGISTRY.get(d["type"])
+    check.nesting("the BSDF dict", d)
+    kind = d["type"]
+    cls = _REGISTRY.get(kind) if isinstance(kind, str) else None
     if cls is None:
-        raise ValueError(f"unknown BSDF type {d['type']!r}; known types: {', '.join(sorted(_REGISTRY))}")
+        raise ValueError(f"unknown BSDF type {check.brief(kind)}; known types: {', '.join(sorted(_REGISTRY))}")
     params = {k: v for k, v in d.items() if k != "type"}
+    if not all(isinstance(k, str) for k in params):
+        raise ValueError(f"bad parameters for BSDF type {kind!r}: parameter names must be strings")
     try:
         return cls(**params)
-    except TypeError as e:
-        raise ValueError(f"bad parameters for BSDF type {d['type']!r}: {e}") from None
+    except RecursionError:
+        raise ValueError(f"bad parameters for BSDF type {kind!r}: nested too deeply") from None
+    except (TypeError, OverflowError, KeyError, AttributeError) as e:
+        raise ValueError(f"bad parameters for BSDF type {kind!r}: {check.one_line(e)}") from None

@@ -5,10 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core
-from .._validate import real_scalar
 from .base import BSDF
 from .interface_term import (DEFAULT_EXT_IOR, DEFAULT_INT_IOR, ext_ior_param, film_to_list,
-                             make_term, parse_film)
+                             int_ior_param, make_term, parse_film)
 
 
 class Dielectric(BSDF):
@@ -27,9 +26,10 @@ class Dielectric(BSDF):
 
     Parameters
     ----------
-    int_ior : float > 0
-        Index of refraction of the interior. Default 1.5046 (BK7 at 589 nm, Mitsuba's default).
-    ext_ior : float > 0
+    int_ior : float in [1e-3, 1e3]
+        Index of refraction of the interior. Default 1.5046 (BK7 at 589 nm, Mitsuba's
+        default). int_ior / ext_ior must lie in [0.01, 100] (docs/limits.md).
+    ext_ior : float in [1e-3, 1e3]
         Index of refraction of the exterior. Default 1.000277 (air).
     film : list of Layer or dicts, optional
         A thin-film coating on the exterior side (top first); thickness variable per query.
@@ -39,8 +39,8 @@ class Dielectric(BSDF):
 
     def __init__(self, int_ior: float = DEFAULT_INT_IOR, ext_ior: float = DEFAULT_EXT_IOR, film=None):
         super().__init__()
-        self.int_ior = real_scalar("int_ior", int_ior, 0.0, lo_open=True)
         self.ext_ior = ext_ior_param(ext_ior)
+        self.int_ior = int_ior_param(int_ior, self.ext_ior)
         self.film = parse_film(film)
 
     def _build(self, wavelengths: np.ndarray):

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core
+from .. import _validate as check
 from ..spectra import Spectrum
 from .base import BSDF
 
@@ -25,7 +26,7 @@ class Diffuse(BSDF):
     def __init__(self, reflectance=0.5, two_sided: bool = False):
         super().__init__()
         self.reflectance = Spectrum.coerce(reflectance, "reflectance", 0.0, 1.0)
-        self.two_sided = bool(two_sided)
+        self.two_sided = check.flag("two_sided", two_sided)
 
     def _build(self, wavelengths: np.ndarray):
         return _core.Diffuse(wavelengths, self.reflectance.at(wavelengths), self.two_sided)

@@ -8,12 +8,15 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .._validate import real_scalar
+from .._validate import MAX_EXTINCTION, MAX_IOR, MIN_IOR, flag, ior
 from ..optics.metals import metal_ior
 from ..optics.thin_film import Layer
 from ..spectra import Spectrum
 
 MAX_FILM_LAYERS = 32  # the core's fixed scratch size (fresnel_terms.h)
+# Relative index of a dielectric interface (interior / exterior): 100 is beyond any pair of
+# real media (air to germanium is 4) and keeps Snell's and Fresnel's terms well conditioned.
+MAX_IOR_RATIO = 100.0
 
 DEFAULT_EXT_IOR = 1.000277  # air
 DEFAULT_INT_IOR = 1.5046    # BK7 at 589 nm (Mitsuba's default)
@@ -24,6 +27,8 @@ def parse_film(film) -> tuple[Layer, ...]:
     if film is None:
         return ()
     items = film if isinstance(film, (list, tuple)) else [film]
+    if not isinstance(film, (list, tuple, dict, Layer)):
+        raise ValueError(f"film must be a Layer, a dict or a list of them, got {type(film).__name__}")
     if len(items) > MAX_FILM_LAYERS:
         raise ValueError(f"film must have at most {MAX_FILM_LAYERS} layers, got {len(items)}")
     layers = []
@@ -51,6 +56,8 @@ class ConductorInterior:
             raise ValueError("give either material or (eta, k), not both")
         if material is None and eta is None and k is None:
             material = "none"
+        if material is not None and not isinstance(material, str):
+            raise ValueError(f"material must be the name of a metal, got {type(material).__name__}")
         self.material = material
         if material == "none":
             # A perfect mirror, as Mitsuba's default: eta = 0, k = 1 gives R = 1 everywhere.
@@ -58,8 +65,8 @@ class ConductorInterior:
         else:
             if material is not None:
                 eta, k = metal_ior(material)
-            self.eta = Spectrum.coerce(eta if eta is not None else 1.0, "eta", 0.0, lo_open=True)
-            self.k = Spectrum.coerce(k if k is not None else 0.0, "k", 0.0)
+            self.eta = Spectrum.coerce(eta if eta is not None else 1.0, "eta", MIN_IOR, MAX_IOR)
+            self.k = Spectrum.coerce(k if k is not None else 0.0, "k", 0.0, MAX_EXTINCTION)
 
     def index(self, wavelengths: np.ndarray) -> np.ndarray:
         return self.eta.at(wavelengths) + 1j * self.k.at(wavelengths)
@@ -81,7 +88,7 @@ class ConductorParams:
     def _init_conductor(self, material, eta, k, ext_ior, two_sided, film) -> None:
         self.interior = ConductorInterior(material, eta, k)
         self.ext_ior = ext_ior_param(ext_ior)
-        self.two_sided = bool(two_sided)
+        self.two_sided = flag("two_sided", two_sided)
         self.film = parse_film(film)
 
     def _conductor_term(self, wavelengths: np.ndarray):
@@ -107,7 +114,17 @@ class ConductorParams:
 
 
 def ext_ior_param(value) -> float:
-    return real_scalar("ext_ior", value, 0.0, lo_open=True)
+    return ior("ext_ior", value)
+
+
+def int_ior_param(value, ext_ior: float) -> float:
+    """The interior index: in range itself and relative to the exterior (docs/limits.md)."""
+    n = ior("int_ior", value)
+    ratio = n / ext_ior
+    if not 1.0 / MAX_IOR_RATIO <= ratio <= MAX_IOR_RATIO:
+        raise ValueError(f"int_ior / ext_ior must be in [{1 / MAX_IOR_RATIO:g}, {MAX_IOR_RATIO:g}], "
+                         f"got {n:g} / {ext_ior:g} = {ratio:g}")
+    return n
 
 
 def make_term(wavelengths: np.ndarray, ext_ior: float, layers: tuple[Layer, ...], *,

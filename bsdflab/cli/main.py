@@ -5,10 +5,10 @@ import argparse
 import sys
 
 from .. import __version__
-from . import info, lobe, render, table, tabulate, thinfilm
+from . import fit, info, lobe, render, serve, table, tabulate, thinfilm
 from . import validate
 
-COMMANDS = (render, lobe, thinfilm, tabulate, table, info)
+COMMANDS = (render, lobe, thinfilm, tabulate, table, info, fit, serve)
 COMMANDS += (validate,)
 
 
@@ -24,13 +24,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from .errors import run_command
+
     parser = build_parser()
     args = parser.parse_args(argv)
-    try:
-        return int(args.run(args) or 0)
-    except ValueError as e:  # bad input: a clear message, not a traceback
-        print(f"bsdflab {args.command}: error: {e}", file=sys.stderr)
-        return 2
+    return run_command(args)
 
 
 if __name__ == "__main__":

@@ -27,6 +27,12 @@ def register(sub) -> None:
     p.add_argument("--save-scene", default=None, help="also write the scene as a scene file (.json)")
     p.add_argument("--cache-dir", default=None, help="table cache folder (default: the user cache)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.add_argument("--spectral", action="store_true",
+                   help="spectral transport over 81 wavelength bins instead of RGB (slower; spectra multiply "
+                        "at every bounce, see docs/spectral_rendering.md)")
+    p.add_argument("--denoise", action="store_true",
+                   help="also write a denoised preview (Intel Open Image Denoise via pyoidn) beside the EXR "
+                        "as <out>.denoised.exr / .png; the EXR itself is unchanged")
     p.set_defaults(run=run)
 
 
@@ -64,10 +70,13 @@ def _scenes(args):
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
-    from ..plots.contact_sheet import contact_sheet
-    from ..render import render, write_exr, write_png
+    from ..files import write_together
+    from ..plots.contact_sheet import contact_sheet, mosaic
+    from ..render import render
+    from ..render.image_io import EXR_SUFFIX, PNG_SUFFIX, exr_writer, write_exr_and_png
     from ..scenes import SCENE_SETS, SCENES
     from ..scenes.scene_file import save_scene
+    from .errors import check_writable
 
     if args.list:
         for name, make in {**SCENES, **SCENE_SETS}.items():
@@ -78,6 +87,13 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--exposure must be a number of stops in [-64, 64], got {args.exposure}")
     if not args.out.lower().endswith(".exr"):
         raise ValueError(f"--out must end in .exr, got {args.out!r}")
+    png = os.path.splitext(args.out)[0] + ".png"
+    check_writable(args.out, "--out")  # before the render, not after it
+    check_writable(png, "--out (its PNG)")
+    if args.save_scene:
+        check_writable(args.save_scene, "--save-scene")
+    if args.denoise and args.scene in SCENE_SETS:
+        raise ValueError("--denoise works on a single scene, not a scene set")
     scenes, base_dir = _scenes(args)
     prepared = []
     for label, s in scenes:
@@ -97,18 +113,26 @@ def run(args: argparse.Namespace) -> int:
         if label and not args.quiet:
             print(f"rendering {label}")
         results.append((label, render(s, spp=args.spp, seed=args.seed, progress=not args.quiet,
-                                      base_dir=base_dir, cache_dir=args.cache_dir)))
-    png = os.path.splitext(args.out)[0] + ".png"
-    if len(results) == 1:
+                                      base_dir=base_dir, cache_dir=args.cache_dir, aovs=args.denoise,
+                                      spectral=args.spectral)))
+    if len(results) == 1:  # the EXR and the PNG appear together or not at all
         result = results[0][1]
         summary = result.summary()
-        write_exr(args.out, result.mean, summary)
-        write_png(png, result.mean, args.exposure)
+        write_exr_and_png(args.out, png, result.mean, summary, args.exposure)
+        if args.denoise:  # a preview beside the unbiased EXR, never instead of it
+            from ..render.denoise import denoise
+
+            stem = os.path.splitext(args.out)[0] + ".denoised"
+            preview = denoise(result)
+            write_exr_and_png(stem + ".exr", stem + ".png", preview,
+                              dict(summary, denoised="Intel Open Image Denoise (pyoidn)"), args.exposure)
+            print(f"wrote the denoised preview {stem}.exr and {stem}.png")
     else:
-        mosaic = contact_sheet([(label, r.mean) for label, r in results], png, args.exposure,
-                               title=args.scene)
+        items = [(label, r.mean) for label, r in results]
         summary = {"scene": args.scene, "images": [dict(r.summary(), label=label) for label, r in results]}
-        write_exr(args.out, mosaic, {"scene": args.scene})
+        sheet = mosaic([im for _, im in items], min(len(items), 3))
+        write_together([(args.out, exr_writer(sheet, {"scene": args.scene}), EXR_SUFFIX),
+                        (png, lambda tmp: contact_sheet(items, tmp, args.exposure, title=args.scene), PNG_SUFFIX)])
     print(json.dumps(summary, indent=1))
     print(f"wrote {args.out} and {png}")
     return 0

@@ -84,12 +84,23 @@ def run_info(args: argparse.Namespace) -> int:
         ("written by", f"bsdflab {attributes.get('bsdflab.version', '?')}, "
                        f"table format version {attributes.get('bsdflab.format_version', '?')}"),
         ("content hash", f"OK ({attributes['bsdflab.content_hash'][:16]}...)"),
+        ("signature", _signature(attributes)),
     ]
     lines += [(f"meta {k}", _compact(v)) for k, v in sorted(meta.items())]
     width = max(13, *(len(label) + 1 for label, _ in lines))
     for label, text in lines:
         print(f"{label:<{width}} {text}")
     return 0
+
+
+def _signature(attributes) -> str:
+    from ..tables import signing
+
+    if "bsdflab.signature" not in attributes:
+        return "none" + (" (refused: a key is set)" if signing.resolve_key(None) else "")
+    if signing.resolve_key(None) is None:
+        return f"present, not verified (set {signing.ENV_VAR} to verify)"
+    return "verified with the configured key"
 
 
 def _channels(table, attributes) -> str:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from .materials import add_material_options, material_from_args
 
@@ -34,10 +35,15 @@ def run(args: argparse.Namespace) -> int:
     import shutil
 
     from ..tables import TableGrid, cached_table, tabulate, write_table
+    from ..tables.data import check_table_memory
+    from .errors import check_writable
 
+    if args.out is not None:
+        check_writable(args.out, "--out")  # before the tabulation, not after it
     model = material_from_args(args)
     grid = TableGrid(args.n_theta_i, args.n_theta_o, args.n_phi, tuple(args.thickness))
     wavelengths = args.wavelengths if args.wavelengths else None
+    check_table_memory(grid, 3 if wavelengths is None else len(wavelengths))
     channels = "rgb" if wavelengths is None else [float(w) for w in wavelengths]
 
     def make():
@@ -51,7 +57,8 @@ def run(args: argparse.Namespace) -> int:
         table, path, hit = make(), None, False
     else:
         table, path, hit = cached_table(model.to_dict(), grid, args.rel_error, channels, make,
-                                        directory=args.cache_dir)
+                                        directory=args.cache_dir, min_samples=args.min_samples,
+                                        max_samples=args.max_samples, seed=args.seed)
     if args.out is not None:
         if path is not None and hit:
             from ..files import write_atomically
@@ -67,4 +74,10 @@ def run(args: argparse.Namespace) -> int:
     print(f"rel. error    target {table.rel_error_target:g}; achieved RMS {m.get('rel_error_rms', 0):.4g}, "
           f"95 % {m.get('rel_error_p95', 0):.4g}, max {m.get('rel_error_max', 0):.4g}")
     print(f"time          {m.get('seconds', 0):.1f} s on {m.get('threads', '?')} threads")
+    accuracy = table.accuracy()
+    print(f"target met    {'yes' if accuracy['target_met'] else 'NO'}: {accuracy['capped_cells']} of "
+          f"{table.samples.size} cells stopped at --max-samples {accuracy['max_samples']}")
+    if not accuracy["target_met"]:
+        print(f"bsdflab tabulate: warning: the table does not reach the target error "
+              f"{table.rel_error_target:g} everywhere; raise --max-samples", file=sys.stderr)
     return 0

@@ -9,14 +9,16 @@ chain: interface j's int_ior is the index of slab j and must equal the ext_ior o
 next interface (or of a base that has one).
 
 eval() is a Monte Carlo estimate: `samples` random walks per direction pair, seeded from
-(seed, wi, wo), so the same call gives the same answer. `eval_with_error` also returns
-the standard error. The top interface's delta reflection (a smooth top) is not part of
+(seed, wi, wo), so the same call gives the same answer. `estimate` also returns the
+standard error and the number of walks whose contribution was not finite (counted, never
+hidden: 0 for a sound model); `eval_with_error` returns the first two. The top interface's delta reflection (a smooth top) is not part of
 eval: `delta_reflectance` gives it exactly, and `sample` returns it as a delta lobe.
 `pdf` is a deterministic approximation for multiple importance sampling (the walk's exact
 density is not available); `sample`'s weight is the walk's unbiased throughput.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -32,6 +34,17 @@ from .slab import Slab
 INTERFACE_TYPES = (Dielectric, RoughDielectric)
 MAX_SLABS = 16
 IOR_TOLERANCE = 1e-9
+MAX_WALKS = 1 << 24
+MAX_DEPTH = 1 << 16
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A Monte Carlo estimate of eval for N direction pairs."""
+
+    value: np.ndarray   # (N, C)
+    stderr: np.ndarray  # (N, C) standard error (for colour output the bound sum_l |W_cl| sigma_l)
+    nonfinite: int      # walks whose contribution was not finite (they count as 0)
 
 
 def _model(value, name: str) -> BSDF:
@@ -51,11 +64,11 @@ class Layered(BSDF):
     slabs : list of Slab (or dicts), one below each interface
     base : BSDF or dict
         What lies below the last slab.
-    samples : int >= 1
+    samples : int in [1, 2^24]
         Random walks per eval() of one direction pair. Default 256.
-    seed : int >= 0
+    seed : int in [0, 2^64)
         Seed of the walks (combined with the directions). Default 0.
-    max_depth : int >= 1
+    max_depth : int in [1, 2^16]
         Scattering events per walk before it is cut (Russian roulette ends most walks
         much earlier). Default 256.
     """
@@ -110,25 +123,50 @@ class Layered(BSDF):
         return self._build(np.asarray(wavelengths, dtype=np.float64), nee=False)
 
     # -- estimator extras -------------------------------------------------------------
-    def eval_with_error(self, wi, wo, wavelengths=None, samples: int | None = None,
-                        seed: int | None = None, lobes: Lobe | int = Lobe.ALL, thickness=None):
-        """(value, standard error), each (N, C). For colour output the error is the bound
-        sum_l |W_cl| sigma_l (channels are correlated: the same walks serve all)."""
+    def estimate(self, wi, wo, wavelengths=None, samples: int | None = None,
+                 seed: int | None = None, lobes: Lobe | int = Lobe.ALL, thickness=None,
+                 scattered_only: bool = False) -> Estimate:
+        """eval with an explicit effort and seed: value, standard error and the count of
+        non-finite walks. For colour output the error is the bound sum_l |W_cl| sigma_l
+        (channels are correlated: the same walks serve all). ``scattered_only`` leaves out
+        the top interface's own reflection (what a table stores, see `exact_part`)."""
         a, b = check.direction_pair(wi, wo)
         wl, to_rgb = self._channels(wavelengths)
-        t = check.per_row("thickness", thickness, len(a), lo=0.0)
+        t = check.per_row("thickness", thickness, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
         n = self.samples if samples is None else _positive_int("samples", samples)
         s = self.seed if seed is None else check.seed(seed)
-        value, err = self._core(wl).eval_with_error(a, b, check.lobe_mask(lobes), t, n, s)
+        core = self._core(wl)
+        if scattered_only:
+            core = core.scattered_part()
+        value, err, bad = core.estimate(a, b, check.lobe_mask(lobes), t, n, s)
         if to_rgb is not None:
-            return value @ to_rgb.T, err @ np.abs(to_rgb).T
-        return value, err
+            value, err = value @ to_rgb.T, err @ np.abs(to_rgb).T
+        return Estimate(value, err, int(bad))
+
+    def eval_with_error(self, wi, wo, wavelengths=None, samples: int | None = None,
+                        seed: int | None = None, lobes: Lobe | int = Lobe.ALL, thickness=None):
+        """(value, standard error), each (N, C): `estimate` without the non-finite count."""
+        e = self.estimate(wi, wo, wavelengths, samples, seed, lobes, thickness)
+        return e.value, e.stderr
+
+    @property
+    def exact_part(self) -> BSDF:
+        """The part of the model known in closed form: the top interface, whose own
+        reflection eval adds exactly (a table stores the rest and adds this back)."""
+        return self.interfaces[0]
+
+    @property
+    def film_thickness_nm(self) -> float:
+        """Total thickness (nm) of the top interface's film, or -1 without a film (what a
+        per-query film thickness replaces)."""
+        film = getattr(self.interfaces[0], "film", ()) or ()
+        return float(sum(layer.thickness_nm for layer in film)) if film else -1.0
 
     def delta_reflectance(self, wi, wavelengths=None, thickness=None) -> np.ndarray:
         """Reflectance of the top interface's delta lobe toward the mirror direction, (N, C)."""
         a = check.directions("wi", wi)
         wl, to_rgb = self._channels(wavelengths)
-        t = check.per_row("thickness", thickness, len(a), lo=0.0)
+        t = check.per_row("thickness", thickness, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
         r = self._core(wl).delta_reflectance(a, t)
         return r @ to_rgb.T if to_rgb is not None else r
 
@@ -140,7 +178,6 @@ class Layered(BSDF):
 
 
 def _positive_int(name: str, value) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
-    return int(value)
+    # walks and depths are the core's int32; 2^24 walks per query is already minutes of work
+    return check.count(name, value, MAX_WALKS if name == "samples" else MAX_DEPTH)
 

@@ -27,12 +27,13 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .._validate import real_array, real_scalar
+from .. import _validate as check
+from .._validate import MAX_EXTINCTION, MAX_IOR, MIN_IOR, real_array, real_scalar
 
 
 def wavelengths_nm(value: Any, name: str = "wavelength_nm") -> np.ndarray:
-    """Validated wavelengths: finite and > 0 nm (any shape)."""
-    return real_array(name, value, 0.0, lo_open=True)
+    """Validated wavelengths in nm (any shape), within [1, 1e12] nm (docs/limits.md)."""
+    return check.wavelengths_nm(name, value)
 
 
 class Dispersion(abc.ABC):
@@ -56,9 +57,9 @@ class Constant(Dispersion):
     Parameters
     ----------
     n : float
-        Real part, finite and > 0.
+        Real part, in [1e-3, 1e3].
     k : float, optional
-        Extinction coefficient, finite and >= 0 (default 0, lossless).
+        Extinction coefficient, in [0, 1e3] (default 0, lossless).
     """
 
     n: float
@@ -66,8 +67,8 @@ class Constant(Dispersion):
     model: ClassVar[str] = "constant"
 
     def __post_init__(self):
-        object.__setattr__(self, "n", real_scalar("n", self.n, 0.0, lo_open=True))
-        object.__setattr__(self, "k", real_scalar("k", self.k, 0.0))
+        object.__setattr__(self, "n", real_scalar("n", self.n, MIN_IOR, MAX_IOR))
+        object.__setattr__(self, "k", real_scalar("k", self.k, 0.0, MAX_EXTINCTION))
 
     def index(self, wavelength_nm) -> np.ndarray:
         wl = wavelengths_nm(wavelength_nm)
@@ -94,7 +95,7 @@ class Cauchy(Dispersion):
     C : float, optional
         Coefficient of lambda^-4 in nm^4, finite (default 0).
 
-    `index` raises ValueError where the resulting n is not > 0.
+    `index` raises ValueError where the resulting n is outside [1e-3, 1e3].
     """
 
     A: float
@@ -109,9 +110,10 @@ class Cauchy(Dispersion):
     def index(self, wavelength_nm) -> np.ndarray:
         wl2 = wavelengths_nm(wavelength_nm) ** 2
         n = self.A + self.B / wl2 + self.C / (wl2 * wl2)
-        if np.any(n <= 0):
-            raise ValueError(f"Cauchy index A + B/lambda^2 + C/lambda^4 must be > 0; got "
-                             f"min {n.min():g} for A={self.A}, B={self.B}, C={self.C}")
+        if np.any(n < MIN_IOR) or np.any(n > MAX_IOR):
+            raise ValueError(f"Cauchy index A + B/lambda^2 + C/lambda^4 must be in [{MIN_IOR:g}, "
+                             f"{MAX_IOR:g}]; got {n.min():g} to {n.max():g} for A={self.A}, "
+                             f"B={self.B}, C={self.C}")
         return n.astype(np.complex128)
 
     def to_dict(self) -> dict[str, Any]:
@@ -140,10 +142,10 @@ class Tabulated(Dispersion):
     model: ClassVar[str] = "tabulated"
 
     def __init__(self, wavelengths_nm, n, k=None):
-        self.wavelengths_nm = real_array("wavelengths_nm", wavelengths_nm, 0.0, lo_open=True,
-                                         ndim=1)
-        self.n = real_array("n", n, 0.0, lo_open=True, ndim=1)
-        self.k = np.zeros_like(self.n) if k is None else real_array("k", k, 0.0, ndim=1)
+        self.wavelengths_nm = real_array("wavelengths_nm", wavelengths_nm, check.MIN_WAVELENGTH_NM,
+                                         check.MAX_WAVELENGTH_NM, ndim=1)
+        self.n = real_array("n", n, MIN_IOR, MAX_IOR, ndim=1)
+        self.k = np.zeros_like(self.n) if k is None else real_array("k", k, 0.0, MAX_EXTINCTION, ndim=1)
         m = len(self.wavelengths_nm)
         if m < 2:
             raise ValueError(f"wavelengths_nm must have at least 2 samples, got {m}")
@@ -191,11 +193,13 @@ def dispersion_from_dict(d: dict[str, Any]) -> Dispersion:
     """The model a `to_dict()` result describes; ValueError for an unknown model."""
     if not isinstance(d, dict) or d.get("model") not in _MODELS:
         known = ", ".join(sorted(_MODELS))
-        raise ValueError(f"a dispersion dict needs 'model' in ({known}); got {d!r}")
+        raise ValueError(f"a dispersion dict needs 'model' in ({known}); got {check.brief(d)}")
     try:
         return _MODELS[d["model"]].from_dict(d)
     except KeyError as e:
         raise ValueError(f"dispersion dict for model {d['model']!r} lacks the key {e}") from None
+    except (TypeError, AttributeError) as e:
+        raise ValueError(f"bad dispersion dict for model {d['model']!r}: {check.one_line(e)}") from None
 
 
 def as_dispersion(value: Any, name: str) -> Dispersion:
@@ -205,7 +209,10 @@ def as_dispersion(value: Any, name: str) -> Dispersion:
     if isinstance(value, dict):
         return dispersion_from_dict(value)
     if np.ndim(value) == 0 and isinstance(value, (int, float, complex, np.number, np.ndarray)):
-        z = complex(value)
+        try:
+            z = complex(value)
+        except (OverflowError, TypeError, ValueError):
+            raise ValueError(f"{name} must be a finite number, got {check.brief(value)}") from None
         if not (math.isfinite(z.real) and math.isfinite(z.imag)):
             raise ValueError(f"{name} must be finite, got {value!r}")
         if z.real <= 0:
@@ -213,6 +220,9 @@ def as_dispersion(value: Any, name: str) -> Dispersion:
         if z.imag < 0:
             raise ValueError(f"{name} must have an imaginary part k >= 0 (absorbing), "
                              f"got {value!r}")
+        if not MIN_IOR <= z.real <= MAX_IOR or z.imag > MAX_EXTINCTION:
+            raise ValueError(f"{name} must have n in [{MIN_IOR:g}, {MAX_IOR:g}] and k in "
+                             f"[0, {MAX_EXTINCTION:g}] (docs/limits.md), got {value!r}")
         return Constant(z.real, z.imag)
     raise ValueError(f"{name} must be a number n + i k, a dict or a Dispersion model; "
                      f"got {type(value).__name__}")

@@ -1,7 +1,8 @@
 """Fresnel coefficients of a single planar interface, real or complex indices.
 
 Sign convention (Born & Wolf; the same as the `tmm` package), for light going from a
-medium of index n_i into one of index n_t (indices n + i k, k >= 0 absorbing):
+medium of index n_i into one of index n_t (indices n + i k, k >= 0 absorbing; n in
+[1e-3, 1e3] and k <= 1e3, docs/limits.md):
 
     r_s = (n_i cos_i - n_t cos_t) / (n_i cos_i + n_t cos_t)
     r_p = (n_t cos_i - n_i cos_t) / (n_t cos_i + n_i cos_t)
@@ -20,6 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import _core
+from .._validate import MAX_EXTINCTION, MAX_IOR, MIN_IOR
 
 
 class Amplitudes(NamedTuple):
@@ -37,9 +39,11 @@ class Reflectance(NamedTuple):
 
 
 def _complex(name, value):
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{name} must be a real or complex number or array")
     try:
         a = np.asarray(value, dtype=np.complex128)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name} must be a real or complex number or array") from None
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be finite (found NaN or infinity)")
@@ -57,6 +61,9 @@ def _inputs(cos_i, n_i, n_t):
             raise ValueError(f"{name} must have a real part > 0")
         if np.any(n.imag < 0):
             raise ValueError(f"{name} must have an imaginary part (k) >= 0")
+        if np.any(n.real < MIN_IOR) or np.any(n.real > MAX_IOR) or np.any(n.imag > MAX_EXTINCTION):
+            raise ValueError(f"{name} must have a real part in [{MIN_IOR:g}, {MAX_IOR:g}] and an "
+                             f"imaginary part <= {MAX_EXTINCTION:g} (docs/limits.md)")
     try:
         c, ni, nt = np.broadcast_arrays(c, ni, nt)
     except ValueError:
@@ -72,8 +79,15 @@ def fresnel_amplitudes(cos_i, n_i, n_t) -> Amplitudes:
     """
     c, ni, nt = _inputs(cos_i, n_i, n_t)
     shape = c.shape
-    out = _core.fresnel_amplitudes(np.ravel(ni), np.ravel(nt), np.ravel(c))
-    return Amplitudes(*(np.reshape(a, shape) for a in out))
+    r_s, r_p, t_s, t_p, cos_t = (np.reshape(a, shape) for a in
+                                 _core.fresnel_amplitudes(np.ravel(ni), np.ravel(nt), np.ravel(c)))
+    # Equal indices are no interface: r = 0, t = 1 -- also at grazing incidence, where the
+    # general formula is 0 / 0.
+    same = ni == nt
+    if np.any(same):
+        r_s, r_p, t_s, t_p, cos_t = (np.where(same, v, a) for v, a in
+                                     ((0, r_s), (0, r_p), (1, t_s), (1, t_p), (c, cos_t)))
+    return Amplitudes(r_s, r_p, t_s, t_p, cos_t)
 
 
 def fresnel_reflectance(cos_i, n_i, n_t) -> Reflectance:
@@ -93,4 +107,6 @@ def fresnel_transmittance(cos_i, n_i, n_t) -> Reflectance:
         ts = np.real(nt * a.cos_t) / np.real(ni * c) * np.abs(a.t_s) ** 2
         tp = np.real(nt * np.conj(a.cos_t)) / np.real(ni * np.conj(c)) * np.abs(a.t_p) ** 2
     ts, tp = np.nan_to_num(ts), np.nan_to_num(tp)
+    same = ni == nt  # no interface: everything passes, grazing included (0 / 0 above)
+    ts, tp = np.where(same, 1.0, ts), np.where(same, 1.0, tp)
     return Reflectance(ts, tp, 0.5 * (ts + tp))

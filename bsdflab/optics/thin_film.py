@@ -16,12 +16,12 @@ film_transmittance(...)  same arguments as film_reflectance -> ndarray
 Arguments
 ---------
 wavelength_nm
-    Vacuum wavelengths in nm, finite and > 0.
+    Vacuum wavelengths in nm, in [1, 1e12].
 theta or cos_theta (exactly one)
     Angle of incidence in radians in [0, pi/2], or its cosine in [0, 1], measured in the
     medium the light arrives from.
 thickness_nm
-    Replaces the thickness of a one-layer film (nm, finite, >= 0), to sweep d.
+    Replaces the thickness of a one-layer film (nm, in [0, 1e9]), to sweep d.
 reverse
     Light arrives from the substrate side (the stack is traversed bottom-up; theta is
     then measured in the substrate).
@@ -53,10 +53,12 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .. import _core
-from .._validate import real_array, real_scalar
+from .. import _validate as check
+from .._validate import real_array
 from .dispersion import Constant, Dispersion, as_dispersion, dispersion_from_dict, wavelengths_nm
 
 POLARISATIONS = ("s", "p", "unpolarised")
+MIN_COSINE = 1e-60
 
 
 @dataclass(frozen=True)
@@ -77,7 +79,7 @@ class Layer:
     def __post_init__(self):
         object.__setattr__(self, "material", as_dispersion(self.material, "material"))
         object.__setattr__(self, "thickness_nm",
-                           real_scalar("thickness_nm", self.thickness_nm, 0.0))
+                           check.film_thickness("thickness_nm", self.thickness_nm))
 
     def to_dict(self) -> dict[str, Any]:
         return {"material": self.material.to_dict(), "thickness_nm": self.thickness_nm}
@@ -151,16 +153,17 @@ class _Problem(NamedTuple):
 
 
 _FILM_PARAMETERS = """film : FilmStack or tuple (n0, n1, d_nm, n2)
-        The stack, or one film: indices (numbers n + i k with k >= 0, dispersion models or
-        their dicts) and a thickness d_nm in nm (finite, >= 0; may be an array).
+        The stack, or one film: indices (numbers n + i k, n in [1e-3, 1e3], k in [0, 1e3],
+        dispersion models or their dicts) and a thickness d_nm in nm (in [0, 1e9]; may be
+        an array).
     wavelength_nm : array_like
-        Vacuum wavelengths in nm, finite and > 0.
+        Vacuum wavelengths in nm, in [1, 1e12].
     theta : array_like, optional
         Angle of incidence in radians, in [0, pi/2], in the medium light arrives from.
     cos_theta : array_like, optional
         Its cosine, in [0, 1]. Give exactly one of theta and cos_theta.
     thickness_nm : array_like, optional
-        Replaces the thickness of a one-layer film (nm, finite, >= 0) to sweep it.
+        Replaces the thickness of a one-layer film (nm, in [0, 1e9]) to sweep it.
     reverse : bool, optional
         Light arrives from the substrate side (theta then lies in the substrate)."""
 
@@ -278,7 +281,7 @@ def _media(film) -> tuple[list[Dispersion], list[Any], list[str]]:
     elif isinstance(film, tuple) and len(film) == 4:
         n0, n1, d, n2 = film
         media = [as_dispersion(n0, "n0"), as_dispersion(n1, "n1"), as_dispersion(n2, "n2")]
-        thicknesses = [real_array("d_nm", d, 0.0)]
+        thicknesses = [check.film_thickness("d_nm", d, array=True)]
     else:
         raise ValueError("film must be a FilmStack or a tuple (n0, n1, d_nm, n2); "
                          f"got {type(film).__name__}")
@@ -290,20 +293,30 @@ def _cosine(theta, cos_theta) -> np.ndarray:
     if (theta is None) == (cos_theta is None):
         raise ValueError("give exactly one of theta (radians, [0, pi/2]) and cos_theta ([0, 1])")
     if cos_theta is not None:
-        return real_array("cos_theta", cos_theta, 0.0, 1.0)
-    # A tolerance of a few ulps lets np.pi / 2 itself through.
-    t = real_array("theta", theta, 0.0, np.pi / 2 + 1e-12)
-    return np.cos(np.minimum(t, np.pi / 2))
+        c = real_array("cos_theta", cos_theta, 0.0, 1.0)
+    else:
+        # A tolerance of a few ulps lets np.pi / 2 itself through.
+        t = real_array("theta", theta, 0.0, np.pi / 2 + 1e-12)
+        c = np.cos(np.minimum(t, np.pi / 2))
+    # Below ~1e-77 the core's fourth powers of n cos underflow and index-matched media give
+    # 0 / 0; a cosine of 1e-60 differs from such a one by nothing double precision shows.
+    return np.where((c > 0) & (c < MIN_COSINE), MIN_COSINE, c)
 
 
 def _check_index(name, n):
-    if np.all(np.isfinite(n) & (n.real > 0) & (n.imag >= 0)):  # one pass when all is well
+    ok = (np.isfinite(n) & (n.real >= check.MIN_IOR) & (n.real <= check.MAX_IOR)
+          & (n.imag >= 0) & (n.imag <= check.MAX_EXTINCTION))
+    if np.all(ok):  # one pass when all is well
         return
     if not np.all(np.isfinite(n)):
         raise ValueError(f"{name} index must be finite at every wavelength")
     if np.any(n.real <= 0):
         raise ValueError(f"{name} index must have a real part n > 0; got min {n.real.min():g}")
-    raise ValueError(f"{name} index must have k >= 0 (absorbing); got min {n.imag.min():g}")
+    if np.any(n.imag < 0):
+        raise ValueError(f"{name} index must have k >= 0 (absorbing); got min {n.imag.min():g}")
+    raise ValueError(f"{name} index must have n in [{check.MIN_IOR:g}, {check.MAX_IOR:g}] and k <= "
+                     f"{check.MAX_EXTINCTION:g} (docs/limits.md); got n {n.real.min():g} to "
+                     f"{n.real.max():g}, k up to {n.imag.max():g}")
 
 
 def _indices(media, names, wl, power, reverse):
@@ -330,7 +343,7 @@ def _problem(film, wavelength_nm, theta, cos_theta, thickness_nm, reverse, power
         if len(thicknesses) != 1:
             raise ValueError(f"thickness_nm overrides a one-layer film; this stack has "
                              f"{len(thicknesses)} layers")
-        thicknesses = [real_array("thickness_nm", thickness_nm, 0.0)]
+        thicknesses = [check.film_thickness("thickness_nm", thickness_nm, array=True)]
     wl = wavelengths_nm(wavelength_nm)
     cos0 = _cosine(theta, cos_theta)
     indices = _indices(media, names, wl, power, reverse)
@@ -361,19 +374,53 @@ def _one_film_columns(p: _Problem):
 def _solve(p: _Problem) -> list[np.ndarray]:
     """(r_s, r_p, t_s, t_p, R_s, R_p, T_s, T_p), each of shape p.shape."""
     if len(p.thicknesses) == 1:
-        out = _core.thin_film(*_one_film_columns(p))
-    else:
-        n_all = np.stack([np.broadcast_to(n, p.shape) for n in p.indices], axis=-1)
-        d_all = np.stack([np.broadcast_to(t, p.shape) for t in p.thicknesses], axis=-1)
-        out = _core.film_stack(n_all.reshape(-1, len(p.indices)),
-                               d_all.reshape(-1, len(p.thicknesses)),
-                               _flat(p.cos0, p.shape, np.float64),
-                               _flat(p.wavelength_nm, p.shape, np.float64))
+        return _with_bare_fallback(p, [np.reshape(a, p.shape) for a in _core.thin_film(*_one_film_columns(p))])
+    return _with_bare_fallback(p, _solve_stack(p))
+
+
+def _solve_stack(p: _Problem) -> list[np.ndarray]:
+    n_all = np.stack([np.broadcast_to(n, p.shape) for n in p.indices], axis=-1)
+    d_all = np.stack([np.broadcast_to(t, p.shape) for t in p.thicknesses], axis=-1)
+    out = _core.film_stack(n_all.reshape(-1, len(p.indices)),
+                           d_all.reshape(-1, len(p.thicknesses)),
+                           _flat(p.cos0, p.shape, np.float64),
+                           _flat(p.wavelength_nm, p.shape, np.float64))
     return [np.reshape(a, p.shape) for a in out]
+
+
+def _with_bare_fallback(p: _Problem, out: list[np.ndarray]) -> list[np.ndarray]:
+    """Where every layer has zero thickness the film is absent and the answer is the bare
+    interface's. The kernels clear their fractions into one denominator, which cancels to
+    0 / 0 for such a film near grazing incidence; those entries take the bare interface."""
+    bad = ~np.all([np.isfinite(a) for a in out], axis=0)
+    if not np.any(bad):
+        return out
+    absent = np.all([np.broadcast_to(t, p.shape) == 0 for t in p.thicknesses], axis=0)
+    use = bad & absent
+    if not np.any(use):
+        return out
+    bare = _bare_interface(p)
+    return [np.where(use, b, a) for a, b in zip(out, bare[4:6] if len(out) == 2 else bare)]
+
+
+def _bare_interface(p: _Problem) -> list[np.ndarray]:
+    """(r_s, r_p, t_s, t_p, R_s, R_p, T_s, T_p) of the interface incident -> substrate."""
+    from .fresnel import fresnel_amplitudes
+
+    n_in, n_out = (np.broadcast_to(n, p.shape) for n in (p.indices[0], p.indices[-1]))
+    c = np.broadcast_to(p.cos0, p.shape)
+    a = fresnel_amplitudes(c, n_in, n_out)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        T_s = np.real(n_out * a.cos_t) / np.real(n_in * c) * np.abs(a.t_s) ** 2
+        T_p = np.real(n_out * np.conj(a.cos_t)) / np.real(n_in * np.conj(c)) * np.abs(a.t_p) ** 2
+    same = n_in == n_out
+    T_s, T_p = (np.where(same, 1.0, np.nan_to_num(t)) for t in (T_s, T_p))
+    return [a.r_s, a.r_p, a.t_s, a.t_p, np.abs(a.r_s) ** 2, np.abs(a.r_p) ** 2, T_s, T_p]
 
 
 def _solve_reflectance(p: _Problem) -> list[np.ndarray]:
     """(R_s, R_p); one film takes the kernel that skips transmission."""
     if len(p.thicknesses) == 1:
-        return [np.reshape(a, p.shape) for a in _core.thin_film_reflectance(*_one_film_columns(p))]
+        out = [np.reshape(a, p.shape) for a in _core.thin_film_reflectance(*_one_film_columns(p))]
+        return _with_bare_fallback(p, out)
     return _solve(p)[4:6]

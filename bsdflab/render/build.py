@@ -10,43 +10,43 @@ import numpy as np
 from .. import _core
 from .. import _validate as check
 from ..bsdfs.base import BSDF, from_dict
+from ..spectra import DEFAULT_WAVELENGTHS, rgb_to_spectrum, srgb_weights
 from .environment import environment_image
 from .scene import Material, Scene
 
 log = logging.getLogger(__name__)
 TABULATED = "tabulated"
+EFFORT = ("min_samples", "max_samples", "seed")
 
 
 def resolve_bsdf(d: dict[str, Any], progress: bool = False, cache_dir=None) -> BSDF:
-    """A BSDF from its dict; ``{"type": "tabulated", "model", "grid", "rel_error"}`` gives
-    the table of ``model`` from the cache, tabulating it first when it is not there."""
+    """A BSDF from its dict; ``{"type": "tabulated", "model", "grid", "rel_error"}`` (and
+    optionally ``min_samples``, ``max_samples``, ``seed``) gives the table of ``model`` from
+    the cache, tabulating it first when it is not there."""
     from ..tables import TableGrid, cached_table, tabulate
     from ..tables.table_bsdf import TableBSDF  # also registers {"type": "table"} with from_dict
 
     if d.get("type") != TABULATED:
         return from_dict(d)
 
-    unknown = set(d) - {"type", "model", "grid", "rel_error", "min_samples"}
+    unknown = set(d) - {"type", "model", "grid", "rel_error", *EFFORT}
     if unknown or "model" not in d:
-        raise ValueError("a tabulated BSDF needs 'model' and may have 'grid', 'rel_error', 'min_samples'"
-                         + (f"; unknown keys: {', '.join(sorted(unknown))}" if unknown else ""))
+        raise ValueError("a tabulated BSDF needs 'model' and may have 'grid', 'rel_error', "
+                         f"{', '.join(repr(k) for k in EFFORT)}"
+                         + (f"; unknown keys: {', '.join(sorted(map(str, unknown)))}" if unknown else ""))
     model = from_dict(d["model"])
-    try:
-        grid = TableGrid.from_dict(d["grid"]) if "grid" in d else TableGrid()
-    except (TypeError, KeyError, AttributeError) as e:
-        raise ValueError(f"bad table grid {d['grid']!r}: {e!r}") from None
+    grid = TableGrid.from_dict(d["grid"]) if "grid" in d else TableGrid()
     rel_error = check.real_scalar("rel_error", d.get("rel_error", 0.02), 0.0, 1.0, lo_open=True)
-    min_samples = d.get("min_samples")  # part of the cache key when given
-    if min_samples is not None and (isinstance(min_samples, bool) or not isinstance(min_samples, int)
-                                    or not 1 <= min_samples <= 1 << 24):
-        raise ValueError(f"min_samples must be an integer in [1, {1 << 24}], got {min_samples!r}")
+    effort = {k: d[k] for k in EFFORT if d.get(k) is not None}  # part of the cache key
 
     def make():
-        return tabulate(model, grid, rel_error=rel_error, progress=progress,
-                        **({} if min_samples is None else {"min_samples": min_samples}))
+        return tabulate(model, grid, rel_error=rel_error, progress=progress, **effort)
 
-    table, path, hit = cached_table(model.to_dict(), grid, rel_error, ("R", "G", "B"), make, directory=cache_dir,
-                                    min_samples=min_samples)
+    table, path, hit = cached_table(model.to_dict(), grid, rel_error, ("R", "G", "B"), make,
+                                    directory=cache_dir, **effort)
+    if not table.accuracy()["target_met"]:
+        log.warning("table %s does not reach its target error %g everywhere (cells stopped at "
+                    "max_samples)", path, rel_error)
     log.info("table %s %s", path, "reused from the cache" if hit else "tabulated")
     return TableBSDF(table)
 
@@ -64,17 +64,50 @@ def _projection(P) -> list[float]:
     return [] if P is None else np.asarray(P, dtype=float).ravel().tolist()
 
 
-def _add_material(core_scene, material: Material, progress: bool, cache_dir) -> int:
+def spectral_lift(core, P) -> list[float]:
+    """The (81 x C) lift of a render core's channels to the spectral bins of the default grid
+    ([] when its channels are those bins): RGB cores (P None) through Mallett & Yuksel's
+    linear basis -- exact for Diffuse, whose spectral reflectance is that lift; for RGB
+    tables an approximation (the table was integrated to RGB) --, one-channel (spectrally
+    flat) cores by broadcasting."""
+    n = len(DEFAULT_WAVELENGTHS)
+    if P is None:
+        return rgb_to_spectrum(np.eye(3), DEFAULT_WAVELENGTHS).T.ravel().tolist()
+    if core.channels == n:
+        return []
+    if core.channels == 1:
+        return [1.0] * n
+    raise ValueError(f"a render core with {core.channels} channels has no spectral form")
+
+
+def _resolver(progress: bool, cache_dir):
+    """resolve_bsdf memoised by the BSDF dict for one scene build: materials that share a
+    BSDF (the snake's body and head) share its core object and its precomputation."""
+    import json
+
+    memo: dict[str, BSDF] = {}
+
+    def resolve(d: dict[str, Any]) -> BSDF:
+        key = json.dumps(d, sort_keys=True, default=repr)
+        if key not in memo:
+            memo[key] = resolve_bsdf(d, progress, cache_dir)
+        return memo[key]
+
+    return resolve
+
+
+def _add_material(core_scene, material: Material, resolve) -> int:
     from .textures import ScaleTexture
 
-    surface = resolve_bsdf(material.bsdf, progress, cache_dir)
+    surface = resolve(material.bsdf)
     core, P = surface.render_core()
-    gap_core, gap_P = None, None
+    gap_core, gap_P, gap_U = None, None, []
     if material.gap_bsdf is not None:
-        gap_core, gap_P = resolve_bsdf(material.gap_bsdf, progress, cache_dir).render_core()
+        gap_core, gap_P = resolve(material.gap_bsdf).render_core()
+        gap_U = spectral_lift(gap_core, gap_P)
     scales = ScaleTexture.from_dict(material.scales).to_core() if material.scales is not None else None
     return core_scene.add_material(core, _projection(P), gap_core, _projection(gap_P), scales,
-                                   film_thickness(surface))
+                                   film_thickness(surface), spectral_lift(core, P), gap_U)
 
 
 def build_render_scene(scene: Scene, base_dir: str | None = None, progress: bool = False, cache_dir=None):
@@ -82,11 +115,17 @@ def build_render_scene(scene: Scene, base_dir: str | None = None, progress: bool
     resolved against ``base_dir``."""
     from ..scenes.geometry import build_mesh
 
+    from .. import limits
+
+    c = scene.camera  # the image buffers come after the meshes: count them in from the start
+    limits.check_bytes(f"a {c.width} x {c.height} render", limits.render_bytes(c.width, c.height))
     core_scene = _core.RenderScene()
     material_ids = {}
+    triangles = 0
+    resolve = _resolver(progress, cache_dir)
     for name, material in scene.materials.items():
         try:
-            material_ids[name] = _add_material(core_scene, material, progress, cache_dir)
+            material_ids[name] = _add_material(core_scene, material, resolve)
         except ValueError as e:
             raise ValueError(f"material {name!r}: {e}") from None
     for shape in scene.shapes:
@@ -94,12 +133,18 @@ def build_render_scene(scene: Scene, base_dir: str | None = None, progress: bool
             mesh = build_mesh(shape.geometry, base_dir)
         except ValueError as e:
             raise ValueError(f"shape {shape.name!r}: {e}") from None
+        triangles += len(mesh.indices)  # the scene's meshes stay in the core for the render
+        limits.check_count("the scene's triangles", triangles, "BSDFLAB_MAX_TRIANGLES")
+        limits.check_bytes(f"the scene's meshes ({triangles} triangles) and a {c.width} x {c.height} render",
+                           limits.SCENE_BYTES_PER_TRIANGLE * triangles + limits.render_bytes(c.width, c.height))
         core_scene.add_mesh(np.asarray(mesh.positions, dtype=np.float32),
                             np.asarray(mesh.indices, dtype=np.uint32),
                             None if mesh.normals is None else np.asarray(mesh.normals, dtype=np.float32),
                             None if mesh.uvs is None else np.asarray(mesh.uvs, dtype=np.float32),
                             material_ids.get(shape.material, -1),
                             list(shape.emission or (0.0, 0.0, 0.0)))
+    wl = DEFAULT_WAVELENGTHS
+    core_scene.set_spectral(rgb_to_spectrum(np.eye(3), wl).T.ravel().tolist(), srgb_weights(wl).ravel().tolist())
     c = scene.camera
     core_scene.set_camera(list(c.origin), list(c.target), list(c.up), c.fov_deg, c.width, c.height)
     env = scene.environment

@@ -5,7 +5,9 @@ import os
 
 import numpy as np
 
-from ..files import write_atomically
+from ..files import write_atomically, write_together
+
+EXR_SUFFIX, PNG_SUFFIX = ".tmp.exr", ".tmp.png"
 
 
 def _rgb(image, name: str = "image") -> np.ndarray:
@@ -15,16 +17,38 @@ def _rgb(image, name: str = "image") -> np.ndarray:
     return a
 
 
-def write_exr(path: str | os.PathLike, image, attributes: dict[str, str] | None = None) -> None:
-    """Linear RGB (H, W, 3) as a float32 OpenEXR; ``attributes`` go into the header as
-    strings (render settings, timing)."""
+def exr_writer(image, attributes: dict[str, str] | None = None):
+    """A function writing linear RGB (H, W, 3) as a float32 OpenEXR to the path it is given
+    (for ``bsdflab.files.write_together``)."""
     import OpenEXR
 
     a = _rgb(image)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     header.update({f"bsdflab.{k}": str(v) for k, v in (attributes or {}).items()})
     channels = {"RGB": np.ascontiguousarray(a)}
-    write_atomically(path, lambda tmp: OpenEXR.File(header, channels).write(tmp), suffix=".tmp.exr")
+    return lambda tmp: OpenEXR.File(header, channels).write(tmp)
+
+
+def write_exr(path: str | os.PathLike, image, attributes: dict[str, str] | None = None) -> None:
+    """Linear RGB (H, W, 3) as a float32 OpenEXR; ``attributes`` go into the header as
+    strings (render settings, timing)."""
+    write_atomically(path, exr_writer(image, attributes), suffix=EXR_SUFFIX)
+
+
+def png_writer(image, exposure: float = 0.0):
+    """A function writing the tone-mapped sRGB PNG of ``image`` to the path it is given."""
+    from PIL import Image
+
+    pixels = tone_map(image, exposure)
+    return lambda tmp: Image.fromarray(pixels, "RGB").save(tmp, format="PNG")
+
+
+def write_exr_and_png(exr_path: str | os.PathLike, png_path: str | os.PathLike, image,
+                      attributes: dict[str, str] | None = None, exposure: float = 0.0) -> None:
+    """The EXR and its PNG, published together: an interrupt leaves both old files (or
+    none) in place, never a new EXR without its PNG."""
+    write_together([(exr_path, exr_writer(image, attributes), EXR_SUFFIX),
+                    (png_path, png_writer(image, exposure), PNG_SUFFIX)])
 
 
 def read_exr(path: str | os.PathLike) -> np.ndarray:
@@ -43,8 +67,8 @@ def read_exr(path: str | os.PathLike) -> np.ndarray:
         try:
             channels = OpenEXR.File(path, separate_channels=True).channels()
             pixels = {k: np.asarray(c.pixels, dtype=np.float32) for k, c in channels.items()}
-        except Exception as e:  # the binding raises RuntimeError / ValueError on damage
-            failure = noise.first_line() or str(e)
+        except Exception as e:  # the binding raises RuntimeError / ValueError / UnicodeError on damage
+            failure = noise.first_line() or f"{type(e).__name__}: {e}"
         else:
             failure = None
     if failure is not None:
@@ -70,7 +94,4 @@ def tone_map(image, exposure: float = 0.0) -> np.ndarray:
 
 def write_png(path: str | os.PathLike, image, exposure: float = 0.0) -> None:
     """Tone-mapped sRGB PNG of a linear RGB image (see ``tone_map``)."""
-    from PIL import Image
-
-    pixels = tone_map(image, exposure)
-    write_atomically(path, lambda tmp: Image.fromarray(pixels, "RGB").save(tmp, format="PNG"), suffix=".tmp.png")
+    write_atomically(path, png_writer(image, exposure), suffix=PNG_SUFFIX)

@@ -17,38 +17,43 @@ from typing import Any
 
 import numpy as np
 
+from .. import limits
+from .._validate import brief, nesting
+
 ENVIRONMENT_TYPES = ("none", "constant", "sky", "envmap")
 MAX_RESOLUTION = 16384
-MAX_PIXELS = 1 << 26  # 67 M pixels: the accumulators take ~3 GB
+MAX_PIXELS = limits.DEFAULTS["BSDFLAB_MAX_PIXELS"]  # the default; BSDFLAB_MAX_PIXELS overrides
 
 
 def _vec3(name: str, value: Any, nonnegative: bool = False) -> tuple[float, float, float]:
     try:
         a = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be 3 numbers, got {value!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name} must be 3 finite numbers, got {brief(value)}") from None
     if a.ndim == 0:
         a = np.full(3, float(a))
     if a.shape != (3,) or not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} must be 3 finite numbers, got {value!r}")
+        raise ValueError(f"{name} must be 3 finite numbers, got {brief(value)}")
     if nonnegative and np.any(a < 0):
-        raise ValueError(f"{name} must be >= 0, got {value!r}")
+        raise ValueError(f"{name} must be >= 0, got {brief(value)}")
     return (float(a[0]), float(a[1]), float(a[2]))
 
 
 def _int_in(name: str, value: Any, lo: int, hi: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
-        raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
+        raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {brief(value)}")
     return int(value)
 
 
 def _positive(name: str, value: Any, hi: float = math.inf) -> float:
+    if isinstance(value, (str, bytes, bool)):
+        raise ValueError(f"{name} must be a number, got {brief(value)}")
     try:
         v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name} must be a finite number, got {brief(value)}") from None
     if not (0 < v < hi) or not math.isfinite(v):
-        raise ValueError(f"{name} must be in (0, {hi}), got {value!r}")
+        raise ValueError(f"{name} must be in (0, {hi}), got {brief(value)}")
     return v
 
 
@@ -73,8 +78,7 @@ class Camera:
         object.__setattr__(self, "fov_deg", _positive("camera fov_deg", self.fov_deg, 179.0))
         object.__setattr__(self, "width", _int_in("width", self.width, 1, MAX_RESOLUTION))
         object.__setattr__(self, "height", _int_in("height", self.height, 1, MAX_RESOLUTION))
-        if self.width * self.height > MAX_PIXELS:
-            raise ValueError(f"width x height must be at most {MAX_PIXELS} pixels, got {self.width * self.height}")
+        limits.check_count("width x height", self.width * self.height, "BSDFLAB_MAX_PIXELS")
         if max(abs(x) for x in (*self.origin, *self.target)) > 1e15:
             raise ValueError("camera origin and target must be within 1e15 of the world origin")
         d = np.subtract(self.target, self.origin)
@@ -224,6 +228,7 @@ class Scene:
     def from_dict(cls, d: dict[str, Any]) -> "Scene":
         if not isinstance(d, dict):
             raise ValueError("a scene must be a dict")
+        nesting("the scene", d)
         unknown = set(d) - {"name", "camera", "shapes", "materials", "environment", "max_depth", "rr_depth"}
         if unknown:
             raise ValueError(f"unknown scene keys: {', '.join(sorted(unknown))}")
@@ -237,7 +242,7 @@ class Scene:
                 rr_depth=d.get("rr_depth", 5),
                 name=str(d.get("name", "scene")),
             )
-        except (TypeError, KeyError) as e:
+        except (TypeError, KeyError, OverflowError, AttributeError) as e:
             raise ValueError(f"bad scene: {e}") from None
 
 

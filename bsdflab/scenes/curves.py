@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .geometry import Mesh, grid_indices
+from .mesh import Mesh, Params, grid_indices, normalise, reserve
 
 SNAKE_DEFAULTS = {
     "length": 100.0,
@@ -90,7 +90,7 @@ class SnakeLayout:
         """World (x, z) points and unit horizontal tangents at arc lengths s."""
         xz = np.stack([np.interp(s, self.s_dense, self.xz_dense[:, k]) for k in (0, 1)], axis=-1)
         t = np.stack([np.interp(s, self.s_dense, self.t_dense[:, k]) for k in (0, 1)], axis=-1)
-        return xz, t / np.linalg.norm(t, axis=-1, keepdims=True)
+        return xz, normalise(t)
 
     def body_radius(self, s: np.ndarray) -> np.ndarray:
         """Half-width along the body, without the front cap."""
@@ -108,13 +108,11 @@ def _smoothstep(x):
 
 def layout_of(spec: dict) -> SnakeLayout:
     """The layout of a ``snake_body`` / ``snake_head`` spec (missing parameters default)."""
-    from .geometry import GEOMETRY_TYPES, _Params
-
-    return snake_layout(_Params("snake_body", {**spec, "type": "snake_body"}, GEOMETRY_TYPES["snake_body"][0]()))
+    return snake_layout(Params("snake_body", {**spec, "type": "snake_body"}, SNAKE_DEFAULTS))
 
 
 def snake_layout(p) -> SnakeLayout:
-    """Check a snake spec's parameters (a geometry ``_Params``) and lay out the centreline."""
+    """Check a snake spec's parameters (a ``mesh.Params``) and lay out the centreline."""
     length = p.number("length", positive=True)
     values = {name: p.number(name, positive=True) for name in
               ("radius", "neck_radius", "tail_length", "neck_length", "flatten", "wavelength",
@@ -125,6 +123,11 @@ def snake_layout(p) -> SnakeLayout:
     center = p.vector("center", 2)
     layout_ints = dict(segments=p.integer("segments", 16, 200000), sides=p.integer("sides", 6, 4096),
                        head_segments=p.integer("head_segments", 8, 20000))
+    # the body's rows (segments, the front cap) or the head's, each (sides + 1) vertices,
+    # plus the dense centreline (16 samples per segment, ~10 doubles each)
+    rows = max(layout_ints["segments"] + max(4, layout_ints["sides"] // 4), layout_ints["head_segments"] + 2) + 1
+    reserve(p.kind, rows * (layout_ints["sides"] + 1) + 4 * layout_ints["segments"],
+            2 * rows * layout_ints["sides"])
     if values["flatten"] > 1.0:
         raise ValueError(f"{p.kind}: flatten must be in (0, 1], got {values['flatten']}")
     cap = 0.6 * values["neck_radius"]

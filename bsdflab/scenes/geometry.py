@@ -24,119 +24,19 @@ the front (outward for closed surfaces).
 """
 from __future__ import annotations
 
-import math
 import os
-from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
 
-MAX_SEGMENTS = 4096
+from .._validate import brief
+from . import curves
+from .mesh import MAX_SEGMENTS, Mesh, grid_indices, normalise as _normalise, reserve
+from .mesh import Params as _Params
+from .mesh import plane_axes as _orthonormal
 
-
-@dataclass(frozen=True)
-class Mesh:
-    positions: np.ndarray            # (V, 3) float64, world space
-    indices: np.ndarray              # (F, 3) int64, counter-clockwise seen from the front
-    normals: np.ndarray | None       # (V, 3) unit shading normals (front side) or None
-    uvs: np.ndarray | None           # (V, 2) or None
-
-
-# -- parameter checking ------------------------------------------------------------------
-class _Params:
-    """Reads one spec's parameters, naming the type in every error."""
-
-    def __init__(self, kind: str, spec: dict, known: dict[str, Any]):
-        self.kind, self.spec, self.known = kind, spec, known
-        unknown = set(spec) - set(known) - {"type", "to_world"}
-        if unknown:
-            raise ValueError(f"{kind}: unknown parameters {', '.join(sorted(unknown))}; "
-                             f"known: {', '.join(sorted(known))}, to_world")
-
-    def get(self, name: str) -> Any:
-        return self.spec.get(name, self.known[name])
-
-    def number(self, name: str, lo: float = -math.inf, hi: float = math.inf, positive: bool = False) -> float:
-        value = self.get(name)
-        try:
-            v = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"{self.kind}: {name} must be a number, got {value!r}") from None
-        if isinstance(value, bool) or not math.isfinite(v) or not lo <= v <= hi or (positive and v <= 0):
-            bound = "> 0" if positive else f"in [{lo}, {hi}]"
-            raise ValueError(f"{self.kind}: {name} must be a finite number {bound}, got {value!r}")
-        return v
-
-    def integer(self, name: str, lo: int, hi: int) -> int:
-        value = self.get(name)
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
-            raise ValueError(f"{self.kind}: {name} must be an integer in [{lo}, {hi}], got {value!r}")
-        return int(value)
-
-    def vector(self, name: str, n: int = 3, unit: bool = False, positive: bool = False) -> np.ndarray:
-        value = self.get(name)
-        try:
-            a = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
-            a = np.empty(0)
-        if a.shape != (n,) or not np.all(np.isfinite(a)):
-            raise ValueError(f"{self.kind}: {name} must be {n} finite numbers, got {value!r}")
-        if positive and np.any(a <= 0):
-            raise ValueError(f"{self.kind}: {name} must be > 0, got {value!r}")
-        if unit:
-            length = np.linalg.norm(a)
-            if length == 0:
-                raise ValueError(f"{self.kind}: {name} must not be zero")
-            a = a / length
-        return a
-
-    def flag(self, name: str) -> bool:
-        value = self.get(name)
-        if not isinstance(value, bool):
-            raise ValueError(f"{self.kind}: {name} must be true or false, got {value!r}")
-        return value
-
-
-# -- shared construction helpers -----------------------------------------------------------
-def grid_indices(rows: int, cols: int, flip: bool = False, collapsed_first: bool = False,
-                 collapsed_last: bool = False) -> np.ndarray:
-    """Triangles over a (rows+1) x (cols+1) vertex grid (row-major). Each quad gives two
-    triangles whose normal follows d(row) x d(col) (reversed with ``flip``); a collapsed
-    first/last row (all its vertices at one point, e.g. a pole) gives one triangle per
-    quad, so no triangle has zero area."""
-    i, j = np.meshgrid(np.arange(rows), np.arange(cols), indexing="ij")
-    a = i * (cols + 1) + j
-    b, d = a + 1, a + cols + 1
-    c = d + 1
-    lower = np.stack([a, d, c], axis=-1)   # degenerate when row i + 1 is collapsed
-    upper = np.stack([a, c, b], axis=-1)   # degenerate when row i is collapsed
-    keep_lower = np.ones((rows, cols), bool)
-    keep_upper = np.ones((rows, cols), bool)
-    if collapsed_first:
-        keep_upper[0] = False
-    if collapsed_last:
-        keep_lower[-1] = False
-    tris = np.concatenate([lower[keep_lower], upper[keep_upper]])
-    if flip:
-        tris = tris[:, ::-1]
-    return tris.astype(np.int64)
-
-
-def _orthonormal(normal: np.ndarray, up: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    """In-plane axes (t_u, t_v) with t_u x t_v = normal; t_v follows ``up``."""
-    if up is None:
-        up = np.array([0.0, 0.0, -1.0]) if abs(normal[1]) > 0.999 else np.array([0.0, 1.0, 0.0])
-    t_v = up - np.dot(up, normal) * normal
-    length = np.linalg.norm(t_v)
-    if length < 1e-9:
-        raise ValueError("up must not be parallel to the normal")
-    t_v /= length
-    return np.cross(t_v, normal), t_v
-
-
-def _normalise(v: np.ndarray) -> np.ndarray:
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
+__all__ = ["GEOMETRY_TYPES", "MAX_SEGMENTS", "Mesh", "build_mesh", "grid_indices", "mesh_area",
+           "transform_mesh", "triangle_normals", "validate_mesh"]
 
 # -- primitives --------------------------------------------------------------------------
 def _sphere(p: _Params) -> Mesh:
@@ -144,6 +44,7 @@ def _sphere(p: _Params) -> Mesh:
     radius = p.number("radius", positive=True)
     n_phi = p.integer("subdivisions", 4, MAX_SEGMENTS)
     n_theta = max(2, n_phi // 2)
+    reserve(p.kind, (n_theta + 1) * (n_phi + 1), 2 * n_theta * n_phi)
     theta = np.linspace(0.0, np.pi, n_theta + 1)
     phi = np.linspace(0.0, 2 * np.pi, n_phi + 1)
     th, ph = np.meshgrid(theta, phi, indexing="ij")
@@ -171,6 +72,7 @@ def _torus(p: _Params) -> Mesh:
         n_minor = min(MAX_SEGMENTS, max(8, round(n_major * minor / major)))
     else:
         n_minor = p.integer("minor_resolution", 3, MAX_SEGMENTS)
+    reserve(p.kind, (n_minor + 1) * (n_major + 1), 2 * n_minor * n_major)
     e1, e2 = _orthonormal(axis, None)   # e1 x e2 = axis
     psi = np.linspace(0.0, 2 * np.pi, n_minor + 1)      # around the tube: rows
     phi = np.linspace(0.0, 2 * np.pi, n_major + 1)      # around the axis: columns
@@ -208,6 +110,7 @@ def _disk(p: _Params) -> Mesh:
     normal, t_u, t_v = _plane_axes(p)
     radius = p.number("radius", positive=True)
     n = p.integer("resolution", 3, 65536)
+    reserve(p.kind, n + 1, n)
     a = np.arange(n) * (2 * np.pi / n)
     ring = np.stack([np.cos(a), np.sin(a)], axis=-1)
     local = np.concatenate([[[0.0, 0.0]], ring])
@@ -225,17 +128,34 @@ def _mesh_file(p: _Params, base_dir: str | None) -> Mesh:
         raise ValueError(f"mesh: path must be a file name, got {path!r}")
     smooth = p.flag("smooth")
     full = path if base_dir is None or os.path.isabs(path) else os.path.join(base_dir, path)
+    if not os.path.isfile(full):
+        raise ValueError(f"mesh: cannot read {full}: {'not a file' if os.path.exists(full) else 'no such file'}")
+    from .. import limits
+
+    limits.check_bytes(f"mesh: {full}", limits.MESH_FILE_EXPANSION * os.path.getsize(full))
     try:
         loaded = trimesh.load(full, force="mesh", process=False)
     except Exception as e:   # trimesh raises many types for unreadable files
-        raise ValueError(f"mesh: cannot read {full}: {e}") from None
+        raise ValueError(f"mesh: cannot read {full}: {type(e).__name__}: {e}") from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise ValueError(f"mesh: {full} holds no triangles")
     positions = np.asarray(loaded.vertices, dtype=float)
     indices = np.asarray(loaded.faces, dtype=np.int64)
+    # checked before anything indexes with them (trimesh's normals would raise IndexError)
+    if indices.ndim != 2 or indices.shape[1] != 3:
+        raise ValueError(f"mesh: {full} has faces of shape {indices.shape}, expected triangles")
+    if len(positions) == 0 or indices.min() < 0 or indices.max() >= len(positions):
+        raise ValueError(f"mesh: {full} has face indices outside [0, {len(positions) - 1}] "
+                         f"(found {indices.min()} to {indices.max()})")
+    if not np.all(np.isfinite(positions)):
+        raise ValueError(f"mesh: {full} has vertex positions that are not finite")
+    reserve(f"mesh: {full}", len(positions), len(indices))
     normals = None
     if smooth:
-        normals = np.asarray(loaded.vertex_normals, dtype=float)
+        try:
+            normals = np.asarray(loaded.vertex_normals, dtype=float)
+        except Exception as e:  # degenerate geometry inside trimesh
+            raise ValueError(f"mesh: {full}: cannot compute vertex normals ({type(e).__name__}: {e})") from None
         bad = ~np.isfinite(normals).all(axis=1) | (np.linalg.norm(normals, axis=1) < 0.5)
         if bad.any():
             raise ValueError(f"mesh: {full} has {int(bad.sum())} vertices without a usable normal")
@@ -249,10 +169,10 @@ def _mesh_file(p: _Params, base_dir: str | None) -> Mesh:
 def _matrix(kind: str, value: Any) -> np.ndarray:
     try:
         m = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         m = np.empty(0)
     if m.shape != (4, 4) or not np.all(np.isfinite(m)):
-        raise ValueError(f"{kind}: to_world must be a 4x4 matrix of finite numbers, got {value!r}")
+        raise ValueError(f"{kind}: to_world must be a 4x4 matrix of finite numbers, got {brief(value)}")
     if not np.allclose(m[3], [0, 0, 0, 1]):
         raise ValueError(f"{kind}: to_world must be affine (last row 0 0 0 1), got {m[3].tolist()}")
     if abs(np.linalg.det(m[:3, :3])) < 1e-12:
@@ -275,17 +195,13 @@ def transform_mesh(mesh: Mesh, m: np.ndarray) -> Mesh:
 # -- entry point ---------------------------------------------------------------------------
 def _snake(kind: str) -> Callable[[_Params], Mesh]:
     def build(p: _Params) -> Mesh:
-        from . import curves
-
         layout = curves.snake_layout(p)
         return curves.snake_body(layout) if kind == "snake_body" else curves.snake_head(layout)
     return build
 
 
 def _snake_defaults() -> dict[str, Any]:
-    from .curves import SNAKE_DEFAULTS
-
-    return SNAKE_DEFAULTS
+    return curves.SNAKE_DEFAULTS
 
 
 _ORIGIN = [0.0, 0.0, 0.0]

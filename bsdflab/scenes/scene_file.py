@@ -12,12 +12,14 @@ import json
 import os
 from dataclasses import replace
 
+from .. import _validate as check
 from ..files import write_atomically
 from ..render import Scene
 from .geometry import GEOMETRY_TYPES
 
 FORMAT = "bsdflab-scene"
 VERSION = 1
+MAX_FILE_BYTES = 64 << 20  # a scene is a few KiB; meshes live in their own files
 
 
 def save_scene(scene: Scene, path: str | os.PathLike) -> str:
@@ -34,6 +36,10 @@ def save_scene(scene: Scene, path: str | os.PathLike) -> str:
     return os.fspath(path)
 
 
+def _no_constant(name: str):
+    raise ValueError(f"{name} is not a number JSON allows (write a finite number)")
+
+
 def _absolute(path: str, folder: str) -> str:
     return path if os.path.isabs(path) else os.path.normpath(os.path.join(folder, path))
 
@@ -42,14 +48,30 @@ def load_scene(path: str | os.PathLike) -> Scene:
     """Read and validate a scene file; ValueError (naming the file) when it cannot be used."""
     path = os.fspath(path)
     try:
+        if os.path.isdir(path):
+            raise ValueError(f"scene file {path} is a folder")
+        size = os.path.getsize(path)
+        if size > MAX_FILE_BYTES:
+            raise ValueError(f"scene file {path} is {size} bytes, more than the {MAX_FILE_BYTES} a "
+                             "scene file may have (meshes belong in mesh files)")
         with open(path, encoding="utf-8") as f:
             text = f.read()
-    except (OSError, UnicodeDecodeError) as e:
-        raise ValueError(f"cannot read scene file {path}: {e}") from None
+    except OSError as e:
+        raise ValueError(f"cannot read scene file {path}: {e.strerror or e}") from None
+    except UnicodeDecodeError as e:
+        raise ValueError(f"cannot read scene file {path}: not UTF-8 text (byte {e.start})") from None
     try:
-        d = json.loads(text)
+        d = json.loads(text, parse_constant=_no_constant)
     except json.JSONDecodeError as e:
         raise ValueError(f"{path}: not valid JSON at line {e.lineno}, column {e.colno}: {e.msg}") from None
+    except RecursionError:
+        raise ValueError(f"{path}: the JSON is nested too deeply") from None
+    except ValueError as e:
+        raise ValueError(f"{path}: {e}") from None
+    try:
+        check.nesting("the scene", d)
+    except ValueError as e:
+        raise ValueError(f"{path}: {e}") from None
     if not isinstance(d, dict) or d.get("format") != FORMAT:
         found = d.get("format") if isinstance(d, dict) else type(d).__name__
         raise ValueError(f"{path} is not a bsdflab scene file (format {found!r}, expected {FORMAT!r})")

@@ -12,8 +12,8 @@ Axes (all angles in radians):
 
 ``values`` holds the BSDF value f(wi, wo) -- without the cosine -- of the *tabulated part*.
 When ``split_direct`` is True (layered models), the top interface's own reflection is not
-in the table: it is evaluated exactly from ``model["interfaces"][0]`` at lookup time, and
-so is the top's delta reflection. Otherwise the table holds the whole non-delta BSDF.
+in the table: it is evaluated exactly from the model's ``exact_part`` (the top interface)
+at lookup time, and so is the top's delta reflection. Otherwise the table holds the whole non-delta BSDF.
 """
 from __future__ import annotations
 
@@ -22,13 +22,28 @@ from typing import Any
 
 import numpy as np
 
-FORMAT_VERSION = 1
+from .. import _validate as check
+from .. import limits
+
+FORMAT_VERSION = 2  # 2: optional keyed signature (bsdflab.signature); 1 is still read
 LOBES = ("reflection", "transmission")
+MAX_NODES = 512
+MAX_THICKNESS_NODES = 256
+# RGB tables may hold slightly negative channels (saturated spectra lie outside the sRGB
+# gamut), never a negative luminance beyond float32 rounding of the projection.
+LUMINANCE_TOLERANCE = 1e-5
 
 
 def node_centres(n: int) -> np.ndarray:
     """n cell-centred angles over [0, pi/2] (never exactly normal or grazing)."""
     return (np.arange(n) + 0.5) * (0.5 * np.pi / n)
+
+
+def check_table_memory(grid: "TableGrid", n_channels: int, n_lobes: int = 2) -> None:
+    """Refuse a table on ``grid`` whose estimated memory exceeds ``BSDFLAB_MAX_BYTES``
+    (call before tabulating; ``n_lobes`` 2 covers transmissive models)."""
+    cells = grid.cells(n_lobes)
+    limits.check_bytes(f"a table of {cells} cells x {n_channels} channels", limits.table_bytes(cells, n_channels))
 
 
 @dataclass(frozen=True)
@@ -43,13 +58,23 @@ class TableGrid:
 
     def __post_init__(self):
         for name in ("n_theta_i", "n_theta_o", "n_phi"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not 2 <= v <= 512:
-                raise ValueError(f"{name} must be an integer in [2, 512], got {v!r}")
-        t = tuple(float(x) for x in self.thickness_nm)
-        if any(not np.isfinite(x) or x < 0 for x in t) or list(t) != sorted(set(t)):
-            raise ValueError("thickness_nm must be finite, >= 0 and strictly increasing")
+            object.__setattr__(self, name, check.integer(name, getattr(self, name), 2, MAX_NODES))
+        if not isinstance(self.thickness_nm, (list, tuple, np.ndarray)):
+            raise ValueError(f"thickness_nm must be a list of nm values, got {check.brief(self.thickness_nm)}")
+        if len(self.thickness_nm) > MAX_THICKNESS_NODES:
+            raise ValueError(f"thickness_nm must have at most {MAX_THICKNESS_NODES} nodes, "
+                             f"got {len(self.thickness_nm)}")
+        t = tuple(float(x) for x in check.film_thickness("thickness_nm", list(self.thickness_nm), array=True)
+                  ) if len(self.thickness_nm) else ()
+        if list(t) != sorted(set(t)):
+            raise ValueError("thickness_nm must be strictly increasing")
         object.__setattr__(self, "thickness_nm", t)
+        limits.check_count("table grid cells (2 lobes x thickness nodes x theta_i x theta_o x phi)",
+                           self.cells(2), "BSDFLAB_MAX_TABLE_CELLS")
+
+    def cells(self, n_lobes: int = 1) -> int:
+        """Cells of a table on this grid with ``n_lobes`` lobes."""
+        return n_lobes * max(1, len(self.thickness_nm)) * self.n_theta_i * self.n_theta_o * self.n_phi
 
     @property
     def theta_i(self) -> np.ndarray:
@@ -69,7 +94,15 @@ class TableGrid:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "TableGrid":
-        return cls(d["n_theta_i"], d["n_theta_o"], d["n_phi"], tuple(d.get("thickness_nm", ())))
+        if not isinstance(d, dict):
+            raise ValueError(f"a table grid must be a dict, got {type(d).__name__}")
+        unknown = set(d) - {"n_theta_i", "n_theta_o", "n_phi", "thickness_nm"}
+        if unknown:
+            raise ValueError(f"unknown table grid keys: {', '.join(sorted(map(str, unknown)))}")
+        missing = [k for k in ("n_theta_i", "n_theta_o", "n_phi") if k not in d]
+        if missing:
+            raise ValueError(f"a table grid needs {', '.join(missing)}")
+        return cls(d["n_theta_i"], d["n_theta_o"], d["n_phi"], d.get("thickness_nm", ()))
 
 
 @dataclass
@@ -105,7 +138,59 @@ class TableData:
                              f"expected {shape} from the grid, lobes and channels")
         if self.samples.shape != shape[:-1]:
             raise ValueError(f"table samples have shape {self.samples.shape}, expected {shape[:-1]}")
-        if any(l not in LOBES for l in self.lobes) or not self.lobes or self.lobes[0] != "reflection":
+        if self.lobes not in (LOBES[:1], LOBES):
             raise ValueError(f"table lobes must be ('reflection',) or ('reflection', 'transmission'), got {self.lobes}")
         if not np.all(np.isfinite(self.values)) or not np.all(np.isfinite(self.stderr)):
             raise ValueError("table values must be finite")
+        if np.any(self.stderr < 0):
+            raise ValueError("table standard errors must be >= 0")
+        if self.samples.size and int(self.samples.min()) < 1:
+            raise ValueError(f"every table cell must have >= 1 sample, found {int(self.samples.min())}")
+        self._check_signs()
+        rel = self.rel_error_target
+        if isinstance(rel, bool) or not isinstance(rel, (int, float)) or not 0 < rel <= 1:
+            raise ValueError(f"table rel_error_target must be a number in (0, 1], got {rel!r}")
+        if not isinstance(self.split_direct, bool):
+            raise ValueError("table split_direct must be a boolean")
+
+    def _check_signs(self) -> None:
+        if self.spectral:
+            if np.any(self.values < 0):
+                raise ValueError("spectral table values must be >= 0 (a BSDF is never negative)")
+            return
+        from .channels import LUMINANCE_RGB
+
+        lum = self.values.astype(np.float64) @ LUMINANCE_RGB
+        floor = -LUMINANCE_TOLERANCE * max(1.0, float(np.abs(lum).max(initial=0.0)))
+        if lum.size and float(lum.min()) < floor:
+            raise ValueError(f"table luminance must be >= 0 (a BSDF is never negative), found {lum.min():g}")
+
+    def accuracy(self) -> dict[str, Any]:
+        """Whether the tabulator reached its target: ``target_met`` is False when any cell
+        of a stochastic (layered) table stopped at ``max_samples`` (its refinement was cut
+        by the cap, not by the error), or when the table does not record its effort."""
+        if not self.split_direct:  # deterministic models: one exact evaluation per cell
+            return {"target_met": True, "capped_cells": 0, "max_samples": self.meta.get("max_samples")}
+        cap = self.meta.get("max_samples")
+        if isinstance(cap, bool) or not isinstance(cap, int):
+            return {"target_met": False, "capped_cells": int(self.samples.size), "max_samples": None}
+        capped = int(np.count_nonzero(self.samples >= cap))
+        return {"target_met": capped == 0, "capped_cells": capped, "max_samples": cap}
+
+    def check_model(self):
+        """The table's model rebuilt through ``from_dict`` (ValueError when it is not a
+        valid model), checked against the table: layered models are split, and the
+        transmission lobe is there exactly when the model transmits."""
+        from ..bsdfs.base import from_dict
+        from ..lobes import Lobe
+
+        model = from_dict(self.model)
+        layered = model.type_name == "layered"
+        if self.split_direct != layered:
+            raise ValueError(f"split_direct is {self.split_direct} but the model is "
+                             f"{'' if layered else 'not '}layered")
+        transmits = bool(model.lobes & Lobe.TRANSMISSION)
+        if (len(self.lobes) == 2) != transmits:
+            raise ValueError(f"the table has lobes {self.lobes} but the model "
+                             f"{'transmits' if transmits else 'does not transmit'}")
+        return model

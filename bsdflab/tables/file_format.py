@@ -26,20 +26,25 @@ String header attributes, JSON where structured: ``bsdflab.format_version``,
 ``bsdflab.version``, ``bsdflab.model``, ``bsdflab.grid``, ``bsdflab.lobes``,
 ``bsdflab.channels``, ``bsdflab.colour_space``, ``bsdflab.units``, ``bsdflab.layout``,
 ``bsdflab.split_direct``, ``bsdflab.rel_error_target``, ``bsdflab.meta`` and
-``bsdflab.content_hash``.
+``bsdflab.content_hash``; optionally ``bsdflab.signature`` (format version 2).
 
 Content hash
 ------------
 ``bsdflab.content_hash`` is the lowercase hex SHA-256 of, in this order:
 
-1. the canonical JSON of every other ``bsdflab.*`` attribute as an object mapping the
+1. the canonical JSON of every other ``bsdflab.*`` attribute (``bsdflab.signature``
+   excepted) as an object mapping the
    attribute name to its string value (keys sorted, separators ``","`` and ``":"``, ASCII
    only -- Python's ``json.dumps(d, sort_keys=True, separators=(",", ":"))``), as UTF-8;
 2. the raw bytes of every channel image, row-major, little-endian: ``f.<name>`` for each
    channel in ``bsdflab.channels`` order, then ``err.<name>`` in the same order, then
    ``samples`` (uint32).
 
-So any change to the pixels or to the bsdflab metadata after writing is detected.
+So any accidental change to the pixels or to the bsdflab metadata is detected. The hash
+is unkeyed: anyone can recompute it after an edit. ``bsdflab.signature`` (written when a
+key is configured, see ``bsdflab.tables.signing``) is an HMAC-SHA256 of the content hash
+under a secret key: only key holders can make a file that verifies. On load every field
+is also re-validated for meaning (``TableData.check``, the model through ``from_dict``).
 """
 from __future__ import annotations
 
@@ -51,16 +56,20 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
+from .. import limits
 from ..files import write_atomically
+from . import signing
 from ._quiet import quiet_native_output
 from .data import FORMAT_VERSION, TableData, TableGrid
 
 PREFIX = "bsdflab."
 HASH_ATTRIBUTE = PREFIX + "content_hash"
+SIGNATURE_ATTRIBUTE = PREFIX + "signature"
+UNHASHED = (HASH_ATTRIBUTE, SIGNATURE_ATTRIBUTE)
 REQUIRED = tuple(PREFIX + name for name in (
     "format_version", "version", "model", "grid", "lobes", "channels", "colour_space", "units",
     "layout", "split_direct", "rel_error_target", "meta", "content_hash"))
-SUPPORTED_VERSIONS = (FORMAT_VERSION,)
+SUPPORTED_VERSIONS = (1, FORMAT_VERSION)  # 1 differs only in having no signature
 
 RGB_COLOUR_SPACE = "linear sRGB (D65)"
 SPECTRAL_COLOUR_SPACE = "spectral, nm"
@@ -102,7 +111,7 @@ def to_images(array: np.ndarray) -> np.ndarray:
 def content_hash(attributes: dict[str, str], images: list[np.ndarray]) -> str:
     """SHA-256 over the bsdflab attributes (all but the hash) and the channel images."""
     h = hashlib.sha256()
-    others = {k: v for k, v in attributes.items() if k.startswith(PREFIX) and k != HASH_ATTRIBUTE}
+    others = {k: v for k, v in attributes.items() if k.startswith(PREFIX) and k not in UNHASHED}
     h.update(canonical_json(others).encode("utf-8"))
     for image in images:
         little = image.astype(image.dtype.newbyteorder("<"), copy=False)
@@ -145,7 +154,7 @@ def _channel_images(table: TableData) -> dict[str, np.ndarray]:
     return images
 
 
-def write_table(path: str | os.PathLike, table: TableData) -> None:
+def write_table(path: str | os.PathLike, table: TableData, key: bytes | str | None = None) -> None:
     """Write `table` to `path` as an OpenEXR table file, atomically.
 
     Parameters
@@ -155,6 +164,9 @@ def write_table(path: str | os.PathLike, table: TableData) -> None:
     table : TableData
         Must pass ``table.check()``; values and stderr are stored as float32, samples as
         uint32 (so they must be >= 0).
+    key : bytes or str, optional
+        Signing key (``bsdflab.tables.signing``); default ``$BSDFLAB_TABLE_KEY``. With a
+        key the file carries ``bsdflab.signature``.
 
     Raises
     ------
@@ -172,6 +184,9 @@ def write_table(path: str | os.PathLike, table: TableData) -> None:
     attributes = _attributes(table)
     images = _channel_images(table)
     attributes[HASH_ATTRIBUTE] = content_hash(attributes, list(images.values()))
+    secret = signing.resolve_key(key)
+    if secret is not None:
+        attributes[SIGNATURE_ATTRIBUTE] = signing.sign(secret, attributes[HASH_ATTRIBUTE])
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage, **attributes}
 
     def write(tmp: str) -> None:
@@ -193,23 +208,37 @@ def read_attributes(path: str | os.PathLike) -> dict[str, str]:
     return {k: v for k, v in header.items() if k.startswith(PREFIX)}
 
 
-def read_table(path: str | os.PathLike) -> TableData:
-    """Read a table file and verify it: format version, shapes and content hash.
+def read_table(path: str | os.PathLike, key: bytes | str | None = None) -> TableData:
+    """Read a table file and verify it: format version, shapes, content hash, signature
+    (when a key is configured) and the meaning of every field.
+
+    Parameters
+    ----------
+    path : str or path-like
+    key : bytes or str, optional
+        Verification key; default ``$BSDFLAB_TABLE_KEY``. With a key, unsigned files and
+        files whose signature does not verify are refused.
 
     Raises
     ------
     ValueError
         Naming the problem: missing file, not an EXR file, not a bsdflab table, written by
-        an unsupported format version, or corrupt (unreadable, inconsistent, or changed
-        after it was written).
+        an unsupported format version, corrupt (unreadable, inconsistent, or changed
+        after it was written), invalid (a field out of range, a model ``from_dict``
+        refuses), unsigned or wrongly signed when a key is set, or too large for the
+        memory cap (``bsdflab.limits``).
     """
     path = os.fspath(path)
+    if not isinstance(path, str):
+        raise ValueError("a table path must be a string")
+    header, _ = _open(path, header_only=True)
+    _check_version(path, header)
+    _check_size(path, header)
     header, channels = _open(path, header_only=False)
 
     def corrupt(why: str) -> ValueError:
         return ValueError(f"table file {path} is corrupt: {why}")
 
-    _check_version(path, header)
     missing = [name for name in REQUIRED if name not in header]
     if missing:
         raise ValueError(f"{path} is not a bsdflab table (missing attribute {', '.join(missing)})")
@@ -219,9 +248,13 @@ def read_table(path: str | os.PathLike) -> TableData:
 
     def parsed(name: str) -> Any:
         try:
-            return json.loads(attributes[PREFIX + name])
+            return json.loads(attributes[PREFIX + name], parse_constant=_no_constant)
         except json.JSONDecodeError as e:
             raise corrupt(f"attribute {PREFIX + name} is not valid JSON ({e})") from None
+        except ValueError as e:  # NaN / Infinity, which canonical JSON never writes
+            raise corrupt(f"attribute {PREFIX + name}: {e}") from None
+        except RecursionError:
+            raise corrupt(f"attribute {PREFIX + name} is nested too deeply") from None
 
     names = parsed("channels")
     if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
@@ -238,7 +271,42 @@ def read_table(path: str | os.PathLike) -> TableData:
         images.append(pixels)
     if content_hash(attributes, images) != attributes[HASH_ATTRIBUTE]:
         raise corrupt("content hash mismatch (file changed after it was written)")
-    return _table_from(parsed, attributes, images, len(names), corrupt)
+    _check_signature(path, attributes, key)
+    table = _table_from(parsed, attributes, images, len(names), corrupt)
+    try:
+        table.check_model()
+    except ValueError as e:
+        raise ValueError(f"table file {path} is invalid: its model: {e}") from None
+    return table
+
+
+def _check_signature(path: str, attributes: dict[str, str], key) -> None:
+    secret = signing.resolve_key(key)
+    if secret is None:
+        return  # nothing to verify against; the content hash still caught accidents
+    signature = attributes.get(SIGNATURE_ATTRIBUTE)
+    if signature is None:
+        raise ValueError(f"table file {path} is not signed, and a signing key is set "
+                         f"({signing.ENV_VAR}): refusing an unsigned table")
+    if not signing.verify(secret, attributes[HASH_ATTRIBUTE], signature):
+        raise ValueError(f"table file {path} has a signature that does not verify with the "
+                         "configured key (signed with another key, or edited and re-hashed)")
+
+
+def _check_size(path: str, header: dict[str, Any]) -> None:
+    """Refuse a table whose declared grid exceeds the caps, before reading any pixels."""
+    try:
+        grid = TableGrid.from_dict(json.loads(header[PREFIX + "grid"]))
+        n_lobes = len(json.loads(header[PREFIX + "lobes"]))
+        n_channels = len(json.loads(header[PREFIX + "channels"]))
+    except (KeyError, TypeError, ValueError, RecursionError):
+        return  # malformed headers are reported by the full checks that follow
+    limits.check_bytes(f"table file {path} ({grid.cells(n_lobes)} cells x {n_channels} channels)",
+                       limits.table_bytes(grid.cells(n_lobes), n_channels))
+
+
+def _no_constant(name: str):
+    raise ValueError(f"{name} is not allowed")
 
 
 def _table_from(parsed, attributes, images, n_channels, corrupt) -> TableData:
@@ -286,7 +354,7 @@ def _check_version(path: str, header: dict[str, Any]) -> None:
     if version not in SUPPORTED_VERSIONS:
         readable = ", ".join(str(v) for v in SUPPORTED_VERSIONS)
         raise ValueError(f"table file {path} was written by format version {version}, "
-                         f"this bsdflab reads version {readable}")
+                         f"this bsdflab reads versions {readable}")
 
 
 def _open(path: str, header_only: bool) -> tuple[dict[str, Any], dict[str, np.ndarray]]:

@@ -26,18 +26,28 @@ class TableBSDF(BSDF):
     ----------
     table : TableData, str or path
         The table, or the path of a table file (read and verified).
+    film_lookup : bool, optional
+        RGB tables only: evaluate the top interface's exact part through an RGB lookup of
+        its Fresnel term over (cos theta, film thickness) (fast; interpolation error below
+        FILM_LOOKUP_MAX_ERROR) instead of spectrally at every evaluation. Default
+        ``FILM_LOOKUP`` (True).
     """
 
     type_name = "table"
 
-    def __init__(self, table=None, path: str | None = None):
+    def __init__(self, table=None, path: str | None = None, film_lookup: bool | None = None):
         super().__init__()
+        self.film_lookup = FILM_LOOKUP if film_lookup is None else bool(film_lookup)
         if table is None and path is None:
             raise ValueError("give a table (TableData) or the path of a table file")
         if not isinstance(table, TableData):
             from .file_format import read_table
 
-            path = os.fspath(table if table is not None else path)
+            source = table if table is not None else path
+            if not isinstance(source, (str, os.PathLike)):
+                raise ValueError(f"table must be a TableData or the path of a table file, "
+                                 f"got {type(source).__name__}")
+            path = os.fspath(source)
             table = read_table(path)
         table.check()
         self.table = table
@@ -77,17 +87,22 @@ class TableBSDF(BSDF):
         g = t.grid
         direct, P = None, []
         if t.split_direct:
-            top = from_dict(t.model["interfaces"][0])
-            if self._wavelengths is None:
+            top = from_dict(t.model).exact_part
+            if self._wavelengths is None and not self.film_lookup:
                 direct = top._core(DEFAULT_WAVELENGTHS)
                 P = srgb_weights(DEFAULT_WAVELENGTHS).ravel()
+            elif self._wavelengths is None:
+                thickness = [x for x in g.thickness_nm if x >= 0]
+                direct = rgb_interface(top, (min(thickness), max(thickness)) if thickness else None,
+                                       default_film_thickness(t.model))
+                P = np.eye(3).ravel()
             else:
                 direct = top._core(self._wavelengths)
                 P = np.eye(len(self._wavelengths)).ravel()
         lum = LUMINANCE_RGB if self._wavelengths is None else np.full(len(t.channels), 1 / len(t.channels))
         return _core.TabulatedBSDF(list(channel_ids), len(t.lobes), g.n_theta_i, g.n_theta_o, g.n_phi,
                                    list(g.thickness_nm), t.values.ravel().tolist(), list(lum), direct,
-                                   list(P), default_film_thickness(t.model))
+                                   list(P), default_film_thickness(t.model), transmission_eta(t.model))
 
     def _params(self) -> dict[str, Any]:
         if self.path is None:
@@ -97,10 +112,62 @@ class TableBSDF(BSDF):
 
 def default_film_thickness(model: dict) -> float:
     """Total film thickness (nm) of the model's coating -- the top interface's for a layered
-    model, the model's own for a coated interface -- or -1 without a film."""
+    model, the model's own for a coated interface -- or -1 without a film. The model is
+    asked (`film_thickness_of`); a dict that is no valid model has no film."""
     try:
-        coated = model["interfaces"][0] if "interfaces" in model else model
-        film = coated.get("film") or []
-        return float(sum(layer["thickness_nm"] for layer in film)) if film else -1.0
-    except (KeyError, IndexError, TypeError, AttributeError):
+        bsdf = from_dict(model)
+    except (ValueError, TypeError):
         return -1.0
+    return film_thickness_of(bsdf)
+
+
+def film_thickness_of(bsdf: BSDF) -> float:
+    """A model's film thickness (nm): its own answer (`film_thickness_nm`, e.g. a layered
+    model's top film) or the total of its own `film` layers; -1 without a film."""
+    own = getattr(bsdf, "film_thickness_nm", None)
+    if own is not None:
+        return float(own)
+    film = getattr(bsdf, "film", None) or ()
+    return float(sum(layer.thickness_nm for layer in film)) if film else -1.0
+
+
+# The RGB lookup of the top interface's Fresnel term (see core/include/bsdflab/projected_term.h):
+# nodes uniform in cos theta_i and in film thickness. Its interpolation error, measured
+# against the exact spectral film at random off-grid points (tests/test_film_lookup.py),
+# is below FILM_LOOKUP_MAX_ERROR in every RGB channel of R and T.
+FILM_LOOKUP = True
+FILM_LOOKUP_COS_NODES = 257
+FILM_LOOKUP_STEP_NM = 1.0
+FILM_LOOKUP_MAX_ERROR = 2e-4  # measured: 8.5e-5 at 2000 random points of the snake film
+
+
+def rgb_interface(top: BSDF, thickness_range, default_thickness: float):
+    """The core of interface ``top`` answering in linear sRGB through a lookup of its
+    spectral Fresnel term projected by the colour weights; ``thickness_range`` (nm) is the
+    (lo, hi) film-thickness range to tabulate, None for the model's own film only."""
+    from ..bsdfs.interface_term import make_term
+    from ..bsdfs.rough import RoughDielectric
+
+    wl = DEFAULT_WAVELENGTHS
+    exact = make_term(wl, top.ext_ior, top.film, int_ior=top.int_ior)
+    lo, hi = thickness_range if (thickness_range and top.film) else (-1.0, -1.0)
+    n_thickness = max(2, int(np.ceil((hi - lo) / FILM_LOOKUP_STEP_NM)) + 1) if hi > lo else 1
+    term = _core.ProjectedFresnelTerm(exact, list(srgb_weights(wl).ravel()), 3, float(lo), float(hi),
+                                      float(default_thickness), FILM_LOOKUP_COS_NODES, n_thickness)
+    ids = [0.0, 1.0, 2.0]
+    if isinstance(top, RoughDielectric):  # its own distribution and energy compensation
+        return top._interface(ids, term, False)
+    return _core.SmoothInterface(ids, term, False)
+
+
+def transmission_eta(model: dict) -> float:
+    """n_t / n_i across a layered model (the product of its boundaries' int/ext ratios),
+    1 when the model does not say."""
+    try:
+        eta = 1.0
+        for b in [*model["interfaces"], model["base"]]:
+            if "int_ior" in b and "ext_ior" in b:
+                eta *= float(b["int_ior"]) / float(b["ext_ior"])
+        return eta
+    except (KeyError, TypeError, ValueError):
+        return 1.0

@@ -19,7 +19,7 @@ What each tool checks
     mean ``sample`` weight; they must agree, and be <= 1 (= 1 without absorption).
 ``reciprocity_error`` / ``eval_pdf_consistency`` (checks.py)
     f(wi, wo) = f(wo, wi); ``sample``'s weight and pdf equal ``eval / pdf`` and ``pdf``.
-``pearson_chi2``, ``pool_low_expected``, ``sidak_significance`` (stats.py)
+``pearson_chi2``, ``pool_low_expected``, ``sidak_significance``, ``sidak_z_limit`` (stats.py)
     The statistical pieces, for tests of your own.
 
 Significance and repeated tests
@@ -67,10 +67,10 @@ from .directions import random_unit_vectors, spherical_directions
 from .discrete import DiscreteChoiceResult, discrete_choice_chi2
 from .furnace import AlbedoEstimate, albedo_sampled, albedo_uniform
 from .image_compare import ImageTestResult, image_z_test, relative_mse  # noqa: F401  (image-level renderer checks)
-from .stats import PearsonResult, PooledCells, pearson_chi2, pool_low_expected, sidak_significance
+from .stats import PearsonResult, PooledCells, pearson_chi2, pool_low_expected, sidak_significance, sidak_z_limit
 
 __all__ = ["AlbedoEstimate", "ChiSquareTest", "ConsistencyReport", "DiscreteChoiceResult",
            "PearsonResult", "PooledCells", "albedo_sampled", "albedo_uniform", "bsdf_chi2",
            "discrete_choice_chi2", "eval_pdf_consistency", "pearson_chi2", "pool_low_expected",
-           "random_unit_vectors", "reciprocity_error", "sidak_significance",
+           "random_unit_vectors", "reciprocity_error", "sidak_significance", "sidak_z_limit",
            "spherical_directions"]

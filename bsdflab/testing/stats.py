@@ -60,6 +60,19 @@ def sidak_significance(significance: float, test_count: int = 1) -> float:
     return 1.0 - (1.0 - alpha) ** (1.0 / m)
 
 
+def sidak_z_limit(significance: float, test_count: int = 1) -> float:
+    """The |z| below which each of ``test_count`` two-sided normal z-tests passes, so that
+    together they wrongly reject a true hypothesis with probability ``significance``
+    (Sidak): the normal quantile at 1 - ``sidak_significance(...)`` / 2.
+
+    Examples
+    --------
+    >>> round(sidak_z_limit(0.01, 64), 2)
+    3.78
+    """
+    return float(sps.norm.isf(sidak_significance(significance, test_count) / 2))
+
+
 def pool_low_expected(observed, expected, min_expected: float = 5.0) -> PooledCells:
     """Merge cells with too few expected counts so the chi-square approximation holds.
 

@@ -1,4 +1,6 @@
 // Bindings of Fresnel terms and the smooth / rough interface BSDFs built from them.
+#include <array>
+#include <cmath>
 #include <pybind11/complex.h>
 #include <pybind11/stl.h>
 #include "arrays.h"
@@ -34,6 +36,45 @@ void bind_interfaces(py::module_ &m) {
         .def(py::init<std::vector<double>, std::shared_ptr<const FresnelTerm>, bool>(),
              py::arg("wavelengths"), py::arg("term"), py::arg("two_sided"));
     py::class_<RoughInterface, BSDF, std::shared_ptr<RoughInterface>>(m, "RoughInterface")
-        .def(py::init<std::vector<double>, std::shared_ptr<const FresnelTerm>, double, bool>(),
-             py::arg("wavelengths"), py::arg("term"), py::arg("alpha"), py::arg("two_sided"));
+        .def(py::init([](std::vector<double> wl, std::shared_ptr<const FresnelTerm> term,
+                         double alpha, bool two_sided, const std::string &distribution,
+                         bool multiscatter) {
+                 MicrofacetType type;
+                 if (distribution == "ggx") type = MicrofacetType::GGX;
+                 else if (distribution == "beckmann") type = MicrofacetType::Beckmann;
+                 else throw std::invalid_argument("distribution must be 'ggx' or 'beckmann'");
+                 py::gil_scoped_release release; // the energy tables take a moment
+                 return std::make_shared<RoughInterface>(std::move(wl), std::move(term), alpha,
+                                                         two_sided, type, multiscatter);
+             }),
+             py::arg("wavelengths"), py::arg("term"), py::arg("alpha"), py::arg("two_sided"),
+             py::arg("distribution") = "ggx", py::arg("multiscatter") = false)
+        .def_property_readonly("pass_through", &RoughInterface::pass_through)
+        .def("single_scattering_albedo",
+             [](const RoughInterface &r, int side, double mu) {
+                 const MultiScatter *ms = r.multiscatter();
+                 if (!ms) throw std::invalid_argument("only an energy-compensated interface has albedo tables");
+                 std::vector<double> out(r.channels());
+                 for (int c = 0; c < r.channels(); ++c) out[c] = ms->albedo(side, mu, c);
+                 return out;
+             },
+             py::arg("side"), py::arg("mu"),
+             "the tabulated single-scattering albedo per channel (side 0 above, 1 below)");
+    // Scalar access to the distributions, for tests against quadrature.
+    auto distribution = [](const std::string &name, double alpha) {
+        if (name != "ggx" && name != "beckmann")
+            throw std::invalid_argument("distribution must be 'ggx' or 'beckmann'");
+        if (!(alpha > 0) || !std::isfinite(alpha)) throw std::invalid_argument("alpha must be > 0");
+        return Microfacet(name == "ggx" ? MicrofacetType::GGX : MicrofacetType::Beckmann, alpha);
+    };
+    m.def("microfacet_d",
+          [distribution](const std::string &name, double alpha, std::array<double, 3> v) {
+              return distribution(name, alpha).D(Vec3{v[0], v[1], v[2]});
+          },
+          py::arg("distribution"), py::arg("alpha"), py::arg("m"), "D(m) of a unit normal");
+    m.def("microfacet_lambda",
+          [distribution](const std::string &name, double alpha, std::array<double, 3> v) {
+              return distribution(name, alpha).Lambda(Vec3{v[0], v[1], v[2]});
+          },
+          py::arg("distribution"), py::arg("alpha"), py::arg("v"), "Smith's Lambda of a direction");
 }

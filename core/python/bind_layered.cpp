@@ -1,7 +1,11 @@
 // Bindings of the layered PFMC BSDF: construction from boundary BSDFs and slabs, plus the
-// estimator's extra entry points (explicit effort and seed, standard error, delta lobe).
+// estimator's extra entry points (explicit effort and seed, standard error, the count of
+// non-finite walks, the delta lobe) and its scattered part (the model without the top's
+// own reflection).
 #include <pybind11/stl.h>
+#include <atomic>
 #include "arrays.h"
+#include "bsdflab/estimate.h"
 #include "bsdflab/layered.h"
 #include "bsdflab/parallel.h"
 
@@ -15,28 +19,36 @@ static Query query_of(const Darr &t, std::size_t i) {
     return q;
 }
 
-static py::tuple eval_with_error_many(const LayeredBSDF &b, const Darr &wi, const Darr &wo,
-                                      uint32_t lobes, const py::object &thickness, int samples,
-                                      uint64_t seed) {
+// (value, standard error, non-finite walks) of any stochastic model, for N pairs.
+static py::tuple estimate_many(const BSDF &model, const Darr &wi, const Darr &wo, uint32_t lobes,
+                               const py::object &thickness, int samples, uint64_t seed) {
+    const StochasticEstimator *est = model.stochastic();
+    if (!est) throw std::invalid_argument("this model is not stochastic");
     require_rows3(wi, "wi");
     require_rows3(wo, "wo");
-    std::size_t n = wi.shape(0), C = b.channels();
+    std::size_t n = wi.shape(0), C = model.channels();
     if (static_cast<std::size_t>(wo.shape(0)) != n) throw std::invalid_argument("wi and wo must have the same length");
+    if (samples < 1) throw std::invalid_argument("samples must be >= 1");
     Darr t = thickness.is_none() ? Darr() : py::cast<Darr>(thickness);
     if (t.size() > 0 && static_cast<std::size_t>(t.size()) != n) throw std::invalid_argument("thickness must have shape (N,)");
     py::array_t<double> out({n, C}), err({n, C});
     const double *pi = wi.data(), *po = wo.data();
     double *o = out.mutable_data(), *e = err.mutable_data();
+    std::atomic<std::uint64_t> nonfinite{0};
     {
         py::gil_scoped_release nogil;
+        EstimateRequest req{samples, seed};
         // Each pair is a whole Monte Carlo estimate: parallelise from a single pair up.
         parallel_for(n, 1, [&](std::size_t s, std::size_t end) {
+            ThreadWorkspace lease;
+            std::uint64_t bad = 0;
             for (std::size_t i = s; i < end; ++i)
-                b.eval_with_error(row(pi, i), row(po, i), lobes, query_of(t, i), samples, seed,
-                                  o + i * C, e + i * C);
+                bad += est->estimate(row(pi, i), row(po, i), lobes, query_of(t, i), req, lease.get(),
+                                     o + i * C, e + i * C);
+            nonfinite += bad;
         });
     }
-    return py::make_tuple(out, err);
+    return py::make_tuple(out, err, static_cast<std::uint64_t>(nonfinite));
 }
 
 static py::array_t<double> delta_reflectance_many(const LayeredBSDF &b, const Darr &wi,
@@ -51,6 +63,7 @@ static py::array_t<double> delta_reflectance_many(const LayeredBSDF &b, const Da
 }
 
 void bind_layered(py::module_ &m) {
+    m.attr("estimator_version") = kEstimatorVersion;
     py::class_<LayeredBSDF, BSDF, std::shared_ptr<LayeredBSDF>>(m, "LayeredBSDF")
         .def(py::init([](std::vector<double> wavelengths, std::vector<std::shared_ptr<BSDF>> boundaries,
                          std::vector<double> thickness, std::vector<std::vector<double>> sigma_a,
@@ -74,7 +87,16 @@ void bind_layered(py::module_ &m) {
              py::arg("wavelengths"), py::arg("boundaries"), py::arg("thickness"), py::arg("sigma_a"),
              py::arg("sigma_s"), py::arg("phase_kind"), py::arg("phase_param"), py::arg("samples"),
              py::arg("seed"), py::arg("max_depth"), py::arg("nee"))
-        .def("eval_with_error", &eval_with_error_many, py::arg("wi"), py::arg("wo"),
-             py::arg("lobes"), py::arg("thickness"), py::arg("samples"), py::arg("seed"))
-        .def("delta_reflectance", &delta_reflectance_many, py::arg("wi"), py::arg("thickness") = py::none());
+        .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"),
+             py::arg("thickness"), py::arg("samples"), py::arg("seed"),
+             "(value, stderr, non-finite walk count) with an explicit effort and seed")
+        .def("delta_reflectance", &delta_reflectance_many, py::arg("wi"), py::arg("thickness") = py::none())
+        .def("scattered_part", [](const std::shared_ptr<LayeredBSDF> &self) {
+            return std::make_shared<ScatteredPart>(self);
+        }, "the model without its top boundary's own reflection (a stochastic BSDF)");
+
+    py::class_<ScatteredPart, BSDF, std::shared_ptr<ScatteredPart>>(m, "LayeredScatteredPart")
+        .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"),
+             py::arg("thickness"), py::arg("samples"), py::arg("seed"),
+             "(value, stderr, non-finite walk count) with an explicit effort and seed");
 }

@@ -25,10 +25,11 @@ Vec3 vec3(const std::vector<double> &v, const char *name) {
     return {v[0], v[1], v[2]};
 }
 
-RenderBSDF render_bsdf(const std::shared_ptr<BSDF> &b, const std::vector<double> &P) {
+RenderBSDF render_bsdf(const std::shared_ptr<BSDF> &b, const std::vector<double> &P, const std::vector<double> &U) {
     RenderBSDF r;
     r.bsdf = b;
     r.P = P;
+    r.U = U;
     return r;
 }
 
@@ -40,12 +41,13 @@ void bind_render(py::module_ &m) {
         .def("add_material",
              [](RenderScene &s, const std::shared_ptr<BSDF> &surface, const std::vector<double> &P,
                 const std::shared_ptr<BSDF> &gap, const std::vector<double> &gap_P,
-                const std::shared_ptr<ScaleTexture> &scales, double film_thickness_nm) {
+                const std::shared_ptr<ScaleTexture> &scales, double film_thickness_nm, const std::vector<double> &U,
+                const std::vector<double> &gap_U) {
                  Material mat;
                  if (!surface) throw std::invalid_argument("material: a BSDF is required");
-                 mat.surface = render_bsdf(surface, P);
+                 mat.surface = render_bsdf(surface, P, U);
                  if (gap) {
-                     mat.gap = render_bsdf(gap, gap_P);
+                     mat.gap = render_bsdf(gap, gap_P, gap_U);
                      mat.has_gap = true;
                  }
                  mat.scales = scales;
@@ -53,8 +55,13 @@ void bind_render(py::module_ &m) {
                  return s.add_material(std::move(mat));
              },
              py::arg("surface"), py::arg("P"), py::arg("gap") = nullptr, py::arg("gap_P") = std::vector<double>(),
-             py::arg("scales") = nullptr, py::arg("film_thickness_nm") = -1.0,
-             "P: the (3 x C) row-major projection of the BSDF's channels to RGB, [] if it answers in RGB")
+             py::arg("scales") = nullptr, py::arg("film_thickness_nm") = -1.0, py::arg("U") = std::vector<double>(),
+             py::arg("gap_U") = std::vector<double>(),
+             "P: the (3 x C) row-major projection of the BSDF's channels to RGB, [] if it answers in RGB; "
+             "U: the (81 x C) lift to the spectral bins, [] if its channels are those bins")
+        .def("set_spectral", &RenderScene::set_spectral, py::arg("U"), py::arg("W"),
+             "U (81 x 3) lifts RGB emission to the spectral bins, W (3 x 81) takes them to linear sRGB")
+        .def_property_readonly("spectral_ready", &RenderScene::spectral_ready)
         .def("add_mesh",
              [](RenderScene &s, const py::object &positions, const py::object &indices, const py::object &normals,
                 const py::object &uvs, int material, const std::vector<double> &emission) {
@@ -95,6 +102,16 @@ void bind_render(py::module_ &m) {
                                                         scale));
              })
         .def("commit", &RenderScene::commit, py::call_guard<py::gil_scoped_release>())
+        .def("embree_seconds",
+             [](const RenderScene &sc, py::array_t<float, py::array::c_style | py::array::forcecast> rays) {
+                 if (rays.ndim() != 2 || rays.shape(1) != 8) throw std::invalid_argument("rays must be (N, 8)");
+                 if (!sc.committed()) throw std::invalid_argument("commit() the scene first");
+                 const float *p = rays.data();
+                 std::size_t n = rays.shape(0);
+                 py::gil_scoped_release release;
+                 return sc.trace_recorded(p, n);
+             },
+             py::arg("rays"), "wall seconds Embree alone takes to trace recorded rays on all cores")
         .def("environment_eval",
              [](const RenderScene &s, const Darr &d) {
                  require_rows3(d, "d");
@@ -129,7 +146,7 @@ void bind_render(py::module_ &m) {
 
     py::class_<RenderJob, std::shared_ptr<RenderJob>>(m, "RenderJob")
         .def(py::init([](std::shared_ptr<RenderScene> scene, int spp, int pass_spp, int max_depth, int rr_depth,
-                         uint64_t seed, int tile, int strategy) {
+                         uint64_t seed, int tile, int strategy, bool spectral) {
                  if (strategy < 0 || strategy > 2) throw std::invalid_argument("strategy must be 0 (MIS), 1 (BSDF) or 2 (light)");
                  RenderSettings s;
                  s.strategy = LightStrategy(strategy);
@@ -139,10 +156,12 @@ void bind_render(py::module_ &m) {
                  s.rr_depth = rr_depth;
                  s.seed = seed;
                  s.tile = tile;
+                 s.spectral = spectral;
                  return std::make_shared<RenderJob>(std::move(scene), s);
              }),
              py::arg("scene"), py::arg("spp"), py::arg("pass_spp") = 4, py::arg("max_depth") = 8,
-             py::arg("rr_depth") = 5, py::arg("seed") = 0, py::arg("tile") = 16, py::arg("strategy") = 0)
+             py::arg("rr_depth") = 5, py::arg("seed") = 0, py::arg("tile") = 16, py::arg("strategy") = 0,
+             py::arg("spectral") = false)
         .def("run", &RenderJob::run, py::call_guard<py::gil_scoped_release>())
         .def("cancel", &RenderJob::cancel)
         .def_property_readonly("cancelled", &RenderJob::cancelled)
@@ -164,5 +183,33 @@ void bind_render(py::module_ &m) {
                  j.radiance(px, py, seed, L);
                  return std::vector<double>{L[0], L[1], L[2]};
              },
-             "one camera sample's radiance at film position (px, py): for tests");
+             "one camera sample's radiance at film position (px, py): for tests")
+        .def_property_readonly("rays_traced", &RenderJob::rays_traced)
+        .def("record_rays",
+             [](const RenderJob &j, std::size_t max_rays) {
+                 std::vector<float> r;
+                 {
+                     py::gil_scoped_release release;
+                     r = j.record_rays(max_rays);
+                 }
+                 py::array_t<float> out({r.size() / 8, std::size_t(8)});
+                 std::copy(r.begin(), r.end(), out.mutable_data());
+                 return out;
+             },
+             py::arg("max_rays"), "(N, 8) rays of the first pass: origin, direction, tmax, shadow flag")
+        .def("aovs",
+             [](const RenderJob &j, int samples) {
+                 if (samples < 1) throw std::invalid_argument("aovs: samples must be >= 1");
+                 std::size_t h = j.height(), w = j.width();
+                 py::array_t<double> albedo({h, w, std::size_t(3)}), normal({h, w, std::size_t(3)});
+                 py::array_t<int> mesh({h, w});
+                 double *a = albedo.mutable_data(), *n = normal.mutable_data();
+                 int *id = mesh.mutable_data();
+                 {
+                     py::gil_scoped_release release;
+                     j.aovs(samples, a, n, id);
+                 }
+                 return py::make_tuple(albedo, normal, mesh);
+             },
+             py::arg("samples") = 16, "(albedo, normal, mesh id) first-hit images for a denoiser and masks");
 }

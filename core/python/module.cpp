@@ -4,6 +4,7 @@
 
 namespace py = pybind11;
 void bind_bsdf(py::module_ &m);
+void bind_fit(py::module_ &m);
 void bind_fresnel(py::module_ &m);
 void bind_interfaces(py::module_ &m);
 void bind_layered(py::module_ &m);
@@ -16,6 +17,7 @@ PYBIND11_MODULE(_core, m) {
     m.doc() = "bsdflab C++ core: optics, BSDFs and estimators (vectorised, GIL released)";
     m.def("worker_count", &bsdflab::worker_count, "threads used by parallel loops");
     bind_bsdf(m);
+    bind_fit(m);
     bind_fresnel(m);
     bind_interfaces(m);
     bind_layered(m);

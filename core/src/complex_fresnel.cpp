@@ -37,7 +37,9 @@ DielectricFresnel fresnel_dielectric(double cos_theta_i, double eta) {
     f.eta_it = outside ? eta : 1.0 / eta;
     f.eta_ti = 1.0 / f.eta_it;
     double ci = std::abs(cos_theta_i);
-    double sin_t2 = f.eta_ti * f.eta_ti * std::max(0.0, 1.0 - ci * ci);
+    // (eta_ti sin_i)^2: at normal incidence 0 even for an overflowing eta_ti.
+    double sin_ti = f.eta_ti * std::sqrt(std::max(0.0, 1.0 - ci * ci));
+    double sin_t2 = sin_ti * sin_ti;
     if (sin_t2 >= 1.0) { // total internal reflection
         f.R = 1.0;
         f.cos_theta_t = 0.0;

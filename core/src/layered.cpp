@@ -12,13 +12,8 @@ namespace {
 
 constexpr int kMaxSlabs = 16;
 constexpr int kRouletteDepth = 4;
-constexpr uint32_t kSmoothTransmission = kDiffuseTransmission | kGlossyTransmission;
-
-double power_heuristic(double a, double b) {
-    a *= a;
-    b *= b;
-    return a + b > 0 ? a / (a + b) : 0.0;
-}
+// A boundary that transmits through a non-delta lobe: strategy B can evaluate it.
+constexpr uint32_t kNonDeltaTransmission = kDiffuseTransmission | kGlossyTransmission;
 
 bool any_positive(const double *v, int n) {
     for (int c = 0; c < n; ++c)
@@ -26,24 +21,59 @@ bool any_positive(const double *v, int n) {
     return false;
 }
 
+// One boundary sample with its three random numbers drawn in a fixed order.
+BSDFSample sample_boundary(const BSDF &b, const Vec3 &wi, uint32_t mask, const Query &q, PCG32 &rng,
+                           double *weight) {
+    const double u1 = rng.uniform();
+    const double u2 = rng.uniform();
+    const double u3 = rng.uniform();
+    return b.sample(wi, u1, u2, u3, mask, q, weight);
+}
+
+Vec3 sample_phase(const PhaseFunction &phase, const Vec3 &w, PCG32 &rng) {
+    const double u1 = rng.uniform();
+    const double u2 = rng.uniform();
+    return phase.sample(w, u1, u2);
+}
+
 } // namespace
 
-// The light chain from wo: per slab j, the direction u_j leading from the exit side into
-// slab j, the light direction L_j just beyond slab j's exit-side boundary, the last-step
-// factor a_j = f_adjoint / pdf and the factor B_j of everything beyond that boundary.
-struct LayeredBSDF::Chain {
-    bool reached[kMaxSlabs] = {}; // L_j and B_j known (strategy B possible)
-    bool ok[kMaxSlabs] = {};      // u_j sampled too (strategy A possible)
-    bool delta[kMaxSlabs] = {};
-    double pdf[kMaxSlabs] = {};
+// The state of one random walk: the light chain from wo and the walk's per-channel
+// buffers. Its memory is carved from the caller's EstimateWorkspace (bind_walk), so walks
+// allocate nothing and nothing is shared between estimates behind their backs.
+// Chain, per slab j: the direction u_j leading from the exit side into slab j, the light
+// direction L_j just beyond slab j's exit-side boundary, the last-step factor
+// a_j = f_adjoint / pdf and the factor B_j of everything beyond that boundary.
+struct LayeredBSDF::Walk {
+    bool reached[kMaxSlabs]; // L_j and B_j known (strategy B possible)
+    bool ok[kMaxSlabs];      // u_j sampled too (strategy A possible)
+    bool delta[kMaxSlabs];
+    double pdf[kMaxSlabs];
     Vec3 u[kMaxSlabs], L[kMaxSlabs];
-    std::vector<double> a, B; // [slab * C + c]
+    double *a, *B;                        // [slab * C + c]
+    double *beyond, *chain_w;             // chain construction
+    double *beta, *tmp, *tr, *wgt, *fly_tr;
+    double *contrib;                      // this walk's contribution, per channel
 };
 
-// Per-walk buffers, allocated once per eval() call.
-struct LayeredBSDF::Walk {
-    std::vector<double> beta, tmp, tr, w;
-};
+std::size_t LayeredBSDF::walk_doubles() const {
+    return (2 * slabs_.size() + 8) * std::size_t(channels());
+}
+
+LayeredBSDF::Walk LayeredBSDF::bind_walk(EstimateWorkspace &ws, std::size_t offset) const {
+    const std::size_t C = channels(), K = slabs_.size();
+    double *p = ws.doubles(offset + walk_doubles()) + offset;
+    Walk wk;
+    wk.a = p;
+    wk.B = p + K * C;
+    p += 2 * K * C;
+    double **bufs[] = {&wk.beyond, &wk.chain_w, &wk.beta, &wk.tmp, &wk.tr, &wk.wgt, &wk.fly_tr, &wk.contrib};
+    for (double **b : bufs) {
+        *b = p;
+        p += C;
+    }
+    return wk;
+}
 
 LayeredBSDF::LayeredBSDF(std::vector<double> wavelengths,
                          std::vector<std::shared_ptr<const BSDF>> boundaries, std::vector<Slab> slabs,
@@ -71,7 +101,8 @@ uint32_t LayeredBSDF::lobes() const {
     return l;
 }
 
-double LayeredBSDF::fly(const Slab &S, double room, double cz, PCG32 &rng, double *beta) const {
+double LayeredBSDF::fly(const Slab &S, double room, double cz, PCG32 &rng, double *beta,
+                        double *tr) const {
     const int C = channels();
     const double length = room / cz;
     if (!(S.sigma_s > 0)) { // pure absorption: attenuate deterministically
@@ -81,10 +112,11 @@ double LayeredBSDF::fly(const Slab &S, double room, double cz, PCG32 &rng, doubl
     // Spectral MIS (one-sample, balance heuristic over channels): draw the flight with a
     // randomly chosen channel's extinction; weight each channel by its true density over
     // the channel-average density. Weights stay below C whatever the spectral contrast.
-    double *tr = scratch(2, C);
-    const int k = std::min(C - 1, static_cast<int>(rng.uniform() * C));
+    const double u_channel = rng.uniform();
+    const double u_distance = rng.uniform();
+    const int k = std::min(C - 1, static_cast<int>(u_channel * C));
     const double sk = S.sigma_a[k] + S.sigma_s;
-    const double t = -std::log(1.0 - rng.uniform()) / sk;
+    const double t = -std::log(1.0 - u_distance) / sk;
     const bool collide = t < length;
     const double d = collide ? t : length;
     double avg = 0;
@@ -107,11 +139,13 @@ void LayeredBSDF::transmittance(int j, double distance, double *tr) const {
     for (int c = 0; c < channels(); ++c) tr[c] = std::exp(-(s.sigma_a[c] + s.sigma_s) * distance);
 }
 
-bool LayeredBSDF::build_chain(const Vec3 &wo, int exit, const Query &q, PCG32 &rng, Chain &ch) const {
+void LayeredBSDF::build_chain(const Vec3 &wo, int exit, const Query &q, PCG32 &rng, Walk &ch) const {
     const int K = static_cast<int>(slabs_.size()), C = channels();
-    ch.a.assign(K * C, 0.0);
-    ch.B.assign(K * C, 0.0);
-    std::vector<double> beyond(C, 1.0), w(C), tr(C);
+    for (int j = 0; j < K; ++j) ch.ok[j] = ch.reached[j] = ch.delta[j] = false;
+    std::fill(ch.a, ch.a + K * C, 0.0);
+    std::fill(ch.B, ch.B + K * C, 0.0);
+    double *beyond = ch.beyond, *w = ch.chain_w, *tr = ch.tr;
+    std::fill(beyond, beyond + C, 1.0);
     Vec3 L = wo;
     for (int step = 0; step < K; ++step) {
         int j = exit == 0 ? step : K - 1 - step;
@@ -119,9 +153,8 @@ bool LayeredBSDF::build_chain(const Vec3 &wo, int exit, const Query &q, PCG32 &r
         ch.reached[j] = true;
         ch.L[j] = L;
         for (int c = 0; c < C; ++c) ch.B[j * C + c] = beyond[c];
-        double u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
-        BSDFSample s = boundaries_[xb]->sample(L, u1, u2, u3, kTransmission, q, w.data());
-        if (!s.lobe || !any_positive(w.data(), C)) break;
+        BSDFSample s = sample_boundary(*boundaries_[xb], L, kTransmission, q, rng, w);
+        if (!s.lobe || !any_positive(w, C)) break;
         double cu = std::abs(s.wo.z);
         if (!(cu > 1e-12)) break;
         ch.ok[j] = true;
@@ -129,69 +162,68 @@ bool LayeredBSDF::build_chain(const Vec3 &wo, int exit, const Query &q, PCG32 &r
         ch.pdf[j] = s.pdf;
         ch.u[j] = s.wo;
         // Radiance-mode weight -> adjoint value f(u, L) / pdf by generalised reciprocity.
-        transmittance(j, slabs_[j].thickness / cu, tr.data());
+        transmittance(j, slabs_[j].thickness / cu, tr);
         for (int c = 0; c < C; ++c) {
             ch.a[j * C + c] = w[c] * s.eta * s.eta / cu;
             beyond[c] *= tr[c] * ch.a[j * C + c] * cu;
         }
         L = -s.wo;
     }
-    return ch.ok[exit == 0 ? 0 : K - 1];
 }
 
-void LayeredBSDF::one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, const Query &q,
-                           PCG32 &rng, double *contrib) const {
-    (void)wo;
-    thread_local Chain ch;
-    thread_local Walk wk;
+void LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng,
+                           Walk &wk) const {
     const int K = static_cast<int>(slabs_.size()), C = channels();
-    wk.beta.assign(C, 1.0);
-    wk.tmp.resize(C);
-    wk.tr.resize(C);
-    wk.w.resize(C);
-    double *beta = wk.beta.data(), *tmp = wk.tmp.data(), *tr = wk.tr.data(), *wgt = wk.w.data();
-    for (int j = 0; j < kMaxSlabs; ++j) ch.ok[j] = ch.reached[j] = false;
-    build_chain(wo, exit, q, rng, ch);
+    double *beta = wk.beta, *tmp = wk.tmp, *tr = wk.tr, *wgt = wk.wgt, *contrib = wk.contrib;
+    std::fill(beta, beta + C, 1.0); // the entry vertex connects before its own sample
     const bool nee = options_.nee;
 
     auto xb = [&](int j) { return exit == 0 ? j : j + 1; };
     auto toward_exit = [&](const Vec3 &w) { return exit == 0 ? w.z > 0 : w.z < 0; };
-    auto rough_exit = [&](int j) { return (boundaries_[xb(j)]->lobes() & kSmoothTransmission) != 0; };
+    auto rough_exit = [&](int j) { return (boundaries_[xb(j)]->lobes() & kNonDeltaTransmission) != 0; };
 
     // Strategy A: connect a vertex to the chain. `value` holds the vertex term per channel
     // (BSDF eval with its cosine, or the phase function), `depth` the distance to the exit
     // side, `p_vertex` the density with which the vertex would have sampled -u_j.
     auto connect = [&](int j, const double *value, double depth, double p_vertex) {
-        if (!nee || !ch.ok[j]) return;
-        double wA = ch.delta[j] ? 1.0 : power_heuristic(ch.pdf[j], p_vertex);
+        if (!nee || !wk.ok[j]) return;
+        double wA = wk.delta[j] ? 1.0 : power_heuristic(wk.pdf[j], p_vertex);
         if (!(wA > 0)) return;
-        transmittance(j, depth / std::abs(ch.u[j].z), tr);
+        transmittance(j, depth / std::abs(wk.u[j].z), tr);
         for (int c = 0; c < C; ++c)
-            contrib[c] += beta[c] * value[c] * tr[c] * ch.a[j * C + c] * ch.B[j * C + c] * wA;
+            contrib[c] += beta[c] * value[c] * tr[c] * wk.a[j * C + c] * wk.B[j * C + c] * wA;
     };
-    // Strategy B: the walk has just sampled w toward slab j's rough exit-side boundary.
-    auto exit_through = [&](int j, const Vec3 &w, double depth, double p_sampled, bool sampled_delta) {
-        if (!ch.reached[j] || !rough_exit(j)) return;
+    // Strategy B: the walk heads along w toward slab j's rough exit-side boundary, `depth`
+    // below it. `p_sampled` is the density of w at its vertex; `mis` false when no strategy
+    // A competes (the vertex was a delta event, or w arrived through delta transmissions).
+    auto exit_through = [&](int j, const Vec3 &w, double depth, double p_sampled, bool mis) {
+        if (!wk.reached[j] || !rough_exit(j)) return;
         const BSDF &X = *boundaries_[xb(j)];
-        const Vec3 &L = ch.L[j];
+        const Vec3 &L = wk.L[j];
         X.eval(-w, L, kTransmission, q, tmp);
         if (!any_positive(tmp, C)) return;
         double wB = 1.0;
-        if (nee && !sampled_delta) wB = power_heuristic(p_sampled, X.pdf(L, -w, kTransmission, q));
+        if (nee && mis) wB = power_heuristic(p_sampled, X.pdf(L, -w, kTransmission, q));
         transmittance(j, depth / std::abs(w.z), tr);
         double inv_cos = 1.0 / std::abs(L.z);
         for (int c = 0; c < C; ++c)
-            contrib[c] += beta[c] * tr[c] * tmp[c] * inv_cos * ch.B[j * C + c] * wB;
+            contrib[c] += beta[c] * tr[c] * tmp[c] * inv_cos * wk.B[j * C + c] * wB;
     };
+    // `covered`: while the walk heads toward the exit, whether the straight continuation
+    // from its last non-delta vertex (through delta exit-side boundaries) is counted by
+    // that vertex's connections. False after a delta vertex: then strategy B is tried at
+    // every exit-side boundary the walk reaches through delta transmissions, the paths'
+    // only strategy (Guo et al.'s estimator needs a non-delta vertex to connect from).
+    bool covered = true;
 
     // Entering the stack.
     int j = entry == 0 ? 0 : K - 1;
     const BSDF &E = *boundaries_[entry];
-    if (entry != exit && !(E.lobes() & kDeltaTransmission) && ch.ok[j]) {
-        E.eval(wi, -ch.u[j], kTransmission, q, tmp);
-        connect(j, tmp, slabs_[j].thickness, E.pdf(wi, -ch.u[j], kTransmission, q));
+    if (entry != exit && !(E.lobes() & kDeltaTransmission) && wk.ok[j]) {
+        E.eval(wi, -wk.u[j], kTransmission, q, tmp);
+        connect(j, tmp, slabs_[j].thickness, E.pdf(wi, -wk.u[j], kTransmission, q));
     }
-    BSDFSample s = E.sample(wi, rng.uniform(), rng.uniform(), rng.uniform(), kTransmission, q, wgt);
+    BSDFSample s = sample_boundary(E, wi, kTransmission, q, rng, wgt);
     if (!s.lobe) return;
     for (int c = 0; c < C; ++c) beta[c] = wgt[c];
     // Roulette compares the throughput with its value after entering, so a small entry
@@ -201,7 +233,10 @@ void LayeredBSDF::one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, 
     if (!(beta_entry > 0)) return;
     Vec3 w = s.wo;
     double zx = entry == exit ? 0.0 : slabs_[j].thickness; // depth below the exit side
-    if (entry != exit) exit_through(j, w, zx, s.pdf, s.lobe & kDelta);
+    if (entry != exit) {
+        covered = !(s.lobe & kDelta);
+        exit_through(j, w, zx, s.pdf, covered);
+    }
 
     for (int depth = 0; depth < options_.max_depth; ++depth) {
         const Slab &S = slabs_[j];
@@ -210,14 +245,15 @@ void LayeredBSDF::one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, 
         if (!(cz > 1e-9)) return;
         const double room = up ? zx : S.thickness - zx;
 
-        const double t = fly(S, room, cz, rng, beta);
+        const double t = fly(S, room, cz, rng, beta, wk.fly_tr);
         if (t >= 0) { // scattering event at depth zx (measured from the exit side)
             zx += up ? -t * cz : t * cz;
-            double to_exit_pdf = ch.ok[j] ? S.phase.eval(w, -ch.u[j]) : 0.0;
+            double to_exit_pdf = wk.ok[j] ? S.phase.eval(w, -wk.u[j]) : 0.0;
             for (int c = 0; c < C; ++c) tmp[c] = to_exit_pdf;
             connect(j, tmp, zx, to_exit_pdf);
-            Vec3 w2 = S.phase.sample(w, rng.uniform(), rng.uniform());
-            if (toward_exit(w2)) exit_through(j, w2, zx, S.phase.eval(w, w2), false);
+            Vec3 w2 = sample_phase(S.phase, w, rng);
+            covered = true;
+            if (toward_exit(w2)) exit_through(j, w2, zx, S.phase.eval(w, w2), true);
             w = w2;
             goto roulette;
         }
@@ -229,13 +265,18 @@ void LayeredBSDF::one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, 
                 // Exit-side boundary: at the stack's exit only reflect (leaving is counted
                 // by the connections); an interior one may also pass on toward the exit.
                 uint32_t mask = b == exit ? uint32_t(kReflection) : uint32_t(kAll);
-                s = V.sample(-w, rng.uniform(), rng.uniform(), rng.uniform(), mask, q, wgt);
+                s = sample_boundary(V, -w, mask, q, rng, wgt);
                 if (!s.lobe) return;
                 for (int c = 0; c < C; ++c) beta[c] *= wgt[c];
                 w = s.wo;
                 if (s.lobe & kTransmission) {
                     j += exit == 0 ? -1 : 1;
                     zx = slabs_[j].thickness;
+                    if (!(s.lobe & kDelta)) {
+                        covered = true; // strategy B at this boundary counted the crossing
+                    } else if (!covered) {
+                        exit_through(j, w, zx, 0.0, false);
+                    }
                 } else {
                     zx = 0.0;
                 }
@@ -243,16 +284,17 @@ void LayeredBSDF::one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, 
                 // Non-exit side: a vertex that may be the last one before leaving.
                 uint32_t mask = outer ? uint32_t(kReflection) : uint32_t(kAll);
                 zx = S.thickness;
-                if (ch.ok[j] && (V.lobes() & (kDiffuseReflection | kGlossyReflection))) {
-                    V.eval(-w, -ch.u[j], kReflection, q, tmp);
-                    if (any_positive(tmp, C)) connect(j, tmp, zx, V.pdf(-w, -ch.u[j], mask, q));
+                if (wk.ok[j] && (V.lobes() & (kDiffuseReflection | kGlossyReflection))) {
+                    V.eval(-w, -wk.u[j], kReflection, q, tmp);
+                    if (any_positive(tmp, C)) connect(j, tmp, zx, V.pdf(-w, -wk.u[j], mask, q));
                 }
-                s = V.sample(-w, rng.uniform(), rng.uniform(), rng.uniform(), mask, q, wgt);
+                s = sample_boundary(V, -w, mask, q, rng, wgt);
                 if (!s.lobe) return;
                 for (int c = 0; c < C; ++c) beta[c] *= wgt[c];
                 w = s.wo;
                 if (s.lobe & kReflection) {
-                    exit_through(j, w, zx, s.pdf, s.lobe & kDelta);
+                    covered = !(s.lobe & kDelta);
+                    exit_through(j, w, zx, s.pdf, covered);
                 } else {
                     j += exit == 0 ? 1 : -1;
                     zx = 0.0;
@@ -265,44 +307,52 @@ void LayeredBSDF::one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, 
             for (int c = 0; c < C; ++c) m = std::max(m, beta[c] / beta_entry);
             if (!(m > 0)) return;
             if (m < 1) {
-                if (rng.uniform() >= m) return;
+                const double u_survive = rng.uniform();
+                if (u_survive >= m) return;
                 for (int c = 0; c < C; ++c) beta[c] /= m;
             }
         }
     }
 }
 
-void LayeredBSDF::eval_projected(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                                 int samples, uint64_t seed, const double *P, int rows,
-                                 bool include_direct, double *out, double *err) const {
+std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_t lobes,
+                                         const Query &q, const EstimateRequest &req,
+                                         bool include_direct, EstimateWorkspace &ws, double *out,
+                                         double *err) const {
     const int C = channels(), K = static_cast<int>(slabs_.size());
-    const int R = P ? rows : C;
+    const int R = req.out_rows(C);
+    const int samples = req.samples;
     for (int r = 0; r < R; ++r) out[r] = err[r] = 0.0;
-    if (!usable_direction(wi) || !usable_direction(wo) || samples < 1) return;
+    if (!usable_direction(wi) || !usable_direction(wo) || samples < 1) return 0;
     const bool base_transmits = boundaries_.back()->lobes() & kTransmission;
-    if (wi.z < 0 && !base_transmits) return;
-    if (wo.z < 0 && !base_transmits) return;
+    if (wi.z < 0 && !base_transmits) return 0;
+    if (wo.z < 0 && !base_transmits) return 0;
     const bool reflect = wi.z * wo.z > 0;
-    if (!(lobes & (reflect ? kReflection : kTransmission) & ~kDelta)) return;
+    if (!(lobes & (reflect ? kReflection : kTransmission) & ~kDelta)) return 0;
     const int entry = wi.z > 0 ? 0 : K, exit = wo.z > 0 ? 0 : K;
 
-    // Projects a per-channel vector v into rows (identity without P).
-    auto project = [&](const double *v, double *dst) {
-        if (!P) { std::copy(v, v + C, dst); return; }
-        for (int r = 0; r < R; ++r) {
-            double acc = 0;
-            for (int c = 0; c < C; ++c) acc += P[r * C + c] * v[c];
-            dst[r] = acc;
-        }
-    };
-    PCG32 rng(hash_directions(seed, wi, wo));
-    std::vector<double> contrib(C), x(R), mean(R, 0.0), m2(R, 0.0);
+    // Workspace layout: the walk, then x, mean, m2 (R each) and direct (C).
+    const std::size_t wn = walk_doubles();
+    double *extra = ws.doubles(wn + 3 * R + C) + wn;
+    Walk wk = bind_walk(ws, 0);
+    double *x = extra, *mean = extra + R, *m2 = extra + 2 * R, *direct = extra + 3 * R;
+    std::fill(mean, mean + 2 * R, 0.0);
+
+    PCG32 rng(hash_directions(req.seed, wi, wo));
+    std::uint64_t nonfinite = 0;
     const double cos_o = std::abs(wo.z);
     for (int n = 1; n <= samples; ++n) {
-        std::fill(contrib.begin(), contrib.end(), 0.0);
-        one_walk(wi, wo, entry, exit, q, rng, contrib.data());
-        for (int c = 0; c < C; ++c) contrib[c] = std::isfinite(contrib[c]) ? contrib[c] * cos_o : 0.0;
-        project(contrib.data(), x.data());
+        std::fill(wk.contrib, wk.contrib + C, 0.0);
+        build_chain(wo, exit, q, rng, wk);
+        one_walk(wi, entry, exit, q, rng, wk);
+        bool finite = true;
+        for (int c = 0; c < C; ++c) finite = finite && std::isfinite(wk.contrib[c]);
+        if (!finite) { // counted and reported by the caller; never part of the mean
+            ++nonfinite;
+            std::fill(wk.contrib, wk.contrib + C, 0.0);
+        }
+        for (int c = 0; c < C; ++c) wk.contrib[c] *= cos_o;
+        project_rows(req.P, R, C, wk.contrib, x);
         for (int r = 0; r < R; ++r) { // Welford: running mean and sum of squared deviations
             double d = x[r] - mean[r];
             mean[r] += d / n;
@@ -310,24 +360,48 @@ void LayeredBSDF::eval_projected(const Vec3 &wi, const Vec3 &wo, uint32_t lobes,
         }
     }
     // The entry boundary's own (non-delta) reflection is known exactly.
-    std::vector<double> direct(C, 0.0), direct_p(R, 0.0);
-    if (include_direct && entry == exit) boundaries_[entry]->eval(wi, wo, kReflection, q, direct.data());
-    project(direct.data(), direct_p.data());
+    std::fill(direct, direct + C, 0.0);
+    if (include_direct && entry == exit) boundaries_[entry]->eval(wi, wo, kReflection, q, direct);
+    project_rows(req.P, R, C, direct, x);
     for (int r = 0; r < R; ++r) {
-        out[r] = mean[r] + direct_p[r];
+        out[r] = mean[r] + x[r];
         err[r] = samples > 1 ? std::sqrt(m2[r] / (double(samples) * (samples - 1))) : 0.0;
     }
+    return nonfinite;
 }
 
-void LayeredBSDF::eval_with_error(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                                  int samples, uint64_t seed, double *out, double *err) const {
-    eval_projected(wi, wo, lobes, q, samples, seed, nullptr, 0, true, out, err);
+std::uint64_t LayeredBSDF::estimate(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                                    const EstimateRequest &request, EstimateWorkspace &ws,
+                                    double *mean, double *err) const {
+    return estimate_impl(wi, wo, lobes, q, request, true, ws, mean, err);
 }
 
+std::uint64_t LayeredBSDF::estimate_scattered(const Vec3 &wi, const Vec3 &wo, uint32_t lobes,
+                                              const Query &q, const EstimateRequest &request,
+                                              EstimateWorkspace &ws, double *mean,
+                                              double *err) const {
+    return estimate_impl(wi, wo, lobes, q, request, false, ws, mean, err);
+}
+
+// eval() at the model's own effort and seed, on leased workspaces: one for the walks, one
+// for the standard errors nobody asked for.
 void LayeredBSDF::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
                        double *out) const {
-    std::vector<double> err(channels());
-    eval_with_error(wi, wo, lobes, q, options_.samples, options_.seed, out, err.data());
+    ThreadWorkspace walks, errors;
+    EstimateRequest req{options_.samples, options_.seed};
+    estimate(wi, wo, lobes, q, req, walks.get(), out, errors.get().doubles(channels()));
+}
+
+ScatteredPart::ScatteredPart(std::shared_ptr<const LayeredBSDF> model)
+    : BSDF(model ? model->wavelengths() : std::vector<double>{}), model_(std::move(model)) {
+    if (!model_) throw std::invalid_argument("ScatteredPart needs a layered model");
+}
+
+void ScatteredPart::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                         double *out) const {
+    ThreadWorkspace walks, errors;
+    EstimateRequest req{model_->options().samples, model_->options().seed};
+    estimate(wi, wo, lobes, q, req, walks.get(), out, errors.get().doubles(channels()));
 }
 
 void LayeredBSDF::delta_reflectance(const Vec3 &wi, const Query &q, double *out) const {
@@ -347,9 +421,10 @@ double LayeredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Qu
     if (!(lobes & (reflect ? kReflection : kTransmission) & ~kDelta)) return 0.0;
     const BSDF &E = *boundaries_[wi.z > 0 ? 0 : boundaries_.size() - 1];
     const int C = channels();
-    std::vector<double> w(C);
-    E.sample(wi, 0.5, 0.5, 0.5, kReflection, q, w.data());
-    double r = std::clamp(channel_mean(w.data(), C), 0.0, 1.0);
+    ThreadWorkspace lease;
+    double *w = lease.get().doubles(C);
+    E.sample(wi, 0.5, 0.5, 0.5, kReflection, q, w);
+    double r = std::clamp(channel_mean(w, C), 0.0, 1.0);
     double p = reflect ? r * E.pdf(wi, wo, kReflection, q) : 0.0;
     double spread = (1.0 - r) * std::abs(wo.z) * kInvPi;
     p += base_transmits ? 0.5 * spread : spread;
@@ -365,31 +440,35 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
     if (wi.z < 0 && !base_transmits) return {};
     const int entry = wi.z > 0 ? 0 : K;
     PCG32 rng(hash_directions(options_.seed, wi, Vec3{u1, u2x, u2y}));
-    std::vector<double> beta(C), w(C);
+    ThreadWorkspace lease;
+    double *buf = lease.get().doubles(3 * C);
+    double *beta = buf, *w = buf + C, *fly_tr = buf + 2 * C;
 
-    BSDFSample s = boundaries_[entry]->sample(wi, u1, u2x, u2y, kAll, q, w.data());
+    BSDFSample s = boundaries_[entry]->sample(wi, u1, u2x, u2y, kAll, q, w);
     if (!s.lobe) return {};
     if (s.lobe & kReflection) { // the top's own reflection (delta or glossy)
         if (!(s.lobe & lobes)) return {};
-        std::copy(w.begin(), w.end(), weight);
+        std::copy(w, w + C, weight);
         // A renderer weights this direction by MIS against light sampling with pdf():
         // report that same density (the weight does not depend on it).
         if (!(s.lobe & kDelta)) s.pdf = pdf(wi, s.wo, kAll, q);
         return s;
     }
-    beta = w;
-    const double beta_entry = *std::max_element(beta.begin(), beta.end());
+    std::copy(w, w + C, beta);
+    double eta = s.eta; // product of the relative indices crossed so far
+    const double beta_entry = *std::max_element(beta, beta + C);
     if (!(beta_entry > 0)) return {};
     int j = entry == 0 ? 0 : K - 1;
     Vec3 dir = s.wo;
     double zd = entry == 0 ? 0.0 : slabs_[j].thickness; // depth below the top of slab j
     for (int depth = 0; depth < options_.max_depth; ++depth) {
         if (depth >= kRouletteDepth) { // every event, scattering ones included
-            double m = *std::max_element(beta.begin(), beta.end()) / beta_entry;
+            double m = *std::max_element(beta, beta + C) / beta_entry;
             if (!(m > 0)) return {};
             if (m < 1) {
-                if (rng.uniform() >= m) return {};
-                for (double &v : beta) v /= m;
+                const double u_survive = rng.uniform();
+                if (u_survive >= m) return {};
+                for (int c = 0; c < C; ++c) beta[c] /= m;
             }
         }
         const Slab &S = slabs_[j];
@@ -397,25 +476,28 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
         const double cz = std::abs(dir.z);
         if (!(cz > 1e-9)) return {};
         const double room = down ? S.thickness - zd : zd;
-        const double t = fly(S, room, cz, rng, beta.data());
+        const double t = fly(S, room, cz, rng, beta, fly_tr);
         if (t >= 0) {
             zd += down ? t * cz : -t * cz;
-            dir = S.phase.sample(dir, rng.uniform(), rng.uniform());
+            dir = sample_phase(S.phase, dir, rng);
             continue;
         }
         const int b = down ? j + 1 : j;
-        s = boundaries_[b]->sample(-dir, rng.uniform(), rng.uniform(), rng.uniform(), kAll, q, w.data());
+        s = sample_boundary(*boundaries_[b], -dir, kAll, q, rng, w);
         if (!s.lobe) return {};
         for (int c = 0; c < C; ++c) beta[c] *= w[c];
         dir = s.wo;
         if (s.lobe & kTransmission) {
+            eta *= s.eta;
             if (b == 0 || b == K) { // left the stack
                 BSDFSample out;
                 out.wo = dir;
-                out.lobe = wi.z * dir.z > 0 ? kGlossyReflection : kGlossyTransmission;
+                const bool reflected = wi.z * dir.z > 0;
+                out.lobe = reflected ? kGlossyReflection : kGlossyTransmission;
                 if (!(out.lobe & lobes)) return {};
                 out.pdf = pdf(wi, dir, kAll, q);
-                std::copy(beta.begin(), beta.end(), weight);
+                out.eta = reflected ? 1.0 : eta;
+                std::copy(beta, beta + C, weight);
                 return out;
             }
             j += down ? 1 : -1;

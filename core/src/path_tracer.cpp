@@ -13,29 +13,9 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Shadow rays stop this fraction short of the light point (float BVH precision).
 constexpr double kShadowEpsilon = 1e-4;
 
-struct ShadingFrame {
-    Vec3 s, t, n;
-    Vec3 to_local(const Vec3 &v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
-    Vec3 to_world(const Vec3 &v) const { return s * v.x + t * v.y + n * v.z; }
-};
-
 Vec3 normalized(const Vec3 &v) {
     double l = length(v);
     return l > 0 ? v * (1 / l) : Vec3{0, 0, 0};
-}
-
-// Orthonormal frame around n with s as close to `tangent` as possible.
-ShadingFrame frame_around(const Vec3 &n, const Vec3 &tangent) {
-    Vec3 s = tangent - n * dot(n, tangent);
-    double l = length(s);
-    if (!(l > 1e-9 * (length(tangent) + 1e-300))) {
-        // No usable tangent: any perpendicular (Duff et al. 2017's branchless basis).
-        double sign = std::copysign(1.0, n.z), a = -1 / (sign + n.z), b = n.x * n.y * a;
-        s = {1 + sign * n.x * n.x * a, sign * b, -sign * n.x};
-    } else {
-        s = s * (1 / l);
-    }
-    return {s, cross(n, s), n};
 }
 
 double power_heuristic(double a, double b) {
@@ -61,6 +41,50 @@ double *channel_buffer(int n) {
 bool any_positive(const double v[3]) { return v[0] > 0 || v[1] > 0 || v[2] > 0; }
 } // namespace
 
+// How a path carries colour. RGB: three channels, BSDFs projected by their P per
+// evaluation. Spectral: the kSpectralBins bins of the default grid, BSDFs lifted by their U
+// (spectral models answer in the bins themselves), RGB emission lifted by the scene's U,
+// and every contribution taken to RGB by the sensor W (illuminant folded in) as it is
+// added. RGB keeps its original arithmetic order (images unchanged bit for bit).
+template <> struct PathColour<3> {
+    static void bsdf(const RenderBSDF &rb, const double *ch, double out[3]) { rb.to_rgb(ch, out); }
+    static void light(const RenderScene &, const double rgb[3], double out[3]) {
+        for (int c = 0; c < 3; ++c) out[c] = rgb[c];
+    }
+    static void add_emitted(const RenderScene &, double L[3], const double beta[3], double w, const double Le[3]) {
+        for (int c = 0; c < 3; ++c) L[c] += beta[c] * w * Le[c];
+    }
+    static void add_connected(const RenderScene &, double L[3], const double beta[3], const double f[3],
+                              const double Le[3], double w) {
+        for (int c = 0; c < 3; ++c) L[c] += beta[c] * f[c] * Le[c] * w;
+    }
+};
+
+template <> struct PathColour<kSpectralBins> {
+    static constexpr int N = kSpectralBins;
+    static void bsdf(const RenderBSDF &rb, const double *ch, double out[N]) { rb.to_spectrum(ch, out); }
+    static void light(const RenderScene &scene, const double rgb[3], double out[N]) { scene.lift(rgb, out); }
+    static void sense(const RenderScene &scene, double L[3], const double v[N]) {
+        const double *W = scene.sensor();
+        for (int r = 0; r < 3; ++r) {
+            double s = 0;
+            for (int l = 0; l < N; ++l) s += W[r * N + l] * v[l];
+            L[r] += s;
+        }
+    }
+    static void add_emitted(const RenderScene &scene, double L[3], const double beta[N], double w, const double Le[N]) {
+        double v[N];
+        for (int l = 0; l < N; ++l) v[l] = beta[l] * w * Le[l];
+        sense(scene, L, v);
+    }
+    static void add_connected(const RenderScene &scene, double L[3], const double beta[N], const double f[N],
+                              const double Le[N], double w) {
+        double v[N];
+        for (int l = 0; l < N; ++l) v[l] = beta[l] * f[l] * Le[l] * w;
+        sense(scene, L, v);
+    }
+};
+
 RenderJob::RenderJob(std::shared_ptr<const RenderScene> scene, const RenderSettings &settings)
     : scene_(std::move(scene)), s_(settings) {
     if (!scene_) throw std::invalid_argument("render: no scene");
@@ -68,6 +92,9 @@ RenderJob::RenderJob(std::shared_ptr<const RenderScene> scene, const RenderSetti
     if (s_.spp < 1 || s_.pass_spp < 1) throw std::invalid_argument("render: spp must be >= 1");
     if (s_.max_depth < 1 || s_.rr_depth < 1) throw std::invalid_argument("render: depths must be >= 1");
     if (s_.tile < 1) throw std::invalid_argument("render: tile size must be >= 1");
+    if (s_.spectral && !scene_->spectral_ready())
+        throw std::invalid_argument("render: spectral mode needs a spectral form of every material "
+                                    "and the scene's spectral matrices");
     tiles_x_ = (width() + s_.tile - 1) / s_.tile;
     tiles_y_ = (height() + s_.tile - 1) / s_.tile;
     passes_ = (s_.spp + s_.pass_spp - 1) / s_.pass_spp;
@@ -76,12 +103,34 @@ RenderJob::RenderJob(std::shared_ptr<const RenderScene> scene, const RenderSetti
     max_channels_ = scene_->max_channels();
 }
 
+void RenderJob::RayLog::add(const Vec3 &o, const Vec3 &d, double tmax, bool shadow) {
+    ++rays;
+    if (!record || record->size() >= 8 * max_record) return;
+    const float r[8] = {float(o.x), float(o.y), float(o.z), float(d.x), float(d.y), float(d.z),
+                        std::isinf(tmax) ? std::numeric_limits<float>::infinity() : float(tmax),
+                        shadow ? 1.0f : 0.0f};
+    record->insert(record->end(), r, r + 8);
+}
+
 void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]) const {
+    RayLog log;
+    trace_path(px, py, sample_seed, L, log);
+}
+
+void RenderJob::trace_path(double px, double py, uint64_t sample_seed, double L[3], RayLog &log) const {
+    if (s_.spectral) trace_path_in<kSpectralBins>(px, py, sample_seed, L, log);
+    else trace_path_in<3>(px, py, sample_seed, L, log);
+}
+
+template <int N>
+void RenderJob::trace_path_in(double px, double py, uint64_t sample_seed, double L[3], RayLog &log) const {
+    using Colour = PathColour<N>;
     PCG32 rng(sample_seed);
     const RenderScene &scene = *scene_;
     const Environment &env = scene.environment();
     L[0] = L[1] = L[2] = 0;
-    double beta[3] = {1, 1, 1}, eta = 1, prev_pdf = 0;
+    double beta[N], eta = 1, prev_pdf = 0;
+    std::fill(beta, beta + N, 1.0);
     bool prev_delta = true;
     Vec3 prev_p;
     Vec3 o = scene.camera().origin(), d = scene.camera().direction(px, py);
@@ -98,43 +147,33 @@ void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]
 
     for (int depth = 1;; ++depth) { // depth: index of the vertex this ray finds
         SurfaceHit hit;
+        log.add(o, d, kInf, false);
         if (!scene.intersect(o, d, kInf, hit)) {
             if (env.active()) {
-                double Le[3];
-                env.eval(d, Le);
+                double rgb[3], Le[N];
+                env.eval(d, rgb);
+                Colour::light(scene, rgb, Le);
                 double w = prev_delta ? 1.0 : mis_hit(prev_pdf, scene.environment_pdf(d));
-                for (int c = 0; c < 3; ++c) L[c] += beta[c] * w * Le[c];
+                Colour::add_emitted(scene, L, beta, w, Le);
             }
             break;
         }
-        double Le[3];
-        scene.emitted(hit, -d, Le);
-        if (any_positive(Le)) {
+        double Le_rgb[3];
+        scene.emitted(hit, -d, Le_rgb);
+        if (any_positive(Le_rgb)) {
+            double Le[N];
+            Colour::light(scene, Le_rgb, Le);
             double w = prev_delta ? 1.0 : mis_hit(prev_pdf, scene.emitter_pdf(prev_p, hit));
-            for (int c = 0; c < 3; ++c) L[c] += beta[c] * w * Le[c];
+            Colour::add_emitted(scene, L, beta, w, Le);
         }
         if (depth >= s_.max_depth) break;
         const Material *mat = scene.material_of(hit.mesh);
         if (!mat) break;
 
-        // Shading: the scale texture may swap in the gap BSDF, tilt the normal (bump) and
-        // change the film thickness of this scale.
-        const RenderBSDF *rb = &mat->surface;
-        Query q;
-        ShadingFrame frame = frame_around(hit.ns, hit.dpdu);
-        if (mat->scales) {
-            ScaleSample ss = mat->scales->lookup(hit.u, hit.v);
-            if (ss.gap) {
-                if (mat->has_gap) rb = &mat->gap;
-            } else {
-                // Slopes are along (T_u, T_v); t = n x s is T_v only for right-handed (u, v)
-                // parameterisations (the snake's and the sphere's are left-handed).
-                const double handed = dot(cross(hit.dpdu, hit.dpdv), frame.n) < 0 ? -1.0 : 1.0;
-                Vec3 nb = normalized(frame.n - frame.s * ss.slope_u - frame.t * (handed * ss.slope_v));
-                if (length(nb) > 0) frame = frame_around(nb, frame.s);
-                if (mat->film_thickness_nm > 0) q.film_thickness_nm = mat->film_thickness_nm * ss.thickness_factor;
-            }
-        }
+        const ShadingPoint sp = mat->shade(hit);
+        const RenderBSDF *rb = sp.bsdf;
+        const ShadingFrame &frame = sp.frame;
+        const Query &q = sp.query;
         const BSDF &bsdf = *rb->bsdf;
         const Vec3 wi = frame.to_local(-d);
 
@@ -144,10 +183,10 @@ void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]
             EmitterSample es = scene.sample_emitter(hit.p, u0, u1, u2);
             if (es.pdf > 0 && any_positive(es.radiance)) {
                 Vec3 wo = frame.to_local(es.wo);
-                double f[3];
+                double f[N];
                 bsdf.eval(wi, wo, kAll, q, buf);
-                rb->to_rgb(buf, f);
-                if (f[0] != 0 || f[1] != 0 || f[2] != 0) {
+                Colour::bsdf(*rb, buf, f);
+                if (std::any_of(f, f + N, [](double x) { return x != 0; })) {
                     // Aim from the offset origin at the light point itself, so the ray
                     // meets the light's plane at exactly its length (aiming along es.wo from
                     // the offset origin would cross it early, and the light would shadow
@@ -162,10 +201,13 @@ void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]
                         if (aimed) dir = to * (1 / len);
                         tmax = len * (1 - kShadowEpsilon);
                     }
+                    if (aimed) log.add(origin, dir, tmax, true);
                     if (aimed && !scene.occluded(origin, dir, tmax)) {
                         double w = (s_.strategy == LightStrategy::kMIS ? power_heuristic(es.pdf, bsdf.pdf(wi, wo, kAll, q))
                                                                         : 1.0) / es.pdf;
-                        for (int c = 0; c < 3; ++c) L[c] += beta[c] * f[c] * es.radiance[c] * w;
+                        double Le[N];
+                        Colour::light(scene, es.radiance, Le);
+                        Colour::add_connected(scene, L, beta, f, Le, w);
                     }
                 }
             }
@@ -175,10 +217,10 @@ void RenderJob::radiance(double px, double py, uint64_t sample_seed, double L[3]
         double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
         BSDFSample bs = bsdf.sample(wi, u0, u1, u2, kAll, q, buf);
         if (bs.lobe == 0) break;
-        double wrgb[3];
-        rb->to_rgb(buf, wrgb);
-        for (int c = 0; c < 3; ++c) beta[c] *= wrgb[c];
-        double beta_max = std::max({beta[0], beta[1], beta[2]});
+        double weight[N];
+        Colour::bsdf(*rb, buf, weight);
+        for (int c = 0; c < N; ++c) beta[c] *= weight[c];
+        const double beta_max = *std::max_element(beta, beta + N);
         if (!(beta_max > 0) || !std::isfinite(beta_max)) break;
         prev_delta = (bs.lobe & kDelta) != 0;
         prev_pdf = bs.pdf;
@@ -201,6 +243,7 @@ void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
     const int x0 = int(tile % tiles_x_) * s_.tile, y0 = int(tile / tiles_x_) * s_.tile;
     const int x1 = std::min(x0 + s_.tile, W), y1 = std::min(y0 + s_.tile, H);
     std::size_t bad = 0;
+    RayLog log;
     for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
             const std::size_t pixel = std::size_t(y) * W + x;
@@ -209,9 +252,9 @@ void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
             for (int k = 0; k < spp; ++k) {
                 const uint64_t hi = pixel_rng.next(), lo = pixel_rng.next(); // in this order
                 const uint64_t sample_seed = (hi << 32) | lo;
-                double px = x + pixel_rng.uniform(), py = y + pixel_rng.uniform();
+                const double jx = pixel_rng.uniform(), jy = pixel_rng.uniform(); // in this order
                 double L[3];
-                radiance(px, py, sample_seed, L);
+                trace_path(x + jx, y + jy, sample_seed, L, log);
                 if (!(std::isfinite(L[0]) && std::isfinite(L[1]) && std::isfinite(L[2]))) {
                     ++bad; // counted, and black: a NaN must not poison the pixel
                     continue;
@@ -227,6 +270,59 @@ void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
             }
         }
     invalid_ += bad;
+    rays_ += log.rays;
+}
+
+std::vector<float> RenderJob::record_rays(std::size_t max_rays) const {
+    std::vector<float> out;
+    out.reserve(8 * max_rays);
+    RayLog log;
+    log.record = &out;
+    log.max_record = max_rays;
+    const std::size_t pixels = std::size_t(width()) * height();
+    const std::size_t stride = 7919; // a prime: successive samples land far apart
+    for (std::size_t k = 0; k < pixels && out.size() < 8 * max_rays; ++k) {
+        const std::size_t pixel = (k * stride) % pixels;
+        const int x = int(pixel % width()), y = int(pixel / width());
+        PCG32 pixel_rng(mix64(mix64(s_.seed) ^ pixel) ^ mix64(0x51ed2705ULL));
+        const uint64_t hi = pixel_rng.next(), lo = pixel_rng.next();
+        const double jx = pixel_rng.uniform(), jy = pixel_rng.uniform();
+        double L[3];
+        trace_path(x + jx, y + jy, (hi << 32) | lo, L, log);
+    }
+    return out;
+}
+
+void RenderJob::aovs(int samples, double *albedo, double *normal, int *mesh_id) const {
+    const int W = width(), H = height();
+    const RenderScene &scene = *scene_;
+    parallel_for(std::size_t(W) * H, 256, [&](std::size_t begin, std::size_t end) {
+        std::vector<double> buf(std::max(max_channels_, 3));
+        for (std::size_t pixel = begin; pixel < end; ++pixel) {
+            double *a = &albedo[3 * pixel], *n = &normal[3 * pixel];
+            a[0] = a[1] = a[2] = n[0] = n[1] = n[2] = 0;
+            mesh_id[pixel] = -1;
+            const int x = int(pixel % W), y = int(pixel / W);
+            SurfaceHit hit;
+            const Vec3 d = scene.camera().direction(x + 0.5, y + 0.5);
+            if (!scene.intersect(scene.camera().origin(), d, kInf, hit)) continue;
+            mesh_id[pixel] = hit.mesh;
+            const Material *mat = scene.material_of(hit.mesh);
+            if (!mat) { a[0] = a[1] = a[2] = 1; continue; } // emitters: white albedo
+            const ShadingPoint sp = mat->shade(hit);
+            n[0] = sp.frame.n.x; n[1] = sp.frame.n.y; n[2] = sp.frame.n.z;
+            const Vec3 wi = sp.frame.to_local(-d);
+            PCG32 rng(mix64(pixel) ^ 0xa0a5ULL);
+            for (int k = 0; k < samples; ++k) {
+                const double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+                BSDFSample bs = sp.bsdf->bsdf->sample(wi, u0, u1, u2, kAll, sp.query, buf.data());
+                if (!bs.lobe) continue;
+                double rgb[3];
+                sp.bsdf->to_rgb(buf.data(), rgb);
+                for (int c = 0; c < 3; ++c) a[c] += std::clamp(rgb[c], 0.0, 1.0) / samples;
+            }
+        }
+    });
 }
 
 void RenderJob::run() {

@@ -21,10 +21,12 @@ double wrap_phi(const Vec3 &wi, const Vec3 &wo) {
 
 TabulatedBSDF::TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, std::vector<float> values,
                              std::vector<double> luminance, std::shared_ptr<const BSDF> direct,
-                             std::vector<double> P, double default_thickness)
+                             std::vector<double> P, double default_thickness, double transmission_eta)
     : BSDF(std::move(channel_ids)), grid_(std::move(grid)), values_(std::move(values)),
       luminance_(std::move(luminance)), direct_(std::move(direct)), P_(std::move(P)),
-      default_thickness_(default_thickness) {
+      default_thickness_(default_thickness), transmission_eta_(transmission_eta) {
+    if (!(transmission_eta_ > 0) || !std::isfinite(transmission_eta_))
+        throw std::invalid_argument("transmission_eta must be finite and > 0");
     const int C = channels();
     if (grid_.thickness.empty()) grid_.thickness = {-1.0};
     if (values_.size() != grid_.cells() * C) throw std::invalid_argument("table values do not match the grid");
@@ -82,8 +84,9 @@ TabulatedBSDF::TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, st
             double a = grid_.theta_i(ti), sum = 0;
             Vec3 wi{std::sin(a), 0.0, std::cos(a)};
             for (int n = 0; n < kDirectAlbedoSamples; ++n) {
-                BSDFSample s = direct_->sample(wi, rng.uniform(), rng.uniform(), rng.uniform(),
-                                               kGlossyReflection | kDiffuseReflection, q, wd.data());
+                // Named draws: argument evaluation order is unspecified (GCC and Clang differ).
+                const double u1 = rng.uniform(), u2x = rng.uniform(), u2y = rng.uniform();
+                BSDFSample s = direct_->sample(wi, u1, u2x, u2y, kGlossyReflection | kDiffuseReflection, q, wd.data());
                 if (!s.lobe) continue;
                 for (int c = 0; c < C; ++c) {
                     double proj = 0;
@@ -129,10 +132,19 @@ TabulatedBSDF::Weights TabulatedBSDF::phi_weights(double phi) const {
 
 // The exact part must describe the same film as the table part: without a thickness axis
 // the table holds the model's own film (-1) and with one node that node's, whatever the
-// query asks for; with several nodes the query's thickness (or the model's) is used.
+// query asks for; with several nodes the query's thickness (or the model's), clamped to
+// the nodes' range as the table part is (thickness_weights): outside the tabulated range
+// the whole BSDF is that of the nearest end node, so the two parts never describe
+// different films.
 Query TabulatedBSDF::direct_query(const Query &q) const {
     Query d = q;
-    if (grid_.thickness.size() == 1) d.film_thickness_nm = grid_.thickness[0];
+    const auto &T = grid_.thickness;
+    if (T.size() == 1) {
+        d.film_thickness_nm = T[0];
+    } else {
+        double t = q.film_thickness_nm >= 0 ? q.film_thickness_nm : default_thickness_;
+        if (t >= 0) d.film_thickness_nm = std::clamp(t, T.front(), T.back());
+    }
     return d;
 }
 
@@ -270,9 +282,11 @@ BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u
     zero(weight);
     if (!usable_direction(wi) || wi.z <= 0) return {};
     const int C = channels();
-    std::vector<double> delta_w(C);
+    double small[16]; // RGB tables: no allocation in the render loop
+    std::vector<double> large(C > 16 ? C : 0);
+    double *delta_w = C > 16 ? large.data() : small;
     double p_delta, p_direct;
-    mixture(wi, q, p_delta, p_direct, delta_w.data());
+    mixture(wi, q, p_delta, p_direct, delta_w);
     PCG32 rng(hash_directions(0x7ab1e, wi, Vec3{u1, u2x, u2y}));
     BSDFSample s;
     if (u1 < p_delta) { // the exact delta reflection of the top interface
@@ -285,7 +299,8 @@ BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u
     }
     if (u1 < p_delta + p_direct) {
         double *wd = scratch(3, direct_->channels());
-        BSDFSample d = direct_->sample(wi, rng.uniform(), u2x, u2y, kGlossyReflection | kDiffuseReflection,
+        const double u_lobe = rng.uniform();
+        BSDFSample d = direct_->sample(wi, u_lobe, u2x, u2y, kGlossyReflection | kDiffuseReflection,
                                        direct_query(q), wd);
         if (!d.lobe) return {};
         s.wo = d.wo;
@@ -316,6 +331,9 @@ BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u
     eval(wi, s.wo, lobes & ~kDelta, q, weight);
     for (int c = 0; c < C; ++c) weight[c] /= s.pdf;
     s.lobe = s.wo.z > 0 ? kGlossyReflection : kGlossyTransmission;
+    // Transmitted weights carry (n_i / n_t)^2 of the whole stack: report its eta so a
+    // path tracer's Russian roulette (throughput x eta^2) sees the radiance scaling.
+    if (s.lobe == kGlossyTransmission) s.eta = transmission_eta_;
     return s;
 }
 

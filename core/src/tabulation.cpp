@@ -2,115 +2,150 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-#include "bsdflab/layered.h"
+#include "bsdflab/estimate.h"
 #include "bsdflab/parallel.h"
 #include "bsdflab/rng.h"
+#include "bsdflab/scratch.h"
 
 namespace bsdflab {
 
-
-TabulationJob::TabulationJob(std::shared_ptr<const BSDF> model, TableGrid grid, std::vector<double> P,
-                             int rows, TabulationSettings settings)
-    : model_(std::move(model)), grid_(std::move(grid)), P_(std::move(P)), rows_(rows),
-      settings_(settings) {
+Tabulator::Tabulator(std::shared_ptr<const BSDF> model, TableGrid grid, std::vector<double> P, int rows,
+                     TabulationSettings settings)
+    : model_(std::move(model)), estimator_(model_ ? model_->stochastic() : nullptr),
+      grid_(std::move(grid)), P_(std::move(P)), rows_(rows), settings_(settings) {
     if (!model_) throw std::invalid_argument("no model to tabulate");
     if (rows_ < 2 || P_.size() != std::size_t(rows_) * model_->channels())
         throw std::invalid_argument("P must have (output channels + 1) x model channels entries");
+    if (settings_.min_samples < 1 || settings_.max_samples < settings_.min_samples)
+        throw std::invalid_argument("need 1 <= min_samples <= max_samples");
     if (grid_.thickness.empty()) grid_.thickness = {-1.0};
-    value.assign(grid_.cells() * out_channels(), 0.0);
-    error.assign(grid_.cells() * out_channels(), 0.0);
-    samples.assign(grid_.cells(), 0);
-    lum_value.assign(grid_.cells(), 0.0);
-    lum_error.assign(grid_.cells(), 0.0);
 }
 
-// Mean and standard error of f (no cosine) for one cell, all rows of P (luminance last).
-void TabulationJob::estimate(std::size_t cell, int n, uint64_t seed, double *mean, double *err) const {
+uint64_t Tabulator::cell_seed(std::size_t cell, uint64_t stage) const {
+    return mix64(settings_.seed ^ mix64(cell * 8 + stage));
+}
+
+std::uint64_t Tabulator::estimate(std::size_t cell, int n, uint64_t seed, double *mean,
+                                  double *err) const {
     Vec3 wi, wo;
     int lobe, t;
     grid_.cell_directions(cell, wi, wo, lobe, t);
     Query q;
     q.film_thickness_nm = grid_.thickness[t];
     const double inv_cos = 1.0 / std::abs(wo.z);
-    if (auto *layered = dynamic_cast<const LayeredBSDF *>(model_.get())) {
-        layered->eval_projected(wi, wo, kAll, q, n, seed, P_.data(), rows_, !settings_.split_direct,
-                                mean, err);
+    std::uint64_t nonfinite = 0;
+    if (estimator_) {
+        ThreadWorkspace lease;
+        EstimateRequest req{n, seed, P_.data(), rows_};
+        nonfinite = estimator_->estimate(wi, wo, kAll, q, req, lease.get(), mean, err);
     } else { // deterministic model: one evaluation, no error
-        std::vector<double> v(model_->channels());
-        model_->eval(wi, wo, kAll, q, v.data());
-        for (int r = 0; r < rows_; ++r) {
-            double acc = 0;
-            for (int c = 0; c < model_->channels(); ++c) acc += P_[r * model_->channels() + c] * v[c];
-            mean[r] = acc;
-            err[r] = 0.0;
-        }
+        ThreadWorkspace lease;
+        double *v = lease.get().doubles(model_->channels());
+        model_->eval(wi, wo, kAll, q, v);
+        project_rows(P_.data(), rows_, model_->channels(), v, mean);
+        for (int r = 0; r < rows_; ++r) err[r] = 0.0;
     }
-    for (int r = 0; r < rows_; ++r) { mean[r] *= inv_cos; err[r] *= inv_cos; }
+    for (int r = 0; r < rows_; ++r) {
+        mean[r] *= inv_cos;
+        err[r] *= inv_cos;
+    }
+    return nonfinite;
 }
 
-void TabulationJob::run() {
-    const std::size_t cells = grid_.cells();
-    const int C = out_channels();
-    const bool stochastic = dynamic_cast<const LayeredBSDF *>(model_.get()) != nullptr;
-    std::vector<double> &lum = lum_value, &lum_err = lum_error;
+namespace {
+void check_cells(const std::vector<std::size_t> &cells, std::size_t count) {
+    for (std::size_t c : cells)
+        if (c >= count) throw std::invalid_argument("cell index out of range");
+}
+} // namespace
 
-    auto cell_seed = [&](std::size_t cell, uint64_t pass) {
-        return mix64(settings_.seed ^ mix64(cell * 8 + pass));
-    };
-    // Pass 1: every cell at the base effort.
-    parallel_for_each(cells, [&](std::size_t cell) {
-        std::vector<double> m(rows_), er(rows_);
-        if (!cancelled_) {
-            int n = stochastic ? settings_.min_samples : 1;
-            estimate(cell, n, cell_seed(cell, 0), m.data(), er.data());
-            std::copy(m.begin(), m.begin() + C, value.begin() + cell * C);
-            std::copy(er.begin(), er.begin() + C, error.begin() + cell * C);
-            lum[cell] = m[C];
-            lum_err[cell] = er[C];
-            samples[cell] = n;
-            ++done_;
-        }
+PilotCells Tabulator::pilot(const std::vector<std::size_t> &cells, const TabulationControl &ctl) const {
+    check_cells(cells, grid_.cells());
+    PilotCells out;
+    out.lum.assign(cells.size(), 0.0);
+    out.lum_error.assign(cells.size(), 0.0);
+    std::atomic<std::uint64_t> nonfinite{0};
+    const int n = estimator_ ? settings_.min_samples : 1;
+    parallel_for_each(cells.size(), [&](std::size_t i) {
+        if (ctl.stop()) return;
+        std::vector<double> m(rows_), e(rows_);
+        nonfinite += estimate(cells[i], n, cell_seed(cells[i], 0), m.data(), e.data());
+        out.lum[i] = m[rows_ - 1];
+        out.lum_error[i] = e[rows_ - 1];
+        ctl.tick();
     });
-    if (cancelled_) return;
-    if (!stochastic) { done_ = total(); return; }
+    out.nonfinite = nonfinite;
+    return out;
+}
 
-    // Error floor per lobe: a fraction of the lobe's mean luminance.
+std::vector<double> Tabulator::floor_scale(const std::vector<double> &lum) const {
+    const std::size_t cells = grid_.cells(), per_lobe = cells / grid_.n_lobes;
+    if (lum.size() != cells) throw std::invalid_argument("floor_scale needs every cell's pilot luminance");
     std::vector<double> scale(grid_.n_lobes, 0.0);
-    std::size_t per_lobe = cells / grid_.n_lobes;
-    for (std::size_t cell = 0; cell < cells; ++cell) scale[cell / per_lobe] += std::abs(lum[cell]) / per_lobe;
+    for (std::size_t cell = 0; cell < cells; ++cell) scale[cell / per_lobe] += std::abs(lum[cell]);
+    for (double &s : scale) s /= double(per_lobe);
+    return scale;
+}
 
-    // Refinement passes: each cell still above its target gets the walks its estimated
-    // variance asks for, pooled with the earlier ones. The variance estimate is itself
-    // noisy, so a couple of passes bring stragglers in.
-    for (int pass = 1; pass <= kRefinePasses && !cancelled_; ++pass)
-    parallel_for_each(cells, [&](std::size_t cell) {
-        std::vector<double> m(rows_), er(rows_);
-        if (!cancelled_) {
-            double target = settings_.rel_error *
-                            std::max(std::abs(lum[cell]), settings_.floor * scale[cell / per_lobe]);
-            int n1 = samples[cell];
-            if (target > 0 && lum_err[cell] > target) {
-                double want = n1 * (lum_err[cell] / target) * (lum_err[cell] / target);
-                int n_total = static_cast<int>(std::min<double>(settings_.max_samples, std::ceil(want * 1.1)));
-                int n2 = n_total - n1;
-                if (n2 > 0) {
-                    estimate(cell, n2, cell_seed(cell, pass), m.data(), er.data());
-                    // Chan et al.: combine two (mean, M2) summaries; M2 = se^2 n (n - 1).
-                    for (int c = 0; c <= C; ++c) { // c == C: the luminance row
-                        double &mean1 = c < C ? value[cell * C + c] : lum[cell];
-                        double &se1 = c < C ? error[cell * C + c] : lum_err[cell];
-                        double M2a = se1 * se1 * n1 * (n1 - 1.0), M2b = er[c] * er[c] * n2 * (n2 - 1.0);
-                        double d = m[c] - mean1, n = double(n1) + n2;
-                        double M2 = M2a + M2b + d * d * double(n1) * n2 / n;
-                        mean1 += d * n2 / n;
-                        se1 = std::sqrt(M2 / (n * (n - 1.0)));
-                    }
-                    samples[cell] = n1 + n2;
-                }
-            }
-            ++done_;
-        }
+int Tabulator::effort(std::size_t cell, double pilot_lum, double pilot_error,
+                      const std::vector<double> &scale) const {
+    if (!estimator_) return 1;
+    const std::size_t per_lobe = grid_.cells() / grid_.n_lobes;
+    const double target = settings_.rel_error * std::max(std::abs(pilot_lum),
+                                                         settings_.floor * scale.at(cell / per_lobe));
+    const int n0 = settings_.min_samples;
+    if (!(target > 0) || !(pilot_error > target)) return n0;
+    // 10 % above the estimated need: the pilot's error estimate is itself noisy.
+    const double ratio = pilot_error / target;
+    const double want = std::ceil(1.1 * n0 * ratio * ratio);
+    return static_cast<int>(std::clamp<double>(want, n0, settings_.max_samples));
+}
+
+FinishedCells Tabulator::finish(const std::vector<std::size_t> &cells, const std::vector<double> &pilot_lum,
+                                const std::vector<double> &pilot_error, const std::vector<double> &scale,
+                                const TabulationControl &ctl) const {
+    check_cells(cells, grid_.cells());
+    if (pilot_lum.size() != cells.size() || pilot_error.size() != cells.size())
+        throw std::invalid_argument("pilot luminance and error must have one entry per cell");
+    if (scale.size() != std::size_t(grid_.n_lobes))
+        throw std::invalid_argument("floor scale must have one entry per lobe");
+    const int C = out_channels();
+    FinishedCells out;
+    out.value.assign(cells.size() * C, 0.0);
+    out.error.assign(cells.size() * C, 0.0);
+    out.lum.assign(cells.size(), 0.0);
+    out.lum_error.assign(cells.size(), 0.0);
+    out.samples.assign(cells.size(), 0);
+    std::atomic<std::uint64_t> nonfinite{0};
+    parallel_for_each(cells.size(), [&](std::size_t i) {
+        if (ctl.stop()) return;
+        const std::size_t cell = cells[i];
+        const int n = effort(cell, pilot_lum[i], pilot_error[i], scale);
+        std::vector<double> m(rows_), e(rows_);
+        nonfinite += estimate(cell, n, cell_seed(cell, 1), m.data(), e.data());
+        std::copy(m.begin(), m.begin() + C, out.value.begin() + i * C);
+        std::copy(e.begin(), e.begin() + C, out.error.begin() + i * C);
+        out.lum[i] = m[C];
+        out.lum_error[i] = e[C];
+        out.samples[i] = n;
+        ctl.tick();
     });
+    out.nonfinite = nonfinite;
+    return out;
+}
+
+TabulationStageJob::TabulationStageJob(std::shared_ptr<const Tabulator> tabulator, Stage stage,
+                                       std::vector<std::size_t> cells, std::vector<double> pilot_lum,
+                                       std::vector<double> pilot_error, std::vector<double> scale)
+    : tabulator_(std::move(tabulator)), stage_(stage), cells_(std::move(cells)),
+      pilot_lum_(std::move(pilot_lum)), pilot_error_(std::move(pilot_error)), scale_(std::move(scale)) {
+    if (!tabulator_) throw std::invalid_argument("no tabulator");
+}
+
+void TabulationStageJob::run() {
+    TabulationControl ctl{&done_, &cancelled_};
+    if (stage_ == kPilot) pilot = tabulator_->pilot(cells_, ctl);
+    else finished = tabulator_->finish(cells_, pilot_lum_, pilot_error_, scale_, ctl);
 }
 
 } // namespace bsdflab

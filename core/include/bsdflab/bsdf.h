@@ -15,6 +15,8 @@
 
 namespace bsdflab {
 
+class StochasticEstimator; // estimate.h
+
 // Lobe flags: one bit per (diffuse | glossy | delta) x (reflection | transmission).
 enum Lobe : uint32_t {
     kNone = 0,
@@ -59,6 +61,8 @@ public:
     // Writes channels() weights to `weight`; returns lobe 0 and zero weights on failure.
     virtual BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
                               const Query &q, double *weight) const = 0;
+    // Monte Carlo models (eval is an estimate) expose their estimator; others return null.
+    virtual const StochasticEstimator *stochastic() const { return nullptr; }
 
 protected:
     void zero(double *out) const {

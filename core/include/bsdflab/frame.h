@@ -9,6 +9,19 @@ namespace bsdflab {
 inline double cos_theta(const Vec3 &w) { return w.z; }
 inline double abs_cos_theta(const Vec3 &w) { return std::abs(w.z); }
 
+// v scaled to unit length; the zero vector stays zero.
+inline Vec3 normalized(const Vec3 &v) {
+    const double l = length(v);
+    return l > 0 ? v * (1 / l) : Vec3{0, 0, 0};
+}
+
+// An orthonormal basis (s, t) with s x t = n for a unit n (Duff et al. 2017, branchless).
+inline void orthonormal_basis(const Vec3 &n, Vec3 &s, Vec3 &t) {
+    const double sign = std::copysign(1.0, n.z), a = -1 / (sign + n.z), b = n.x * n.y * a;
+    s = {1 + sign * n.x * n.x * a, sign * b, -sign * n.x};
+    t = {b, sign + n.y * n.y * a, -n.y};
+}
+
 // Mirror direction about the normal (both directions pointing away).
 inline Vec3 reflect(const Vec3 &wi) { return {-wi.x, -wi.y, wi.z}; }
 

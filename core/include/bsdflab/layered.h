@@ -11,21 +11,30 @@
 // a spectral throughput. A "light chain" is sampled once per walk from wo through the
 // boundaries on the exit side (transmission only), giving per slab the direction u_j that
 // leads straight out to wo and the factor of that unscattered path. Every non-delta vertex
-// (medium scattering, reflection at the non-exit side of a slab) connects to the chain
-// (next-event estimation, strategy A). After a vertex samples a direction toward a rough
-// exit-side boundary, that boundary's BTDF toward the chain is evaluated (strategy B); A
-// and B are combined with the power heuristic. The walk itself never leaves through the
-// exit side, so no path is counted twice. Russian roulette after a few bounces and a depth
-// cap end every walk. The top boundary's own reflection is added exactly (non-delta part);
-// its delta part is not estimated: see delta_reflectance / sample.
+// (medium scattering, reflection at the non-exit side of a slab, a rough entry in
+// transmission) connects to the chain (next-event estimation, strategy A; through delta
+// exit-side boundaries the chain is deterministic and A is the only strategy). After a
+// vertex samples a direction toward a rough exit-side boundary, that boundary's BTDF toward
+// the chain is evaluated (strategy B); A and B are combined with the power heuristic.
+// A path whose last non-delta vertex cannot connect (it is followed by delta events only:
+// a smooth base or interior reflection, or the rough entry of a reflection path) is
+// counted by strategy B alone, at the first rough exit-side boundary the walk reaches
+// through delta transmissions (the walk's `covered` flag tracks this). The walk itself
+// never leaves through the exit side, so no path is counted twice. Russian roulette after
+// a few bounces and a depth cap end every walk. The top boundary's own reflection is added
+// exactly (non-delta part); its delta part is not estimated: see delta_reflectance / sample.
 //
 // Paths whose every vertex is a delta event (e.g. a smooth coat over a smooth mirror) form
 // a delta lobe of the stack and are not part of eval.
+//
+// Random numbers are drawn into named locals, in program order, so that the streams (and
+// every estimate) are the same whatever compiler evaluates function arguments in which order.
 #pragma once
 #include <cstdint>
 #include <memory>
 #include <vector>
 #include "bsdf.h"
+#include "estimate.h"
 #include "phase.h"
 #include "rng.h"
 
@@ -45,7 +54,7 @@ struct LayeredOptions {
     bool nee = true;      // false: strategy B only (the naive walk, for benchmarks)
 };
 
-class LayeredBSDF final : public BSDF {
+class LayeredBSDF final : public BSDF, public StochasticEstimator {
 public:
     LayeredBSDF(std::vector<double> wavelengths, std::vector<std::shared_ptr<const BSDF>> boundaries,
                 std::vector<Slab> slabs, LayeredOptions options);
@@ -53,39 +62,78 @@ public:
     void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
               double *out) const override;
     double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const override;
+    // A transmitted sample reports eta = the product of the walk's relative indices
+    // (n below / n above the stack, or its inverse from below); reflection reports 1.
     BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
                       const Query &q, double *weight) const override;
+    const StochasticEstimator *stochastic() const override { return this; }
 
-    // eval() with an explicit effort and seed, also writing the standard error per channel.
-    void eval_with_error(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                         int samples, uint64_t seed, double *out, double *stderr_out) const;
-    // The same estimate projected by P (rows x channels, row-major) before the statistics,
-    // so errors of derived quantities (RGB, luminance) are exact; `include_direct` false
-    // leaves out the top boundary's own (deterministic) reflection.
-    void eval_projected(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, int samples,
-                        uint64_t seed, const double *P, int rows, bool include_direct, double *out,
-                        double *stderr_out) const;
+    // The whole non-delta BSDF: the multiply scattered light plus the top's own reflection.
+    std::uint64_t estimate(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                           const EstimateRequest &request, EstimateWorkspace &workspace,
+                           double *mean, double *stderr_out) const override;
+    // The estimate without the entry boundary's own (deterministic) reflection: the light
+    // that entered the stack. ScatteredPart exposes it as a model of its own.
+    std::uint64_t estimate_scattered(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                                     const EstimateRequest &request, EstimateWorkspace &workspace,
+                                     double *mean, double *stderr_out) const;
     // Reflectance of the top boundary's delta lobe toward the mirror direction.
     void delta_reflectance(const Vec3 &wi, const Query &q, double *out) const;
+    // The top boundary: its reflection is the part of the model known exactly.
+    const std::shared_ptr<const BSDF> &top() const { return boundaries_.front(); }
     const LayeredOptions &options() const { return options_; }
 
 private:
-    struct Chain;
     struct Walk;
-    bool build_chain(const Vec3 &wo, int exit, const Query &q, PCG32 &rng, Chain &chain) const;
-    void one_walk(const Vec3 &wi, const Vec3 &wo, int entry, int exit, const Query &q,
-                  PCG32 &rng, double *contrib) const;
+    std::uint64_t estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                                const EstimateRequest &request, bool include_direct,
+                                EstimateWorkspace &workspace, double *mean, double *err) const;
+    Walk bind_walk(EstimateWorkspace &workspace, std::size_t offset) const;
+    std::size_t walk_doubles() const;
+    void build_chain(const Vec3 &wo, int exit, const Query &q, PCG32 &rng, Walk &wk) const;
+    void one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng, Walk &wk) const;
     void transmittance(int slab, double distance, double *tr) const;
     // Advances a flight of at most `room` depth in slab j along a direction of |z| = cz,
     // sampled by spectral MIS over the channels' extinctions (so absorbing slabs scatter
     // where light actually reaches, with weights bounded by the channel count):
     // returns the travelled distance along the ray if it ends in a scattering event
-    // (throughput updated), or a negative number if it reaches the boundary.
-    double fly(const Slab &S, double room, double cz, PCG32 &rng, double *beta) const;
+    // (throughput updated), or a negative number if it reaches the boundary. `tr` is a
+    // buffer of channels() doubles.
+    double fly(const Slab &S, double room, double cz, PCG32 &rng, double *beta, double *tr) const;
 
     std::vector<std::shared_ptr<const BSDF>> boundaries_;
     std::vector<Slab> slabs_;
     LayeredOptions options_;
+};
+
+// "The model without its top interface's own reflection": the light that entered the
+// stack, as a stochastic BSDF. The tabulator stores this part of a layered model and the
+// table BSDF adds top() back exactly at lookup.
+class ScatteredPart final : public BSDF, public StochasticEstimator {
+public:
+    explicit ScatteredPart(std::shared_ptr<const LayeredBSDF> model);
+    uint32_t lobes() const override { return model_->lobes() & ~kDelta; }
+    void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+              double *out) const override;
+    double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const override {
+        return model_->pdf(wi, wo, lobes, q);
+    }
+    // Not a sampler of its own (it is a part of a BSDF): returns no sample.
+    BSDFSample sample(const Vec3 &, double, double, double, uint32_t, const Query &,
+                      double *weight) const override {
+        zero(weight);
+        return {};
+    }
+    const StochasticEstimator *stochastic() const override { return this; }
+    std::uint64_t estimate(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                           const EstimateRequest &request, EstimateWorkspace &workspace,
+                           double *mean, double *stderr_out) const override {
+        return model_->estimate_scattered(wi, wo, lobes, q, request, workspace, mean, stderr_out);
+    }
+    const LayeredBSDF &model() const { return *model_; }
+
+private:
+    std::shared_ptr<const LayeredBSDF> model_;
 };
 
 } // namespace bsdflab

@@ -10,6 +10,9 @@
 // uniform in (cos theta_o, phi) within the patch; theta_i and thickness nodes are picked
 // with their interpolation weights. pdf() is the exact density of that mixture.
 // Tables describe light arriving from above (wi.z > 0); from below everything is zero.
+// Film thicknesses outside a multi-node thickness range are clamped to its ends, for the
+// table part and the exact part alike. Transmitted samples report eta = n_t / n_i of the
+// whole stack (their weights carry (n_i / n_t)^2).
 #pragma once
 #include <memory>
 #include <vector>
@@ -24,7 +27,7 @@ public:
     // luminance: per channel weights for the sampling CDFs.
     TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, std::vector<float> values,
                   std::vector<double> luminance, std::shared_ptr<const BSDF> direct,
-                  std::vector<double> P, double default_thickness);
+                  std::vector<double> P, double default_thickness, double transmission_eta = 1.0);
     uint32_t lobes() const override;
     void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
               double *out) const override;
@@ -54,6 +57,7 @@ private:
     std::shared_ptr<const BSDF> direct_;
     std::vector<double> P_; // (C x direct channels) row-major, or empty
     double default_thickness_;
+    double transmission_eta_; // n_t / n_i across the whole stack, reported by transmitted samples
     // Per (thickness node, theta_i node): patch CDF (patches() + 1 entries), patch
     // probabilities, and the table albedo (luminance) at that node.
     std::vector<double> cdf_, prob_, albedo_;

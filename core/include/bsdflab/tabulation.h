@@ -1,12 +1,29 @@
 // Tabulation of an isotropic BSDF on a grid of (film thickness, theta_i, theta_o, phi)
 // for reflection and, if the model transmits, transmission (layout in table_grid.h).
-// Stochastic models (LayeredBSDF) get an adaptive effort: a first pass of `min_samples`
-// walks per cell, then each cell is refined until the standard error of its luminance is
-// below rel_error * max(|luminance|, floor * mean luminance of the lobe), or max_samples.
 // Values are stored without the cosine (f, 1/sr) after projecting the model's channels by
 // P (e.g. spectra -> linear sRGB); the last row of P is the luminance that drives effort.
+//
+// Stochastic models (BSDF::stochastic() non-null) get an adaptive effort in two stages:
+//   pilot   `min_samples` walks per cell estimate the cell's luminance and its standard
+//           error (seed stream 0 of the cell);
+//   finish  each cell gets n = clamp(1.1 min_samples (se / target)^2, min_samples,
+//           max_samples) walks, target = rel_error max(|pilot luminance|, floor x the mean
+//           pilot luminance of the cell's lobe), from a FRESH seed stream (1 of the cell).
+//           The stored value, error and sample count are those of the fresh walks alone.
+// Why this is unbiased: the pilot only chooses n. Given n, the finish walks are
+// independent of the pilot, so E[value | n] = f for every n, hence E[value] = f. (Pooling
+// the pilot into the value, as version 1 did, is biased low for heavy-tailed cells: a
+// pilot that reads low also understates its error and stops its cell early.)
+//
+// Decomposition (a distributed driver runs blocks of cells; results are bit-identical to
+// a whole run): a cell's pilot is a pure function of (model, grid, cell, settings, seed);
+// the only cross-cell quantity, the per-lobe floor scale, is reduced from the pilot
+// luminances in cell-index order (floor_scale); a cell's finish is a pure function of
+// (model, grid, cell, settings, seed, its pilot luminance and error, the floor scale).
+// Each cell is computed by one thread, so thread counts do not change any bit either.
 #pragma once
 #include <atomic>
+#include <cstdint>
 #include <memory>
 #include <vector>
 #include "bsdf.h"
@@ -17,39 +34,95 @@ namespace bsdflab {
 struct TabulationSettings {
     double rel_error = 0.01;
     double floor = 0.05;   // fraction of the lobe's mean luminance below which error is absolute
-    int min_samples = 64;
+    int min_samples = 64;  // pilot walks, and the least number of final walks
     int max_samples = 1 << 16;
     uint64_t seed = 0;
-    bool split_direct = false; // leave the top boundary's own reflection out (layered models)
 };
 
-class TabulationJob {
+// Progress and cancellation shared by the stages of one job (both may be null).
+struct TabulationControl {
+    std::atomic<std::size_t> *done = nullptr;
+    const std::atomic<bool> *cancelled = nullptr;
+    bool stop() const { return cancelled && cancelled->load(); }
+    void tick() const {
+        if (done) ++*done;
+    }
+};
+
+// Outputs of the pilot stage, one entry per listed cell.
+struct PilotCells {
+    std::vector<double> lum, lum_error;
+    std::uint64_t nonfinite = 0;
+};
+
+// Outputs of the finish stage, one entry per listed cell (value/error: out_channels each).
+struct FinishedCells {
+    std::vector<double> value, error, lum, lum_error;
+    std::vector<int> samples;
+    std::uint64_t nonfinite = 0;
+};
+
+// The stage functions. Immutable after construction: safe to share between threads;
+// each stage runs its cells on all cores (call without the GIL).
+class Tabulator {
 public:
     // P: (rows x model channels) row-major; rows - 1 output channels plus luminance last.
-    TabulationJob(std::shared_ptr<const BSDF> model, TableGrid grid, std::vector<double> P, int rows,
-                  TabulationSettings settings);
-    void run();  // blocking; call without the GIL
-    void cancel() { cancelled_ = true; }
-    bool cancelled() const { return cancelled_; }
-    std::size_t done() const { return done_; }
-    static constexpr int kRefinePasses = 3;
-    std::size_t total() const { return (1 + kRefinePasses) * grid_.cells(); }
-
-    const TableGrid &grid() const { return grid_; }
+    Tabulator(std::shared_ptr<const BSDF> model, TableGrid grid, std::vector<double> P, int rows,
+              TabulationSettings settings);
+    std::size_t cells() const { return grid_.cells(); }
     int out_channels() const { return rows_ - 1; }
-    // [cell * out_channels + c]; cell order as in TableGrid::cell_index.
-    std::vector<double> value, error;
-    std::vector<int> samples;
-    std::vector<double> lum_value, lum_error; // per cell: luminance and its standard error
+    bool stochastic() const { return estimator_ != nullptr; }
+    const TableGrid &grid() const { return grid_; }
+    const TabulationSettings &settings() const { return settings_; }
+
+    PilotCells pilot(const std::vector<std::size_t> &cells, const TabulationControl &ctl = {}) const;
+    // Per lobe: the mean |pilot luminance| over the lobe's cells, summed in cell order.
+    // `lum` holds every cell's pilot luminance (cells() entries, cell order).
+    std::vector<double> floor_scale(const std::vector<double> &lum) const;
+    // The number of final walks of a cell from its pilot (1 for a deterministic model).
+    int effort(std::size_t cell, double pilot_lum, double pilot_error,
+               const std::vector<double> &scale) const;
+    // pilot_lum / pilot_error: aligned with `cells`.
+    FinishedCells finish(const std::vector<std::size_t> &cells, const std::vector<double> &pilot_lum,
+                         const std::vector<double> &pilot_error, const std::vector<double> &scale,
+                         const TabulationControl &ctl = {}) const;
 
 private:
-    void estimate(std::size_t cell, int n, uint64_t seed, double *mean, double *err) const;
+    // Mean and standard error of f (no cosine) for one cell, all rows of P (luminance last).
+    std::uint64_t estimate(std::size_t cell, int n, uint64_t seed, double *mean, double *err) const;
+    uint64_t cell_seed(std::size_t cell, uint64_t stage) const;
 
     std::shared_ptr<const BSDF> model_;
+    const StochasticEstimator *estimator_;
     TableGrid grid_;
     std::vector<double> P_;
     int rows_;
     TabulationSettings settings_;
+};
+
+// One stage over a list of cells as a job (progress, cancel) for the bindings: the
+// Python tabulate() runs the pilot job over every cell, floor_scale, then the finish job
+// over every cell -- the same calls a distributed driver makes on blocks of cells.
+class TabulationStageJob {
+public:
+    enum Stage { kPilot = 0, kFinish = 1 };
+    TabulationStageJob(std::shared_ptr<const Tabulator> tabulator, Stage stage,
+                       std::vector<std::size_t> cells, std::vector<double> pilot_lum = {},
+                       std::vector<double> pilot_error = {}, std::vector<double> scale = {});
+    void run();  // blocking; call without the GIL
+    void cancel() { cancelled_ = true; }
+    bool cancelled() const { return cancelled_; }
+    std::size_t done() const { return done_; }
+    std::size_t total() const { return cells_.size(); }
+
+    PilotCells pilot;       // after a pilot run
+    FinishedCells finished; // after a finish run
+
+private:
+    std::shared_ptr<const Tabulator> tabulator_;
+    Stage stage_;
+    std::vector<std::size_t> cells_;
+    std::vector<double> pilot_lum_, pilot_error_, scale_;
     std::atomic<std::size_t> done_{0};
     std::atomic<bool> cancelled_{false};
 };

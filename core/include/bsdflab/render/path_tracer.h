@@ -31,7 +31,11 @@ struct RenderSettings {
     int rr_depth = 5;
     uint64_t seed = 0;
     int tile = 16;
+    // Spectral transport over the default grid's bins instead of RGB (see path_tracer.cpp).
+    bool spectral = false;
 };
+
+template <int N> struct PathColour;
 
 class RenderJob {
 public:
@@ -56,7 +60,27 @@ public:
     // One camera sample's radiance (exposed for tests).
     void radiance(double px, double py, uint64_t sample_seed, double rgb[3]) const;
 
+    // Rays traced by run() so far (camera, bounce and shadow rays).
+    std::size_t rays_traced() const { return rays_; }
+    // The rays one sample per pixel of the first pass traces, over pixels spread evenly
+    // across the image, up to max_rays: 8 floats per ray (origin, direction, tmax,
+    // 0 = closest hit / 1 = shadow), for timing Embree alone on the renderer's own rays.
+    std::vector<float> record_rays(std::size_t max_rays) const;
+    // First-hit auxiliary images for a denoiser, (H, W, 3) each: the BSDF's albedo (mean
+    // sample weight over `samples` draws at the pixel centre's hit) and the shading normal;
+    // mesh_id (H, W) is the mesh hit first (-1: none).
+    void aovs(int samples, double *albedo, double *normal, int *mesh_id) const;
+
 private:
+    struct RayLog {
+        std::size_t rays = 0;
+        std::vector<float> *record = nullptr;
+        std::size_t max_record = 0;
+        void add(const Vec3 &o, const Vec3 &d, double tmax, bool shadow);
+    };
+    void trace_path(double px, double py, uint64_t sample_seed, double L[3], RayLog &log) const;
+    template <int N>
+    void trace_path_in(double px, double py, uint64_t sample_seed, double L[3], RayLog &log) const;
     void render_tile(std::size_t tile, int pass, int spp);
 
     std::shared_ptr<const RenderScene> scene_;
@@ -64,7 +88,7 @@ private:
     std::size_t tiles_x_, tiles_y_, passes_;
     std::vector<double> sum_, sum_sq_;     // completed passes
     std::vector<double> pass_sum_, pass_sq_; // the pass in progress
-    std::atomic<std::size_t> done_{0}, invalid_{0};
+    std::atomic<std::size_t> done_{0}, invalid_{0}, rays_{0};
     std::atomic<bool> cancelled_{false}, running_{false};
     int spp_done_ = 0;
     int max_channels_ = 3;

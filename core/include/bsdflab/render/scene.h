@@ -13,17 +13,24 @@
 #include "bsdflab/render/camera.h"
 #include "bsdflab/render/distribution.h"
 #include "bsdflab/render/environment.h"
+#include "bsdflab/render/shading.h"
 #include "bsdflab/scale_texture.h"
 
 namespace bsdflab {
 
+// Spectral mode carries this many bins per path: the default 380-780 nm grid at 5 nm.
+constexpr int kSpectralBins = 81;
+
 // A BSDF as the renderer sees it: its own channels projected to linear sRGB by P (3 x C,
-// row-major); P empty means the BSDF already answers in RGB (C == 3).
+// row-major; empty: the BSDF already answers in RGB, C == 3) and, for spectral mode, lifted
+// to the spectral bins by U (kSpectralBins x C, row-major; empty: the BSDF's channels are
+// those bins, C == kSpectralBins).
 struct RenderBSDF {
     std::shared_ptr<const BSDF> bsdf;
-    std::vector<double> P;
+    std::vector<double> P, U;
     uint32_t lobes = 0;
     void to_rgb(const double *channels, double rgb[3]) const;
+    void to_spectrum(const double *channels, double out[kSpectralBins]) const;
 };
 
 struct Material {
@@ -32,6 +39,9 @@ struct Material {
     bool has_gap = false;
     std::shared_ptr<const ScaleTexture> scales; // may be null
     double film_thickness_nm = -1;              // base thickness the scales modulate; < 0: none
+
+    // The BSDF, shading frame and query at a hit (see shading.h).
+    ShadingPoint shade(const SurfaceHit &hit) const;
 };
 
 struct MeshInput {
@@ -70,6 +80,13 @@ public:
     int add_mesh(MeshInput m);
     void set_camera(const Camera &c);
     void set_environment(Environment e);
+    // Spectral mode's colour: U (kSpectralBins x 3) lifts RGB emission to the bins, W
+    // (3 x kSpectralBins) takes a spectrum (illuminant folded in) to linear sRGB.
+    void set_spectral(std::vector<double> U, std::vector<double> W);
+    // Every material has a spectral form and the matrices are set.
+    bool spectral_ready() const { return !W_.empty() && spectral_capable_; }
+    void lift(const double rgb[3], double out[kSpectralBins]) const;
+    const double *sensor() const { return W_.data(); }
     bool committed() const { return committed_; }
     // Builds the BVH and the light distribution; the scene is read-only afterwards.
     void commit();
@@ -83,6 +100,9 @@ public:
 
     bool intersect(const Vec3 &o, const Vec3 &d, double tmax, SurfaceHit &hit) const;
     bool occluded(const Vec3 &o, const Vec3 &d, double tmax) const;
+    // Embree alone: traces recorded rays (8 floats each, see RenderJob::record_rays) on all
+    // cores with rtcIntersect1 / rtcOccluded1 and nothing else; returns the wall seconds.
+    double trace_recorded(const float *rays, std::size_t n) const;
 
     // Radiance a surface emits at `hit` towards direction `w` (unit, away from the surface).
     void emitted(const SurfaceHit &hit, const Vec3 &w, double rgb[3]) const;
@@ -109,6 +129,8 @@ private:
     Distribution1D light_choice_;
     std::vector<std::vector<double>> light_prob_; // per mesh, per triangle (empty if not emissive)
     int max_channels_ = 3;
+    std::vector<double> U_, W_;
+    bool spectral_capable_ = true;
     bool committed_ = false;
 };
 

@@ -1,0 +1,152 @@
+"""Fitting: bsdflab's C++ forward model against the same model with colour-science's
+``thin_film_tmm`` (vectorised numpy) or ``tmm`` (pure Python) as the film part, in one run.
+
+Workload: the specular rows of the shipped synthetic example (examples/fit/data.csv:
+4 angles x 36 wavelengths = 144 rows), thickness spread by 8 Gauss-Hermite nodes. Each
+peer computes exactly the same observables (checked to 1e-9 here) -- only the film part
+differs. Prints forward-model evaluations per second (one evaluation = one parameter set,
+all rows) and effective samples per second of the same emcee study (same data, priors,
+start and seed) with each forward model, and the ratios. bsdflab runs on all threads and
+on one (BSDFLAB_THREADS=1); the peers on one.
+
+    python3 bench/bench_fit.py
+Profile:  python3 -m cProfile -s cumtime bench/bench_fit.py | head -40
+"""
+from __future__ import annotations
+
+import os
+import time
+import tomllib
+import warnings
+
+import emcee
+import numpy as np
+import tmm
+from colour.phenomena import thin_film_tmm
+
+from bsdflab.fit import GEOMETRIES, FitConfig, ForwardModel, LogPosterior, read_csv
+from bsdflab.fit.parameters import FORWARD_NAMES
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DATA = os.path.join(HERE, "..", "examples", "fit", "data.csv")
+NODES = 8
+CONFIG = f"""
+[parameters]
+film_thickness_nm = {{ prior = "uniform", low = 300.0, high = 600.0 }}
+film_thickness_spread_nm = {{ prior = "uniform", low = 0.0, high = 40.0 }}
+film_index_A = {{ prior = "normal", mean = 1.83, sd = 0.05 }}
+[model]
+thickness_nodes = {NODES}
+[sampler]
+walkers = 8
+"""
+STEPS = 60
+COL = {n: i for i, n in enumerate(FORWARD_NAMES)}
+
+
+class PeerForwardModel:
+    """The specular part of bsdflab.fit's forward model with a third-party film code."""
+
+    def __init__(self, dataset, nodes: int, film: str):
+        if np.any(dataset.geometry != GEOMETRIES.index("specular")):
+            raise ValueError("the peer implements specular rows only")
+        self.ds, self.film = dataset, film
+        self.wl, self.wl_index = np.unique(dataset.wavelength_nm, return_inverse=True)
+        self.angles, self.angle_index = np.unique(dataset.angle_deg, return_inverse=True)
+        x, w = np.polynomial.hermite.hermgauss(nodes)
+        self.x, self.w = x, w / w.sum()
+
+    def evaluate(self, theta):
+        theta = np.atleast_2d(theta)
+        return np.array([self._one(t) for t in theta])
+
+    def _one(self, t):
+        d = np.maximum(0.0, t[COL["film_thickness_nm"]] + np.sqrt(2) * t[COL["film_thickness_spread_nm"]] * self.x)
+        if t[COL["film_thickness_spread_nm"]] == 0:
+            d, w = d[:1], np.ones(1)
+        else:
+            w = self.w
+        n_e, n_s = t[COL["exterior_index"]], t[COL["substrate_index"]]
+        R = np.empty((len(self.wl), len(self.angles)))
+        for j, lam in enumerate(self.wl):
+            n_f = t[COL["film_index_A"]] + t[COL["film_index_B"]] / lam**2
+            if self.film == "colour":
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    r, _ = thin_film_tmm([n_e, n_f, n_s], d, np.array([lam]), self.angles)
+                R[j] = r[0].mean(axis=-1) @ w          # (angles, nodes, pol) -> (angles,)
+            else:
+                for a, ang in enumerate(self.angles):
+                    R[j, a] = sum(wk * tmm.unpolarized_RT([n_e, n_f, n_s], [np.inf, dk, np.inf],
+                                                          np.radians(ang), lam)["R"] for dk, wk in zip(d, w))
+        return R[self.wl_index, self.angle_index]
+
+
+def evals_per_second(model, theta, min_seconds=1.5):
+    n, start = 0, time.perf_counter()
+    while True:
+        model.evaluate(theta)
+        n += len(theta)
+        elapsed = time.perf_counter() - start
+        if elapsed > min_seconds:
+            return n / elapsed
+
+
+def study(logpost, model, p0, seed):
+    logpost.model = model
+    sampler = emcee.EnsembleSampler(len(p0), logpost.ndim, logpost, vectorize=True)
+    sampler.random_state = np.random.RandomState(seed).get_state()
+    start = time.perf_counter()
+    sampler.run_mcmc(p0, STEPS, progress=False)
+    seconds = time.perf_counter() - start
+    chain = sampler.get_chain()
+    tau = emcee.autocorr.integrated_time(chain, tol=0)
+    return chain, float(np.min(STEPS * len(p0) / tau)), seconds
+
+
+def main():
+    ds = read_csv(DATA)
+    keep = ds.geometry == GEOMETRIES.index("specular")
+    ds = ds.__class__(*(getattr(ds, f)[keep] for f in ("geometry", "angle_deg", "angle_out_deg", "wavelength_nm",
+                                                         "reflectance", "sigma")))
+    config = FitConfig.parse(tomllib.loads(CONFIG))
+    ours = ForwardModel(ds, NODES)
+    colour_peer, tmm_peer = PeerForwardModel(ds, NODES, "colour"), PeerForwardModel(ds, NODES, "tmm")
+    logpost = LogPosterior(ds, config)
+    rng = np.random.default_rng(0)
+    sets = logpost.full(logpost.sample_prior(32, rng))[:, :len(FORWARD_NAMES)]
+    ref = ours.evaluate(sets[:3])
+    for peer in (colour_peer, tmm_peer):
+        err = np.max(np.abs(peer.evaluate(sets[:3]) - ref))
+        assert err < 1e-9, f"peer disagrees by {err}"
+    print(f"load: {os.getloadavg()[0]:.1f} (1-min average; the machine may be shared)")
+    print(f"forward model, {ds.geometry.size} specular rows, {NODES} thickness nodes, per parameter set:")
+    rates = {}
+    rates["bsdflab"] = evals_per_second(ours, sets)
+    os.environ["BSDFLAB_THREADS"] = "1"
+    rates["bsdflab 1 thread"] = evals_per_second(ours, sets)
+    del os.environ["BSDFLAB_THREADS"]
+    rates["colour thin_film_tmm"] = evals_per_second(colour_peer, sets[:4])
+    rates["tmm"] = evals_per_second(tmm_peer, sets[:1], min_seconds=3.0)
+    for name, r in rates.items():
+        print(f"  {name:<22} {r:12.1f} evaluations/s")
+    print(f"  ratio bsdflab / colour  {rates['bsdflab'] / rates['colour thin_film_tmm']:8.1f}x "
+          f"(1 thread: {rates['bsdflab 1 thread'] / rates['colour thin_film_tmm']:.1f}x)")
+    print(f"  ratio bsdflab / tmm     {rates['bsdflab'] / rates['tmm']:8.1f}x "
+          f"(1 thread: {rates['bsdflab 1 thread'] / rates['tmm']:.1f}x)")
+
+    centre = np.array([430.0, 12.0, 1.83])
+    p0 = centre + 1e-3 * np.array([1.0, 1.0, 1e-3]) * rng.standard_normal((config.sampler.walkers, 3))
+    print(f"emcee study: {config.sampler.walkers} walkers x {STEPS} steps, same start and seed")
+    c_ours, ess_ours, t_ours = study(logpost, ours, p0, 1)
+    c_peer, ess_peer, t_peer = study(logpost, colour_peer, p0, 1)
+    same = np.max(np.abs(c_ours - c_peer))
+    print(f"  chains identical to {same:.1e} (so the ESS is the same; ESS/s differs by time)")
+    print(f"  bsdflab  {t_ours:8.2f} s  ESS {ess_ours:6.1f}  {ess_ours / t_ours:10.2f} ESS/s")
+    print(f"  colour   {t_peer:8.2f} s  ESS {ess_peer:6.1f}  {ess_peer / t_peer:10.2f} ESS/s")
+    print(f"  ESS/s ratio bsdflab / colour-film study: {(ess_ours / t_ours) / (ess_peer / t_peer):.1f}x "
+          f"(tmm-film study, from its evaluation rate: ~{(ess_ours / t_ours) / (ess_peer / t_peer) * rates['colour thin_film_tmm'] / rates['tmm']:.0f}x)")
+
+
+if __name__ == "__main__":
+    main()

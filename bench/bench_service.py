@@ -1,0 +1,148 @@
+"""The HTTP layer's cost: POST /v1/bsdf/eval against a trivial endpoint and the direct call.
+
+One run starts a real `bsdflab serve` on 127.0.0.1 (a free port) and a load generator in a
+second process that sends, with ``--concurrency`` connections, at most ``--requests``
+requests per scenario (and stops after ``--seconds``):
+  healthz   GET /healthz (the app's floor: routing, JSON, uvicorn)
+  eval/M    POST /v1/bsdf/eval with 1000 direction pairs of model M
+and, in this process, the same evaluation through the Python API (``lobe_views.evaluate``
+on the same arrays). Printed: throughput and p50/p99 latency per scenario, and the ratios
+HTTP p50 / direct p50 (goal: < 2 for a 1000-pair request) and eval p50 / healthz p50.
+Models: "diffuse" (the cheapest evaluation: the HTTP cost at its most visible) and
+"thinfilm" (a rough dielectric with the guanine film, spectral: a realistic query).
+
+    python bench/bench_service.py                     # ~1 minute
+    python bench/bench_service.py --requests 400 --concurrency 8
+Profile the server side with: python -m cProfile -o serve.prof -m bsdflab.cli.main serve
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+PAIRS = 1000
+MODELS = {
+    "diffuse": {"type": "diffuse", "reflectance": [0.5, 0.4, 0.3]},
+    "thinfilm": {"type": "roughdielectric", "alpha": 0.08, "int_ior": 1.5515, "ext_ior": 1.000277,
+                 "film": [{"material": 1.83, "thickness_nm": 400.0}]},
+}
+
+
+def directions(n: int = PAIRS, seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    v = rng.normal(size=(2, n, 3))
+    v /= np.linalg.norm(v, axis=2, keepdims=True)
+    v[..., 2] = np.abs(v[..., 2])
+    return v[0], v[1]
+
+
+def stats(latencies: list[float], wall: float) -> dict:
+    a = np.asarray(latencies)
+    return {"requests": len(a), "per_s": len(a) / wall, "p50_ms": 1e3 * float(np.percentile(a, 50)),
+            "p99_ms": 1e3 * float(np.percentile(a, 99))}
+
+
+# -- the load generator (second process) ------------------------------------------------------
+def load(url: str, requests: int, concurrency: int, seconds: float) -> dict:
+    import httpx2 as httpx
+
+    wi, wo = directions()
+    bodies = {name: json.dumps({"model": m, "wi": wi.tolist(), "wo": wo.tolist()}) for name, m in MODELS.items()}
+    results = {}
+    with httpx.Client(base_url=url, timeout=60, limits=httpx.Limits(max_connections=concurrency)) as client:
+        scenarios = [("healthz", lambda: client.get("/healthz"))]
+        scenarios += [(f"eval/{name}", lambda b=body: client.post(
+            "/v1/bsdf/eval", content=b, headers={"content-type": "application/json"})) for name, body in bodies.items()]
+        for name, call in scenarios:
+            for _ in range(3):            # warm the connections and the model cache
+                call().raise_for_status()
+            deadline = time.perf_counter() + seconds
+
+            def one(_):
+                if time.perf_counter() > deadline:
+                    return None
+                t = time.perf_counter()
+                call().raise_for_status()
+                return time.perf_counter() - t
+
+            start = time.perf_counter()
+            with ThreadPoolExecutor(concurrency) as pool:
+                latencies = [x for x in pool.map(one, range(requests)) if x is not None]
+            results[name] = stats(latencies, time.perf_counter() - start)
+    return results
+
+
+# -- the direct calls (this process) ----------------------------------------------------------
+def direct(requests: int) -> dict:
+    from bsdflab import from_dict
+    from bsdflab.lobe_views import evaluate
+
+    wi, wo = directions()
+    out = {}
+    for name, m in MODELS.items():
+        bsdf = from_dict(m)
+        evaluate(bsdf, wi, wo)
+        latencies = []
+        start = time.perf_counter()
+        for _ in range(requests):
+            t = time.perf_counter()
+            evaluate(bsdf, wi, wo)
+            latencies.append(time.perf_counter() - t)
+        out[f"eval/{name}"] = stats(latencies, time.perf_counter() - start)
+    return out
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--requests", type=int, default=200, help="requests per scenario (default 200)")
+    p.add_argument("--concurrency", type=int, default=4, help="connections in flight (default 4)")
+    p.add_argument("--seconds", type=float, default=20.0, help="time cap per scenario (default 20)")
+    p.add_argument("--load", metavar="URL", help=argparse.SUPPRESS)   # the load-generator process
+    args = p.parse_args()
+    if args.load:
+        print(json.dumps(load(args.load, args.requests, args.concurrency, args.seconds)))
+        return 0
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+    from service_process import ServiceProcess
+
+    with tempfile.TemporaryDirectory() as data:
+        server = ServiceProcess(Path(data), workers=1)
+        try:
+            http = {c: json.loads(subprocess.run(
+                [sys.executable, __file__, "--load", server.url, "--requests", str(args.requests),
+                 "--concurrency", str(c), "--seconds", str(args.seconds)],
+                capture_output=True, text=True, check=True).stdout) for c in (1, args.concurrency)}
+        finally:
+            server.stop()
+    here = direct(args.requests)
+    print(f"load: {os.getloadavg()[0]:.1f} (1-min average; the machine is shared), {os.cpu_count()} cores, "
+          f"{PAIRS} pairs per eval")
+    print(f"{'scenario':<16} {'path':<18} {'req/s':>9} {'p50 ms':>9} {'p99 ms':>9}")
+    for c, results in http.items():
+        for name, s in results.items():
+            print(f"{name:<16} {f'http, {c} in flight':<18} {s['per_s']:9.1f} {s['p50_ms']:9.2f} {s['p99_ms']:9.2f}")
+    for name, s in here.items():
+        print(f"{name:<16} {'direct':<18} {s['per_s']:9.1f} {s['p50_ms']:9.2f} {s['p99_ms']:9.2f}")
+    print("ratios, one request in flight (p50 latency):")
+    for name in here:
+        ratio = http[1][name]["p50_ms"] / here[name]["p50_ms"]
+        print(f"  {name}: http / direct = {ratio:.2f} (goal < 2: {'met' if ratio < 2 else 'not met'}); "
+              f"http / healthz = {http[1][name]['p50_ms'] / http[1]['healthz']['p50_ms']:.2f}")
+    print(f"throughput with {args.concurrency} in flight / direct sequential:")
+    for name in here:
+        print(f"  {name}: {http[args.concurrency][name]['per_s'] / here[name]['per_s']:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,38 @@
+"""`bsdflab serve`: the HTTP API and the lobe-explorer page (uvicorn)."""
+from __future__ import annotations
+
+import argparse
+
+
+def register(sub) -> None:
+    p = sub.add_parser("serve", help="serve the HTTP API and the lobe explorer page",
+                       description="Run the bsdflab service: the HTTP API under /v1 (docs at /docs) and "
+                                   "the lobe explorer at /. Jobs (tables, renders) run in worker "
+                                   "processes; their state lives in DATA_DIR/jobs.sqlite and their "
+                                   "files in DATA_DIR/artefacts. Every option has a BSDFLAB_* "
+                                   "environment variable (BSDFLAB_HOST, BSDFLAB_PORT, ...).")
+    p.add_argument("--host", default=None, help="address to listen on (default 127.0.0.1)")
+    p.add_argument("--port", type=int, default=None, help="port (default 8000; 0 picks a free one)")
+    p.add_argument("--data-dir", default=None, help="job store and artefacts (default: the user data folder)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="job worker processes (default: cores - 1, at most 4)")
+    p.add_argument("--log-level", default="info", choices=("critical", "error", "warning", "info", "debug"))
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    import uvicorn
+    from pydantic import ValidationError
+
+    from ..service import Settings, create_app
+
+    overrides = {k: v for k, v in (("host", args.host), ("port", args.port), ("data_dir", args.data_dir),
+                                   ("workers", args.workers)) if v is not None}
+    try:
+        settings = Settings(**overrides)
+    except ValidationError as e:
+        raise ValueError("; ".join(f"{'.'.join(map(str, err['loc']))}: {err['msg']}" for err in e.errors())) from None
+    config = uvicorn.Config(create_app(settings), host=settings.host, port=settings.port,
+                            log_level=args.log_level, timeout_graceful_shutdown=5)
+    uvicorn.Server(config).run()
+    return 0

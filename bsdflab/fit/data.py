@@ -1,0 +1,169 @@
+"""Reflectance data files for fitting (format: docs/fit_data.md).
+
+A CSV file with a header row and the columns
+
+    angle_deg, angle_out_deg, wavelength_nm, reflectance, sigma, geometry
+
+``angle_out_deg`` may be left out of the header when no row is ``diffuse`` and is empty
+for specular and total rows. Lines starting with ``#`` are comments (kept, e.g. to label
+synthetic data). Every problem is a ``ValueError`` naming the file, the line and the column.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..files import write_atomically
+
+GEOMETRIES = ("specular", "diffuse", "total")   # index = the core's Geometry code
+MODEL_RANGE_NM = (350.0, 1000.0)                # Cauchy film index and melanin power law
+COLUMNS = ("angle_deg", "angle_out_deg", "wavelength_nm", "reflectance", "sigma", "geometry")
+REQUIRED = tuple(c for c in COLUMNS if c != "angle_out_deg")
+SPECULAR_TOLERANCE_DEG = 1e-6
+
+
+@dataclass
+class Dataset:
+    """Measured (or simulated) reflectances, one entry per row of the file.
+
+    geometry: int codes into GEOMETRIES; angle_out_deg is NaN except for diffuse rows.
+    """
+
+    geometry: np.ndarray
+    angle_deg: np.ndarray
+    angle_out_deg: np.ndarray
+    wavelength_nm: np.ndarray
+    reflectance: np.ndarray
+    sigma: np.ndarray
+    comments: list[str] = field(default_factory=list)
+
+    def __len__(self) -> int:
+        return len(self.geometry)
+
+    def with_reflectance(self, reflectance, sigma=None, comments=None) -> "Dataset":
+        return Dataset(self.geometry, self.angle_deg, self.angle_out_deg, self.wavelength_nm,
+                       np.asarray(reflectance, float),
+                       self.sigma if sigma is None else np.asarray(sigma, float),
+                       self.comments if comments is None else list(comments))
+
+    def groups(self) -> list[tuple[str, np.ndarray]]:
+        """(label, row indices) per measured curve (geometry and angles), in file order."""
+        keys: dict[tuple, list[int]] = {}
+        for i in range(len(self)):
+            g = GEOMETRIES[self.geometry[i]]
+            key = (g, float(self.angle_deg[i]), float(self.angle_out_deg[i]) if g == "diffuse" else None)
+            keys.setdefault(key, []).append(i)
+        out = []
+        for (g, a, b), rows in keys.items():
+            label = f"{g} {a:g}°" + (f" → {b:g}°" if b is not None else "")
+            idx = np.array(rows)
+            out.append((label, idx[np.argsort(self.wavelength_nm[idx], kind="stable")]))
+        return out
+
+    def to_csv_text(self) -> str:
+        buf = io.StringIO()
+        for c in self.comments:
+            buf.write(f"# {c}\n")
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(COLUMNS)
+        for i in range(len(self)):
+            out = "" if math.isnan(self.angle_out_deg[i]) else repr(float(self.angle_out_deg[i]))
+            w.writerow([repr(float(self.angle_deg[i])), out, repr(float(self.wavelength_nm[i])),
+                        f"{self.reflectance[i]:.10g}", f"{self.sigma[i]:.6g}",
+                        GEOMETRIES[self.geometry[i]]])
+        return buf.getvalue()
+
+    def write_csv(self, path: str | os.PathLike) -> None:
+        """Write the file atomically (temp file + rename)."""
+        text = self.to_csv_text()
+
+        def write(tmp: str) -> None:
+            with open(tmp, "w", encoding="utf-8") as f:
+                f.write(text)
+
+        write_atomically(path, write, suffix=".tmp.csv")
+
+
+def _number(text: str, column: str, where: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"{where}: {column} must be a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise ValueError(f"{where}: {column} must be finite, got {text!r}")
+    return value
+
+
+def read_csv(path: str | os.PathLike) -> Dataset:
+    """Read and validate a data file; ValueError naming the file and line on bad input."""
+    path = os.fspath(path)
+    try:
+        with open(path, encoding="utf-8", newline="") as f:
+            lines = f.read().splitlines()
+    except (OSError, UnicodeDecodeError) as e:
+        raise ValueError(f"cannot read data file {path}: {e}") from None
+    return parse_csv(lines, path)
+
+
+def parse_csv(lines: list[str], name: str = "<data>") -> Dataset:
+    comments = [ln.lstrip("#").strip() for ln in lines if ln.lstrip().startswith("#")]
+    numbered = [(i + 1, ln) for i, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith("#")]
+    if not numbered:
+        raise ValueError(f"{name}: empty data file (no header, no rows)")
+    header_line, header_text = numbered[0]
+    header = [h.strip() for h in next(csv.reader([header_text]))]
+    missing = [c for c in REQUIRED if c not in header]
+    unknown = [c for c in header if c not in COLUMNS]
+    if missing or unknown:
+        raise ValueError(f"{name}: line {header_line}: header must name the columns {', '.join(COLUMNS)} "
+                         f"(angle_out_deg optional); missing {missing or 'none'}, unknown {unknown or 'none'}")
+    if len(set(header)) != len(header):
+        raise ValueError(f"{name}: line {header_line}: a column is named twice in the header")
+    if len(numbered) == 1:
+        raise ValueError(f"{name}: no data rows after the header")
+    col = {c: header.index(c) for c in header}
+    rows, seen = [], {}
+    for number, text in numbered[1:]:
+        where = f"{name}: line {number}"
+        cells = [c.strip() for c in next(csv.reader([text]))]
+        if len(cells) != len(header):
+            raise ValueError(f"{where}: expected {len(header)} values, got {len(cells)}")
+        g = cells[col["geometry"]].lower()
+        if g not in GEOMETRIES:
+            raise ValueError(f"{where}: unknown geometry {cells[col['geometry']]!r}; known: {', '.join(GEOMETRIES)}")
+        a = _number(cells[col["angle_deg"]], "angle_deg", where)
+        if not 0.0 <= a < 90.0:
+            raise ValueError(f"{where}: angle_deg must be in [0, 90), got {a:g}")
+        b = math.nan
+        out_text = cells[col["angle_out_deg"]] if "angle_out_deg" in col else ""
+        if g == "diffuse":
+            if not out_text:
+                raise ValueError(f"{where}: a diffuse row needs angle_out_deg")
+            b = _number(out_text, "angle_out_deg", where)
+            if not -90.0 < b < 90.0:
+                raise ValueError(f"{where}: angle_out_deg must be in (-90, 90), got {b:g}")
+            if abs(b - a) < SPECULAR_TOLERANCE_DEG:
+                raise ValueError(f"{where}: a diffuse row at the specular direction (angle_out_deg = "
+                                 f"angle_deg) would include the mirror reflection; use geometry 'specular'")
+        elif out_text:
+            raise ValueError(f"{where}: angle_out_deg must be empty for a {g} row")
+        wl = _number(cells[col["wavelength_nm"]], "wavelength_nm", where)
+        if not MODEL_RANGE_NM[0] <= wl <= MODEL_RANGE_NM[1]:
+            raise ValueError(f"{where}: wavelength_nm {wl:g} is outside the model's range "
+                             f"{MODEL_RANGE_NM[0]:g}-{MODEL_RANGE_NM[1]:g} nm")
+        r = _number(cells[col["reflectance"]], "reflectance", where)
+        s = _number(cells[col["sigma"]], "sigma", where)
+        if s <= 0:
+            raise ValueError(f"{where}: sigma must be > 0, got {s:g}")
+        key = (g, a, b if g == "diffuse" else None, wl)
+        if key in seen:
+            raise ValueError(f"{where}: duplicate of line {seen[key]} (same geometry, angles and wavelength)")
+        seen[key] = number
+        rows.append((GEOMETRIES.index(g), a, b, wl, r, s))
+    arr = np.array(rows, dtype=float)
+    return Dataset(arr[:, 0].astype(int), arr[:, 1], arr[:, 2], arr[:, 3], arr[:, 4], arr[:, 5], comments)

@@ -1,0 +1,137 @@
+"""The study's figures (matplotlib, Agg): corner plot, posterior predictive bands,
+traces with the autocorrelation time, and the appearance posterior."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..plots.lobe import save_figure
+from ..render.image_io import tone_map
+from .appearance import AppearancePosterior
+from .data import Dataset
+from .parameters import parameter
+from .sampling import RunResult
+
+
+# short titles over the corner plot's diagonal (the axis labels carry the full names)
+SYMBOLS = {"film_thickness_nm": "d", "film_thickness_spread_nm": "σ_d", "film_index_A": "A", "film_index_B": "B",
+           "substrate_index": "n_s", "exterior_index": "n_e", "sigma_a_550": "σ_a(550)",
+           "absorption_exponent": "exponent", "slab_thickness_um": "h", "base_albedo": "ρ", "noise_scale": "s"}
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _label(name: str) -> str:
+    unit = parameter(name).unit
+    return f"{name} [{unit}]" if unit else name
+
+
+def corner_plot(draws: np.ndarray, names, path: str, truths=None) -> None:
+    import corner
+
+    plt = _plt()
+    k = draws.shape[1]
+    fig = corner.corner(draws, fig=plt.figure(figsize=(2.6 * k, 2.6 * k)), labels=[_label(n) for n in names],
+                        quantiles=[0.05, 0.5, 0.95], show_titles=True, title_fmt=".4g", title_kwargs={"fontsize": 7},
+                        titles=[SYMBOLS.get(n, n) for n in names],
+                        label_kwargs={"fontsize": 8}, truths=truths, truth_color="tab:red")
+    fig.suptitle("posterior (lines: 5 %, 50 %, 95 %" + ("; red: truth)" if truths is not None else ")"),
+                 fontsize=9)
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def predictive_plot(dataset: Dataset, model_draws: np.ndarray, predictive_draws: np.ndarray, path: str) -> None:
+    """One panel per measured curve: data +- sigma, the model's 90 % band and the
+    posterior predictive 90 % band (model + noise)."""
+    plt = _plt()
+    groups = dataset.groups()
+    cols = min(3, len(groups))
+    rows = math.ceil(len(groups) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.0 * rows), squeeze=False)
+    for ax in axes.ravel()[len(groups):]:
+        ax.axis("off")
+    for ax, (label, idx) in zip(axes.ravel(), groups):
+        wl = dataset.wavelength_nm[idx]
+        pq = np.quantile(predictive_draws[:, idx], [0.05, 0.95], axis=0)
+        mq = np.quantile(model_draws[:, idx], [0.05, 0.5, 0.95], axis=0)
+        ax.fill_between(wl, pq[0], pq[1], color="tab:blue", alpha=0.18, lw=0, label="predictive 90 %")
+        ax.fill_between(wl, mq[0], mq[2], color="tab:blue", alpha=0.45, lw=0, label="model 90 %")
+        ax.plot(wl, mq[1], color="tab:blue", lw=1.0, label="model median")
+        ax.errorbar(wl, dataset.reflectance[idx], dataset.sigma[idx], fmt=".", ms=3, color="k", lw=0.7,
+                    label="data ± σ")
+        ax.set_title(label, fontsize=9)
+        ax.set_xlabel("wavelength [nm]", fontsize=8)
+        ax.set_ylabel("reflectance" if label.startswith(("specular", "total")) else "π f (reflectance factor)",
+                      fontsize=8)
+        ax.tick_params(labelsize=7)
+    axes.ravel()[0].legend(fontsize=6, loc="best")
+    fig.tight_layout()
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def trace_plot(run: RunResult, path: str, tau_multiple: float = 50.0) -> None:
+    plt = _plt()
+    k = len(run.names)
+    fig, axes = plt.subplots(k + 1, 1, figsize=(8, 1.6 * (k + 1) + 0.4), squeeze=False)
+    steps = np.arange(run.steps)
+    for j, name in enumerate(run.names):
+        ax = axes[j, 0]
+        ax.plot(steps, run.chain[:, :, j], color="k", alpha=max(0.05, 3.0 / run.chain.shape[1]), lw=0.5)
+        ax.axvline(run.burn, color="tab:red", lw=0.8)
+        ax.set_ylabel(name, fontsize=7)
+        ax.tick_params(labelsize=7)
+    ax = axes[k, 0]
+    ns = np.array([n for n, _ in run.tau_history])
+    taus = np.array([t for _, t in run.tau_history])
+    for j, name in enumerate(run.names):
+        ax.plot(ns, taus[:, j], marker=".", lw=0.8, label=name)
+    ax.plot(ns, ns / tau_multiple, "k--", lw=0.8, label=f"N / {tau_multiple:g} (stop when τ is below)")
+    ax.set_xlabel("step N", fontsize=8)
+    ax.set_ylabel("τ estimate", fontsize=8)
+    ax.tick_params(labelsize=7)
+    ax.legend(fontsize=6, ncol=3)
+    axes[0, 0].set_title(f"walkers (red: burn-in {run.burn}); {run.stop_reason}", fontsize=7)
+    fig.tight_layout()
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def appearance_plot(app: AppearancePosterior, path: str) -> float:
+    """Colour strips per draw (rows) vs angle (columns) and the Delta E00 interval per
+    angle. Returns the display exposure (stops) the strips were brightened by."""
+    plt = _plt()
+    peak = float(np.max(app.rgb_mean))
+    exposure = math.log2(0.9 / peak) if peak > 0 else 0.0
+    strips = tone_map(np.vstack([app.rgb_mean[None], app.rgb]).astype(np.float32), exposure)
+    iv = app.interval(0.9)
+    fig, (a0, a1) = plt.subplots(2, 1, figsize=(7.5, 6.8), gridspec_kw={"height_ratios": [1.4, 1]})
+    a = app.angles_deg
+    step = (a[1] - a[0]) if len(a) > 1 else 1.0
+    a0.imshow(strips, aspect="auto", interpolation="nearest",
+              extent=(a[0] - step / 2, a[-1] + step / 2, len(app.rgb) + 0.5, -0.5))
+    a0.axhline(0.5, color="w", lw=1.0)
+    a0.set_ylabel("row 0: posterior mean; 1..: draws", fontsize=8)
+    a0.set_title(f"specular colour vs angle (sRGB, D65; display exposure +{exposure:.1f} stops)", fontsize=9)
+    a1.fill_between(a, iv["low"], iv["high"], color="tab:purple", alpha=0.3, lw=0, label="5-95 %")
+    a1.plot(a, iv["median"], color="tab:purple", label="median")
+    a1.plot(a, iv["bound"], "k--", lw=0.9, label="90 % of draws below")
+    a1.set_xlabel("angle of incidence = viewing angle [deg]", fontsize=8)
+    a1.set_ylabel("ΔE00 to posterior mean", fontsize=8)
+    a1.legend(fontsize=7)
+    for ax in (a0, a1):
+        ax.tick_params(labelsize=7)
+        ax.set_xlim(a[0] - step / 2, a[-1] + step / 2)
+    fig.tight_layout()
+    save_figure(fig, path)
+    plt.close(fig)
+    return exposure

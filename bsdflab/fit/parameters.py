@@ -1,0 +1,60 @@
+"""The fit's physical parameters: names, units, defaults (the xenopeltis preset's values)
+and the column each takes in the C++ forward model (core/include/bsdflab/fit_forward.h).
+
+``noise_scale`` is not a forward-model input: it multiplies every row's sigma in the
+likelihood (1 = the stated uncertainties are right).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .. import presets
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str
+    unit: str
+    default: float
+    lo: float          # domain of the model (inclusive unless lo_open)
+    hi: float
+    description: str
+    lo_open: bool = False
+
+
+PARAMETERS: tuple[Parameter, ...] = (
+    Parameter("film_thickness_nm", "nm", presets.FILM_THICKNESS_NM, 0.0, 20000.0,
+              "mean thickness of the guanine (iridophore) film"),
+    Parameter("film_thickness_spread_nm", "nm", 0.0, 0.0, 5000.0,
+              "standard deviation of the film thickness across the measured spot"),
+    Parameter("film_index_A", "", presets.GUANINE_IOR, 0.0, 10.0,
+              "film index, Cauchy A (n = A + B / lambda^2)", lo_open=True),
+    Parameter("film_index_B", "nm^2", 0.0, -1e6, 1e6, "film index, Cauchy B"),
+    Parameter("substrate_index", "", presets.KERATIN_IOR_550, 0.0, 10.0,
+              "index of the slab under the film (keratin); must exceed exterior_index",
+              lo_open=True),
+    Parameter("exterior_index", "", presets.AIR_IOR, 0.0, 10.0, "index of the exterior (air)",
+              lo_open=True),
+    Parameter("sigma_a_550", "1/um", 1.2, 0.0, 1000.0, "slab absorption coefficient at 550 nm"),
+    Parameter("absorption_exponent", "", 3.33, -20.0, 20.0,
+              "sigma_a(lambda) = sigma_a_550 (lambda / 550 nm)^-exponent (eumelanin 3.33)"),
+    Parameter("slab_thickness_um", "um", 4.0, 0.0, 10000.0, "pigment slab thickness"),
+    Parameter("base_albedo", "", 0.04, 0.0, 1.0, "Lambertian albedo of the base"),
+)
+FORWARD_NAMES = tuple(p.name for p in PARAMETERS)
+NOISE = Parameter("noise_scale", "", 1.0, 0.0, 1000.0,
+                  "multiplies every stated sigma in the likelihood", lo_open=True)
+ALL = {p.name: p for p in (*PARAMETERS, NOISE)}
+ALL_NAMES = tuple(ALL)
+
+
+def parameter(name: str) -> Parameter:
+    if name not in ALL:
+        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(ALL_NAMES)}")
+    return ALL[name]
+
+
+def in_domain(name: str, value: float) -> bool:
+    p = parameter(name)
+    above = value > p.lo if p.lo_open else value >= p.lo
+    return bool(above and value <= p.hi)

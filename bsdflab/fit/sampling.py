@@ -1,0 +1,151 @@
+"""MAP initialisation (scipy.optimize) and emcee sampling with an autocorrelation stop.
+
+Stop rule (emcee's documented recipe): every ``check_every`` steps estimate the integrated
+autocorrelation time tau of every parameter; stop when the chain is longer than
+``tau_multiple`` x max tau AND every tau changed by < 1 % since the last check, or at
+``max_steps`` (the step cap). ``RunResult.stop_reason`` says which happened.
+Burn-in = 2 max tau, thinning = max(1, min tau / 2) for the posterior draws.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import emcee
+import numpy as np
+from scipy import optimize
+
+from .config import SamplerSettings
+from .posterior import LogPosterior
+
+TAU_CHANGE = 0.01
+FD_STEP = 1e-6   # finite-difference step of the MAP gradient, in prior sds
+
+
+@dataclass
+class MapResult:
+    x: np.ndarray
+    log_posterior: float
+    starts: int
+    evaluations: int
+
+
+@dataclass
+class RunResult:
+    names: tuple[str, ...]
+    chain: np.ndarray            # (steps, walkers, ndim), whole run
+    log_prob: np.ndarray         # (steps, walkers)
+    acceptance: np.ndarray       # (walkers,)
+    tau: np.ndarray              # (ndim,) at the end
+    tau_history: list[tuple[int, np.ndarray]]
+    converged: bool
+    stop_reason: str
+    seconds: float
+    evaluations: int
+    map: MapResult
+    sampler: emcee.EnsembleSampler = field(repr=False)
+
+    @property
+    def steps(self) -> int:
+        return self.chain.shape[0]
+
+    @property
+    def burn(self) -> int:
+        return min(int(np.ceil(2.0 * np.max(self.tau))), self.steps - 2)
+
+    @property
+    def thin(self) -> int:
+        return max(1, int(0.5 * np.min(self.tau)))
+
+    def draws(self) -> np.ndarray:
+        """Post-burn-in, thinned draws, flattened over walkers: (n, ndim)."""
+        return self.chain[self.burn::self.thin].reshape(-1, self.chain.shape[2])
+
+    def ess_tau(self) -> np.ndarray:
+        """Effective sample size per parameter after burn-in: (steps - burn) walkers / tau."""
+        return (self.steps - self.burn) * self.chain.shape[1] / self.tau
+
+
+def find_map(logpost: LogPosterior, starts: int, rng: np.random.Generator) -> MapResult:
+    """Best of ``starts`` L-BFGS-B runs from the most probable of many prior draws
+    (thin-film likelihoods have a mode per interference order: one local start is not
+    enough). Coordinates are scaled by the prior sd; the gradient is a central difference
+    whose 2 ndim + 1 points go to the forward model as one batch."""
+    before = logpost.evaluations
+    pool = logpost.sample_prior(max(256, 32 * starts), rng)
+    lp = logpost(pool)
+    order = np.argsort(-np.where(np.isfinite(lp), lp, -np.inf))[:starts]
+    scale = np.array([logpost.config.priors[n].dist.std() for n in logpost.free])
+    bounds = []
+    for n, sc in zip(logpost.free, scale):
+        lo, hi = logpost.config.priors[n].support()
+        # open support ends (a log-normal's 0) are kept a whisker away
+        bounds.append((lo / sc + FD_STEP * 2 if np.isfinite(lo) else None,
+                       hi / sc - FD_STEP * 2 if np.isfinite(hi) else None))
+    eye = np.eye(len(scale)) * FD_STEP
+
+    def value_and_gradient(z):
+        pts = np.vstack([z, z + eye, z - eye]) * scale
+        v = -logpost(pts)
+        f0, fp, fm = v[0], v[1:1 + len(z)], v[1 + len(z):]
+        if not np.isfinite(f0):
+            return 1e300, np.zeros_like(z)
+        fp = np.where(np.isfinite(fp), fp, f0)
+        fm = np.where(np.isfinite(fm), fm, f0)
+        return f0, (fp - fm) / (2 * FD_STEP)
+
+    best = None
+    for i in order:
+        res = optimize.minimize(value_and_gradient, pool[i] / scale, jac=True, method="L-BFGS-B",
+                                bounds=bounds, options={"maxiter": 500, "ftol": 1e-12, "gtol": 1e-8})
+        if best is None or res.fun < best.fun:
+            best = res
+    x = best.x * scale
+    return MapResult(x, float(-best.fun), starts, logpost.evaluations - before)
+
+
+def initial_ball(logpost: LogPosterior, centre: np.ndarray, walkers: int,
+                 rng: np.random.Generator) -> np.ndarray:
+    """Walkers in a tiny Gaussian ball around the MAP, all with a finite posterior."""
+    scale = 1e-4 * np.array([logpost.config.priors[n].dist.std() for n in logpost.free])
+    p0 = centre + scale * rng.standard_normal((walkers, len(centre)))
+    for _ in range(100):
+        bad = ~np.isfinite(logpost(p0))
+        if not np.any(bad):
+            return p0
+        p0[bad] = centre + scale * rng.standard_normal((int(bad.sum()), len(centre)))
+    raise ValueError("could not place the walkers around the MAP inside the prior's support")
+
+
+def run_sampler(logpost: LogPosterior, settings: SamplerSettings, progress: bool = True) -> RunResult:
+    rng = np.random.default_rng(settings.seed)
+    t0 = time.perf_counter()
+    map_result = find_map(logpost, settings.map_starts, rng)
+    p0 = initial_ball(logpost, map_result.x, settings.walkers, rng)
+    before = logpost.evaluations
+    sampler = emcee.EnsembleSampler(settings.walkers, logpost.ndim, logpost, vectorize=True)
+    # emcee's moves draw from its own RandomState; seed it from our generator for repeatability
+    sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
+    history: list[tuple[int, np.ndarray]] = []
+    converged, old_tau = False, None
+    for _ in sampler.sample(p0, iterations=settings.max_steps, progress=progress):
+        n = sampler.iteration
+        if n % settings.check_every:
+            continue
+        tau = sampler.get_autocorr_time(tol=0)
+        history.append((n, tau))
+        if (old_tau is not None and np.all(np.isfinite(tau)) and np.all(n > settings.tau_multiple * tau)
+                and np.all(np.abs(old_tau - tau) < TAU_CHANGE * tau)):
+            converged = True
+            break
+        old_tau = tau
+    seconds = time.perf_counter() - t0
+    tau = sampler.get_autocorr_time(tol=0)
+    if not history or history[-1][0] != sampler.iteration:
+        history.append((sampler.iteration, tau))
+    reason = (f"converged: N = {sampler.iteration} > {settings.tau_multiple:g} tau (max tau {np.max(tau):.1f}) "
+              f"and tau stable to {TAU_CHANGE:.0%}" if converged else
+              f"step cap: stopped at max_steps = {settings.max_steps} with N / max tau = "
+              f"{sampler.iteration / np.max(tau):.1f} < {settings.tau_multiple:g} (not converged by the rule)")
+    return RunResult(logpost.free, sampler.get_chain(), sampler.get_log_prob(), sampler.acceptance_fraction,
+                     tau, history, converged, reason, seconds, logpost.evaluations - before, map_result, sampler)

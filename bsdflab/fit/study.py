@@ -1,0 +1,182 @@
+"""A fitting study: data + config -> posterior -> the study folder.
+
+Everything is written into a temporary folder beside ``out`` and renamed into place at the
+end, so an interrupted study (Ctrl-C, an error) leaves no half-written folder.
+
+Folder contents: posterior.nc (ArviZ InferenceData), parameters.md / parameters.csv,
+corner.png, predictive.png, trace.png, appearance.png + appearance.csv, renders.png,
+material.json (posterior-mean model dict), sphere.json (a scene file with it, for
+``bsdflab render``), summary.json, and copies of the data and config files.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import shutil
+import tempfile
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from ..bsdfs import from_dict
+from .appearance import appearance_posterior
+from .config import FitConfig
+from .data import Dataset, read_csv
+from .diagnostics import inference_data, summary_rows, table_markdown
+from .figures import appearance_plot, corner_plot, predictive_plot, trace_plot
+from .material import material_dict
+from .parameters import ALL_NAMES
+from .posterior import LogPosterior
+from .sampling import run_sampler
+
+PREDICTIVE_DRAWS = 200
+
+
+def truths_from_comments(dataset: Dataset) -> dict | None:
+    """The ``truth: name=value, ...`` comment that ``bsdflab fit simulate`` writes."""
+    for c in dataset.comments:
+        if c.startswith("truth:"):
+            out = {}
+            for item in c[len("truth:"):].split(","):
+                k, _, v = item.strip().partition("=")
+                try:
+                    out[k] = float(v)
+                except ValueError:
+                    return None
+            return out
+    return None
+
+
+def _text(path: str, text: str) -> None:
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(text)
+
+
+def run_study(data, config: FitConfig, out: str | os.PathLike, progress: bool = True,
+              overwrite: bool = False, data_path: str | None = None) -> dict:
+    """Fit ``data`` (a Dataset or a CSV path) with ``config`` and write the study to ``out``.
+    Returns the summary dict (also written as summary.json)."""
+    if not isinstance(data, Dataset):
+        data_path = os.fspath(data)
+        data = read_csv(data_path)
+    out = os.path.abspath(os.fspath(out))
+    if os.path.exists(out) and not overwrite:
+        raise ValueError(f"--out {out} already exists (choose another folder or overwrite it)")
+    parent = os.path.dirname(out)
+    os.makedirs(parent, exist_ok=True)
+    tmp = tempfile.mkdtemp(dir=parent, prefix=f".{os.path.basename(out)}.tmp-")
+    try:
+        summary = _write_study(data, config, tmp, progress, data_path)
+        if os.path.exists(out):
+            old = tempfile.mkdtemp(dir=parent, prefix=f".{os.path.basename(out)}.old-")
+            os.replace(out, os.path.join(old, "study"))
+            os.replace(tmp, out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(tmp, out)
+        return summary
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, data_path: str | None) -> dict:
+    t0 = time.perf_counter()
+    logpost = LogPosterior(data, config)
+    run = run_sampler(logpost, config.sampler, progress=progress)
+    truths = truths_from_comments(data)
+    idata = inference_data(run, logpost, data)
+    idata.to_netcdf(os.path.join(folder, "posterior.nc"), engine="h5netcdf")
+
+    rows = summary_rows(run, idata, truths)
+    _text(os.path.join(folder, "parameters.md"), table_markdown(rows))
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    _text(os.path.join(folder, "parameters.csv"), buf.getvalue())
+
+    draws = run.draws()
+    rng = np.random.default_rng(config.sampler.seed + 1)
+    corner_plot(draws, run.names, os.path.join(folder, "corner.png"),
+                truths=[truths.get(n) for n in run.names] if truths else None)
+    pick = draws[rng.choice(len(draws), min(PREDICTIVE_DRAWS, len(draws)), replace=False)]
+    model_draws = logpost.predict(pick)
+    noise = logpost.full(pick)[:, ALL_NAMES.index("noise_scale")][:, None] * data.sigma[None, :]
+    predictive_plot(data, model_draws, model_draws + noise * rng.standard_normal(model_draws.shape),
+                    os.path.join(folder, "predictive.png"))
+    trace_plot(run, os.path.join(folder, "trace.png"), config.sampler.tau_multiple)
+
+    mean_full = logpost.full(np.mean(draws, axis=0))[0]
+    ap = config.appearance
+    app_draws = logpost.full(draws[rng.choice(len(draws), min(ap.draws, len(draws)), replace=False)])
+    app = appearance_posterior(app_draws, mean_full, ap.angles_deg, config.model.thickness_nodes,
+                               config.model.angle_nodes)
+    exposure = appearance_plot(app, os.path.join(folder, "appearance.png"))
+    iv = app.interval(0.9)
+    lines = ["angle_deg,delta_e00_median,delta_e00_p05,delta_e00_p95,delta_e00_p90"]
+    lines += [f"{a:g},{m:.4f},{lo:.4f},{hi:.4f},{b:.4f}"
+              for a, m, lo, hi, b in zip(app.angles_deg, iv["median"], iv["low"], iv["high"], iv["bound"])]
+    _text(os.path.join(folder, "appearance.csv"), "\n".join(lines) + "\n")
+
+    material = from_dict(material_dict(mean_full)).to_dict()   # canonical form, as from_dict reads it
+    _text(os.path.join(folder, "material.json"), json.dumps(material, indent=1) + "\n")
+    _write_scene(mean_full, folder)
+    if ap.renders:
+        _write_renders(app_draws[:ap.renders], mean_full, ap, folder, config.sampler.seed)
+
+    if data_path:
+        shutil.copyfile(data_path, os.path.join(folder, "data.csv"))
+    else:
+        _text(os.path.join(folder, "data.csv"), data.to_csv_text())
+    if config.source and os.path.isfile(config.source):
+        shutil.copyfile(config.source, os.path.join(folder, "config.toml"))
+    angle30 = int(np.argmin(np.abs(app.angles_deg - 30.0)))
+    ess_min = float(np.min(run.ess_tau()))
+    summary = {
+        "data": data_path, "rows": len(data), "free": list(run.names), "fixed": config.fixed,
+        "walkers": int(run.chain.shape[1]), "steps": run.steps, "converged": run.converged,
+        "stop_reason": run.stop_reason, "burn_in": run.burn, "thin": run.thin,
+        "tau": dict(zip(run.names, run.tau.tolist())),
+        "acceptance_fraction": {"mean": float(np.mean(run.acceptance)), "min": float(np.min(run.acceptance)),
+                                "max": float(np.max(run.acceptance))},
+        "map": dict(zip(run.names, run.map.x.tolist())), "map_log_posterior": run.map.log_posterior,
+        "posterior_draws": int(len(draws)), "ess_tau_min": ess_min,
+        "sampling_seconds": run.seconds, "ess_per_second": ess_min / run.seconds,
+        "forward_evaluations": run.evaluations + run.map.evaluations,
+        "appearance": {"angle_deg": float(app.angles_deg[angle30]),
+                       "delta_e00_p90": float(iv["bound"][angle30]),
+                       "statement": f"the specular colour at {app.angles_deg[angle30]:g} deg is known to within "
+                                    f"dE00 <= {iv['bound'][angle30]:.2f} (90 % of posterior draws)",
+                       "display_exposure_stops": exposure},
+        "posterior_mean": dict(zip(ALL_NAMES, map(float, mean_full))),
+        "material_note": "material.json carries the mean film thickness: the thickness spread is a spatial "
+                         "average with no counterpart in one BSDF",
+        "parameters": rows, "seconds": time.perf_counter() - t0,
+    }
+    _text(os.path.join(folder, "summary.json"), json.dumps(summary, indent=1, default=float) + "\n")
+    return summary
+
+
+def _write_scene(values, folder: str) -> None:
+    from ..scenes.scene_file import save_scene
+    from .renders import sphere_scene
+
+    scene = sphere_scene(values, 320)
+    mat = scene.materials["object"]
+    full = replace(scene, materials={**scene.materials, "object": replace(mat, bsdf=material_dict(values))})
+    save_scene(full, os.path.join(folder, "sphere.json"))
+
+
+def _write_renders(draws_full, mean_full, ap, folder: str, seed: int) -> None:
+    from ..plots.contact_sheet import contact_sheet
+    from .renders import render_draws
+
+    values = [mean_full, *draws_full]
+    labels = ["posterior mean"] + [f"draw {i + 1}: d = {v[0]:.1f} nm" for i, v in enumerate(draws_full)]
+    items = render_draws(values, labels, ap.render_size, ap.render_spp, seed)
+    contact_sheet(items, os.path.join(folder, "renders.png"), title="sphere renders of posterior draws",
+                  columns=min(len(items), 5))

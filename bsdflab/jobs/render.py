@@ -1,0 +1,137 @@
+"""Job kind "render": path-trace a named scene to an EXR (linear) and a PNG (sRGB).
+
+Request (normalised)::
+
+    {"scene": "sphere", "options": {...the scene's own keywords...}, "width": 320,
+     "height": 180, "spp": 16, "seed": 0, "max_depth": null}
+
+Artefacts in ``out_dir`` (a content-addressed folder): ``<key>.exr`` and ``<key>.png``.
+Tables the scene's materials need are built into, or reused from, the same folder (it is
+their table cache), so a table asked for on its own and one a render needs are one file.
+"""
+from __future__ import annotations
+
+import hashlib
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from .. import __version__
+from .. import _validate as check
+from .._jobs import monitored
+
+FIELDS = {"scene", "options", "width", "height", "spp", "seed", "max_depth"}
+MAX_SIDE = 16384
+
+
+def _int(name: str, value, lo: int, hi: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+        raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
+    return value
+
+
+def build_scene(request: dict[str, Any]):
+    """The ``bsdflab.render.Scene`` a normalised request describes."""
+    from ..scenes import scene
+
+    s = scene(request["scene"], width=request["width"], height=request["height"], **request["options"])
+    return s if request["max_depth"] is None else replace(s, max_depth=request["max_depth"])
+
+
+def normalise(request: dict[str, Any]) -> dict[str, Any]:
+    from ..render.render import MAX_SPP
+    from ..scenes import SCENES
+
+    unknown = set(request) - FIELDS
+    if unknown:
+        raise ValueError(f"unknown render request fields: {', '.join(sorted(unknown))}")
+    name = request.get("scene")
+    if name not in SCENES:
+        raise ValueError(f"unknown scene {name!r}; known scenes: {', '.join(SCENES)}")
+    options = request.get("options") or {}
+    if not isinstance(options, dict) or {"width", "height"} & set(options):
+        raise ValueError("options must be a dict of the scene's keywords (width and height go outside it)")
+    out = {"scene": name, "options": dict(options),
+           "width": _int("width", request.get("width", 320), 1, MAX_SIDE),
+           "height": _int("height", request.get("height", 180), 1, MAX_SIDE),
+           "spp": _int("spp", request.get("spp", 16), 1, MAX_SPP),
+           "seed": check.seed(request.get("seed", 0)),
+           "max_depth": request.get("max_depth")}
+    if out["max_depth"] is not None:
+        out["max_depth"] = _int("max_depth", out["max_depth"], 1, 1024)
+    scene = build_scene(out)   # the scene's own checks (options, materials)
+    out["max_depth"] = scene.max_depth
+    _canonical(out)            # options must be plain JSON
+    return out
+
+
+def _canonical(request: dict[str, Any]) -> str:
+    from ..tables.file_format import canonical_json
+
+    try:
+        return canonical_json(request)
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"render request is not plain JSON: {e}") from None
+
+
+def key(request: dict[str, Any]) -> str:
+    """SHA-256 of the canonical request, the kind and the package version."""
+    text = _canonical({"kind": "render", "bsdflab_version": __version__, "request": request})
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def files(request_key: str) -> dict[str, str]:
+    return {"exr": f"{request_key}.exr", "png": f"{request_key}.png"}
+
+
+def existing(request: dict[str, Any], out_dir: Path) -> dict[str, Any] | None:
+    k = key(request)
+    names = files(k)
+    exr, png = Path(out_dir) / names["exr"], Path(out_dir) / names["png"]
+    if not (exr.is_file() and png.is_file()):   # both are written atomically, the EXR last
+        return None
+    try:
+        return {"hash": k, "files": names, "from_cache": True, "summary": exr_attributes(exr)}
+    except Exception:   # noqa: BLE001 -- an unreadable file is rebuilt, not served
+        return None
+
+
+def run(request: dict[str, Any], out_dir: Path, progress, cancelled, client=None) -> dict[str, Any]:
+    from ..render import render, write_exr, write_png
+
+    out_dir = Path(out_dir)
+    found = existing(request, out_dir)
+    if found is not None:
+        return found
+    k = key(request)
+    names = files(k)
+    exr, png = out_dir / names["exr"], out_dir / names["png"]
+
+    tabulated = False
+
+    def staged(stage: str, fraction: float) -> None:
+        # Tables first (when a material needs one), then the image: one bar from 0 to 1.
+        nonlocal tabulated
+        if stage == "tabulating":
+            tabulated = True
+            progress(0.5 * fraction)
+        else:
+            progress(0.5 + 0.5 * fraction if tabulated else fraction)
+
+    scene = build_scene(request)
+    extra = {} if client is None else {"client": client}
+    with monitored(staged, cancelled):
+        result = render(scene, spp=request["spp"], seed=request["seed"], progress=False,
+                        cache_dir=out_dir, **extra)
+    summary = {k2: str(v) for k2, v in result.summary().items()}
+    write_png(png, result.mean)
+    write_exr(exr, result.mean, summary)
+    return {"hash": k, "files": names, "from_cache": False, "summary": summary}
+
+
+def exr_attributes(path: str | Path) -> dict[str, str]:
+    """The ``bsdflab.*`` header attributes of a rendered EXR (the render summary)."""
+    import OpenEXR
+
+    header = OpenEXR.File(str(path), header_only=True).header()
+    return {k[len("bsdflab."):]: str(v) for k, v in header.items() if k.startswith("bsdflab.")}

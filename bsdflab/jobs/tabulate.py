@@ -1,0 +1,122 @@
+"""Job kind "tabulate": measure a model into a table file in the table cache.
+
+Request (normalised)::
+
+    {"model": <BSDF dict>, "grid": {"n_theta_i", "n_theta_o", "n_phi", "thickness_nm"},
+     "rel_error": 0.01, "wavelengths": null | [nm, ...], "min_samples": 512,
+     "max_samples": 65536, "seed": 0}
+
+``out_dir`` is a table cache folder (``bsdflab.tables.cache``): the table is
+``out_dir/<key>.exr`` with the cache's own key, so the same table asked for by a render's
+``"tabulated"`` material (with that folder as its cache) is the same file.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import _validate as check
+from .._jobs import monitored
+from ..models import model_from_spec
+from ..tables import TableGrid, cache_key, cached_table, read_attributes, read_table, tabulate
+from ..tables.channels import table_channels
+from ..tables.file_format import HASH_ATTRIBUTE
+from ..tables.summary import relative_error_summary
+from ..tables.tabulate import _count   # the tabulator's own check of walk counts
+
+DEFAULT_MIN_SAMPLES = 512
+FIELDS = {"model", "preset", "overrides", "grid", "rel_error", "wavelengths", "min_samples",
+          "max_samples", "seed"}
+
+
+def normalise(request: dict[str, Any]) -> dict[str, Any]:
+    unknown = set(request) - FIELDS
+    if unknown:
+        raise ValueError(f"unknown tabulate request fields: {', '.join(sorted(unknown))}")
+    model = model_from_spec(request)
+    grid_spec = request.get("grid") or {}
+    if not isinstance(grid_spec, dict):
+        raise ValueError("grid must be a dict with n_theta_i, n_theta_o, n_phi, thickness_nm")
+    defaults = TableGrid().to_dict()
+    unknown = set(grid_spec) - set(defaults)
+    if unknown:
+        raise ValueError(f"unknown grid fields: {', '.join(sorted(unknown))}")
+    grid = TableGrid.from_dict({**defaults, **grid_spec})
+    wavelengths = request.get("wavelengths")
+    if wavelengths is not None:
+        wavelengths = [float(w) for w in table_channels(wavelengths)[1]]
+    min_samples = _count("min_samples", request.get("min_samples", DEFAULT_MIN_SAMPLES))
+    max_samples = _count("max_samples", request.get("max_samples", 65536))
+    if max_samples < min_samples:
+        raise ValueError(f"max_samples ({max_samples}) must be >= min_samples ({min_samples})")
+    return {"model": model.to_dict(), "grid": grid.to_dict(),
+            "rel_error": check.real_scalar("rel_error", request.get("rel_error", 0.01), 0.0, 1.0, lo_open=True),
+            "wavelengths": wavelengths, "min_samples": min_samples, "max_samples": max_samples,
+            "seed": check.seed(request.get("seed", 0))}
+
+
+def cells(request: dict[str, Any]) -> int:
+    """Table cells the request asks for (both lobes counted), for request caps."""
+    g = request["grid"]
+    return 2 * max(1, len(g["thickness_nm"])) * g["n_theta_i"] * g["n_theta_o"] * g["n_phi"]
+
+
+def _key_arguments(request: dict[str, Any]):
+    """(model, grid, rel_error, channels) and the effort and seed, as the cache keys them
+    (defaults spelled out share the entry of requests that leave them out)."""
+    names = table_channels(request["wavelengths"])[0]
+    effort = {"min_samples": request["min_samples"], "max_samples": request["max_samples"],
+              "seed": request["seed"]}
+    return request["model"], TableGrid.from_dict(request["grid"]), request["rel_error"], names, effort
+
+
+def key(request: dict[str, Any]) -> str:
+    """The table cache's key (``bsdflab.tables.cache_key``) of this request."""
+    model, grid, rel_error, names, effort = _key_arguments(request)
+    return cache_key(model, grid, rel_error, names, **effort)
+
+
+def existing(request: dict[str, Any], out_dir: Path) -> dict[str, Any] | None:
+    path = Path(out_dir) / f"{key(request)}.exr"
+    if not path.is_file():
+        return None
+    try:
+        return {"hash": path.stem, "files": {"exr": path.name}, "from_cache": True, **describe(path)}
+    except ValueError:   # damaged: the job rebuilds it (cached_table does)
+        return None
+
+
+def run(request: dict[str, Any], out_dir: Path, progress, cancelled, client=None) -> dict[str, Any]:
+    from ..bsdfs import from_dict
+
+    model_dict, grid, rel_error, names, effort = _key_arguments(request)
+    model = from_dict(model_dict)
+    extra = {} if client is None else {"client": client}
+
+    def make():
+        with monitored(lambda stage, fraction: progress(fraction), cancelled):
+            return tabulate(model, grid, rel_error=rel_error, wavelengths=request["wavelengths"],
+                            min_samples=request["min_samples"], max_samples=request["max_samples"],
+                            seed=request["seed"], progress=False, **extra)
+
+    table, path, hit = cached_table(model_dict, grid, rel_error, names, make, directory=out_dir, **effort)
+    if path is None:
+        raise OSError(f"could not write the table into {out_dir}")
+    return {"hash": path.stem, "files": {"exr": path.name}, "from_cache": hit, **describe(path, table)}
+
+
+def describe(path: str | os.PathLike, table=None) -> dict[str, Any]:
+    """What a table file holds: model, grid, lobes, channels, effort and error statistics."""
+    table = read_table(path) if table is None else table
+    samples = np.asarray(table.samples)
+    return {"model": table.model, "grid": table.grid.to_dict(), "lobes": list(table.lobes),
+            "channels": list(table.channels), "split_direct": bool(table.split_direct),
+            "rel_error_target": float(table.rel_error_target), "meta": table.meta,
+            "error": relative_error_summary(table),
+            "samples": {"total": int(samples.sum()), "min": int(samples.min()),
+                        "max": int(samples.max()), "mean": float(samples.mean())},
+            "content_hash": read_attributes(path).get(HASH_ATTRIBUTE, ""),
+            "bytes": os.path.getsize(path)}

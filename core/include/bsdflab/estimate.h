@@ -1,0 +1,84 @@
+// Stochastic models: BSDFs whose eval() is a Monte Carlo estimate (the PFMC layered BSDF).
+// eval() answers with the model's own effort and seed; callers that need an explicit
+// effort, seed, standard error or a projection of the channels (the tabulator, the Python
+// bindings) use this small interface, reached through BSDF::stochastic() -- no cast to a
+// concrete model.
+//
+// Scratch memory is explicit: every estimate takes an EstimateWorkspace owned by the
+// caller (one per thread), so an estimate allocates nothing once its workspace has grown,
+// and two estimates never share buffers behind each other's back. Entry points without a
+// caller-owned workspace (BSDF::eval) lease one from a per-thread stack (ThreadWorkspace),
+// so a stochastic model nested inside another one takes the next level instead of
+// clobbering its caller's buffers.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <vector>
+#include "bsdf.h"
+
+namespace bsdflab {
+
+// Bumped whenever the numbers an estimator produces for a given (model, directions, seed)
+// change (a fix, a different order of random draws). Cached tables key on it.
+constexpr int kEstimatorVersion = 2;
+
+// Growable scratch memory of one thread's estimates.
+class EstimateWorkspace {
+public:
+    // At least n doubles; valid until the next call to doubles() on this workspace.
+    double *doubles(std::size_t n) {
+        if (buffer_.size() < n) buffer_.resize(n);
+        return buffer_.data();
+    }
+
+private:
+    std::vector<double> buffer_;
+};
+
+// A workspace leased from this thread's stack for the lifetime of the object.
+class ThreadWorkspace {
+public:
+    ThreadWorkspace() : workspace_(acquire()) {}
+    ~ThreadWorkspace() { --depth(); }
+    ThreadWorkspace(const ThreadWorkspace &) = delete;
+    ThreadWorkspace &operator=(const ThreadWorkspace &) = delete;
+    EstimateWorkspace &get() { return *workspace_; }
+
+private:
+    static int &depth() {
+        thread_local int d = 0;
+        return d;
+    }
+    static EstimateWorkspace *acquire() {
+        thread_local std::deque<EstimateWorkspace> stack; // deque: references stay valid
+        const std::size_t level = static_cast<std::size_t>(depth()++);
+        if (level >= stack.size()) stack.emplace_back();
+        return &stack[level];
+    }
+    EstimateWorkspace *workspace_;
+};
+
+// What one estimate is asked for: `samples` independent walks seeded from (seed, wi, wo),
+// the per-walk values projected by P (rows x channels, row-major) before the statistics
+// so that errors of derived quantities (RGB, luminance) are exact. P null: the channels.
+struct EstimateRequest {
+    int samples = 1;
+    uint64_t seed = 0;
+    const double *P = nullptr;
+    int rows = 0;
+    int out_rows(int channels) const { return P ? rows : channels; }
+};
+
+class StochasticEstimator {
+public:
+    virtual ~StochasticEstimator() = default;
+    // Mean and standard error (per output row) of f |cos theta_o| at (wi, wo). Returns the
+    // number of walks whose contribution was not finite: those walks count as zero in the
+    // mean and are reported, never hidden (a correct model returns 0).
+    virtual std::uint64_t estimate(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                                   const EstimateRequest &request, EstimateWorkspace &workspace,
+                                   double *mean, double *stderr_out) const = 0;
+};
+
+} // namespace bsdflab

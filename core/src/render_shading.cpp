@@ -1,0 +1,48 @@
+// Material::shade: the scale texture's gap BSDF, bump frame and film thickness.
+#include "bsdflab/render/shading.h"
+#include <cmath>
+#include "bsdflab/render/scene.h"
+
+namespace bsdflab {
+
+namespace {
+Vec3 normalized(const Vec3 &v) {
+    double l = length(v);
+    return l > 0 ? v * (1 / l) : Vec3{0, 0, 0};
+}
+} // namespace
+
+ShadingFrame frame_around(const Vec3 &n, const Vec3 &tangent) {
+    Vec3 s = tangent - n * dot(n, tangent);
+    double l = length(s);
+    if (!(l > 1e-9 * (length(tangent) + 1e-300))) {
+        // No usable tangent: any perpendicular (Duff et al. 2017's branchless basis).
+        double sign = std::copysign(1.0, n.z), a = -1 / (sign + n.z), b = n.x * n.y * a;
+        s = {1 + sign * n.x * n.x * a, sign * b, -sign * n.x};
+    } else {
+        s = s * (1 / l);
+    }
+    return {s, cross(n, s), n};
+}
+
+ShadingPoint Material::shade(const SurfaceHit &hit) const {
+    ShadingPoint sp;
+    sp.bsdf = &surface;
+    sp.frame = frame_around(hit.ns, hit.dpdu);
+    if (!scales) return sp;
+    ScaleSample ss = scales->lookup(hit.u, hit.v);
+    if (ss.gap) {
+        if (has_gap) sp.bsdf = &gap;
+        return sp;
+    }
+    // Slopes are along (T_u, T_v); t = n x s is T_v only for right-handed (u, v)
+    // parameterisations (the snake's and the sphere's are left-handed).
+    const ShadingFrame &f = sp.frame;
+    const double handed = dot(cross(hit.dpdu, hit.dpdv), f.n) < 0 ? -1.0 : 1.0;
+    Vec3 nb = normalized(f.n - f.s * ss.slope_u - f.t * (handed * ss.slope_v));
+    if (length(nb) > 0) sp.frame = frame_around(nb, f.s);
+    if (film_thickness_nm > 0) sp.query.film_thickness_nm = film_thickness_nm * ss.thickness_factor;
+    return sp;
+}
+
+} // namespace bsdflab

@@ -1,0 +1,59 @@
+"""The FastAPI application: ``create_app(settings)``; ``bsdflab serve`` runs it with uvicorn."""
+from __future__ import annotations
+
+import contextlib
+
+from fastapi import FastAPI
+from fastapi.staticfiles import StaticFiles
+
+import bsdflab
+
+from . import errors
+from .jobs import JobService
+from .routers import bsdf, catalog, jobs, meta, page, renders, tables, thinfilm
+from .settings import Settings
+
+DESCRIPTION = """BSDF queries, thin-film spectra, tables and renders from bsdflab's Python API.
+
+Models are given in their `to_dict` form or as a preset name with keyword overrides.
+Tabulations and renders are jobs: `POST` answers 202 with the job (follow it at
+`/v1/jobs/{id}` or as server-sent events at `/v1/jobs/{id}/events`) or 200 when the result
+exists already. Artefacts are content-addressed: the same request finds the same files.
+Every request a client can send gets a 2xx or a 4xx with a message."""
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    settings = settings or Settings()
+
+    @contextlib.asynccontextmanager
+    async def lifespan(app: FastAPI):
+        app.state.jobs = JobService(settings)
+        try:
+            yield
+        finally:
+            app.state.jobs.close()
+
+    app = FastAPI(title="bsdflab", version=bsdflab.__version__, description=DESCRIPTION, lifespan=lifespan)
+    app.state.settings = settings
+    errors.install(app)
+    app.add_middleware(errors.BodyLimit, limit=settings.limit_body_bytes)
+    for module in (meta, catalog, bsdf, thinfilm, tables, renders, jobs, page):
+        app.include_router(module.router)
+    app.mount("/static", StaticFiles(directory=page.STATIC_DIR), name="static")
+    if settings.api_key is None:
+        app.openapi = lambda: _without_security(app)
+    return app
+
+
+def _without_security(app: FastAPI) -> dict:
+    """The OpenAPI schema with the API-key requirements taken out: without a configured key
+    no endpoint asks for one, and the schema should say so."""
+    if app.openapi_schema is None:
+        schema = FastAPI.openapi(app)
+        for path in schema.get("paths", {}).values():
+            for operation in path.values():
+                operation.pop("security", None)
+                operation.get("responses", {}).pop("401", None)
+        schema.get("components", {}).pop("securitySchemes", None)
+        app.openapi_schema = schema
+    return app.openapi_schema

@@ -1,0 +1,208 @@
+"""Request and response bodies (pydantic). Requests forbid unknown fields; physical
+ranges are checked by the Python API, whose ValueError becomes a 422 naming the field."""
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+Seed = Annotated[int, Field(ge=0, lt=1 << 64, description="random seed (uint64)")]
+Count = Annotated[int, Field(ge=1, le=1 << 24)]
+Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+HASH_PATTERN = r"^[0-9a-f]{64}$"
+JOB_ID_PATTERN = r"^[0-9a-f]{32}$"
+
+
+class Request(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class ModelSpec(Request):
+    """A model: its ``to_dict`` form, or a preset name and keyword overrides."""
+
+    model: dict[str, Any] | None = Field(None, description="a BSDF dict (BSDF.to_dict form)",
+                                         examples=[{"type": "diffuse", "reflectance": 0.5}])
+    preset: str | None = Field(None, description="a preset name (GET /v1/presets)", examples=["xenopeltis"])
+    overrides: dict[str, Any] | None = Field(None, description="the preset's keyword parameters",
+                                             examples=[{"film_thickness_nm": 450}])
+
+    def spec(self) -> dict[str, Any]:
+        return {"model": self.model, "preset": self.preset, "overrides": self.overrides}
+
+
+class Error(BaseModel):
+    detail: Any = Field(description="what was wrong (for 422: the field and the valid range)")
+
+
+# -- BSDF queries ----------------------------------------------------------------------------
+class EvalRequest(ModelSpec):
+    wi: list[Vector3] | None = Field(None, description="incident unit vectors (N, 3) or one")
+    wo: list[Vector3] | None = Field(None, description="outgoing unit vectors (N, 3) or one")
+    theta_i: list[float] | None = Field(None, description="incidence angles in degrees [0, 90]")
+    theta_o: list[float] | None = Field(None, description="outgoing angles in degrees [0, 180] (> 90: below)")
+    phi: list[float] | None = Field(None, description="azimuth phi_o - phi_i in degrees (mirror at 180)")
+    wavelengths: list[float] | None = Field(None, description="nm; omit for linear sRGB (D65)")
+    samples: Count | None = Field(None, description="walks per pair for stochastic models (default: the model's)")
+    seed: Seed | None = Field(None, description="seed of the walks (default: the model's)")
+
+
+class EvalResponse(BaseModel):
+    channels: list[str]
+    wi: list[list[float]]
+    wo: list[list[float]]
+    values: list[list[float | None]] = Field(description="f(wi, wo) |cos theta_o| per pair and channel")
+    stderr: list[list[float | None]] | None = Field(description="standard errors (stochastic models), else null")
+    stochastic: bool
+
+
+class LobeRequest(ModelSpec):
+    theta_i: float = Field(30.0, description="incidence angle in degrees [0, 90)")
+    view: Literal["plane", "hemisphere", "both"] = "both"
+    points: int = Field(91, ge=3, description="points along the plane of incidence")
+    resolution: int = Field(32, ge=3, description="side of the hemisphere grid")
+    samples: Count | None = Field(None, description="walks per direction for stochastic models")
+    seed: Seed | None = None
+
+
+class PlaneView(BaseModel):
+    angle_deg: list[float] = Field(description="signed outgoing angle in the plane (mirror at +theta_i)")
+    values: list[list[float | None]] = Field(description="f |cos theta_o|, linear sRGB")
+    stderr: list[list[float | None]] | None
+
+
+class HemisphereView(BaseModel):
+    x: list[float]
+    y: list[float]
+    rgb: list[list[list[float | None] | None]] = Field(description="[row y][column x] linear sRGB, null outside")
+    luminance: list[list[float | None]]
+    luminance_stderr: list[list[float | None]] | None
+
+
+class LobeResponse(BaseModel):
+    theta_i: float
+    wi: list[float]
+    model: dict[str, Any]
+    stochastic: bool
+    plane: PlaneView | None = None
+    hemisphere: HemisphereView | None = None
+
+
+class ThinFilmRequest(Request):
+    ext_ior: float = Field(1.000277, description="index of the medium light comes from (default air)")
+    film_ior: float = Field(1.83, description="film index (default guanine)")
+    thickness_nm: float = Field(400.0, description="film thickness in nm")
+    substrate_ior: float = Field(1.5515, description="substrate index (default keratin at 550 nm)")
+    angles: list[float] | None = Field(None, description="incidence angles in degrees (default 0, 5, ... 85)")
+    wavelengths: list[float] | None = Field(None, description="nm (default 380, 385, ... 780)")
+
+
+class ThinFilmResponse(BaseModel):
+    angles: list[float]
+    wavelengths: list[float]
+    reflectance: list[list[float]] = Field(description="[angle][wavelength], unpolarised")
+    transmittance: list[list[float]]
+    rgb: list[list[float]] = Field(description="reflected colour per angle, linear sRGB (D65)")
+    srgb: list[str] = Field(description="the same colours for display: #rrggbb, one exposure for all")
+    exposure: float
+
+
+# -- catalogues ------------------------------------------------------------------------------
+class PresetInfo(BaseModel):
+    name: str
+    description: str
+    parameters: dict[str, Any]
+    model: dict[str, Any]
+
+
+class SceneInfo(BaseModel):
+    name: str
+    description: str
+    parameters: dict[str, Any]
+
+
+# -- jobs ------------------------------------------------------------------------------------
+class JobInfo(BaseModel):
+    id: str
+    kind: str
+    hash: str = Field(description="content hash of the request: the artefact's name")
+    state: Literal["queued", "running", "done", "failed", "cancelled"]
+    progress: float
+    elapsed_s: float
+    eta_s: float | None
+    created: float
+    started: float | None
+    finished: float | None
+    attempts: int
+    cancel_requested: bool = False
+    error: str | None = None
+    error_type: str | None = None
+    links: dict[str, str]
+
+
+class JobList(BaseModel):
+    jobs: list[JobInfo]
+
+
+class TableRequest(ModelSpec):
+    grid: dict[str, Any] | None = Field(None, description="n_theta_i, n_theta_o, n_phi, thickness_nm",
+                                        examples=[{"n_theta_i": 4, "n_theta_o": 8, "n_phi": 5}])
+    rel_error: float = Field(0.01, description="target relative standard error per cell")
+    wavelengths: list[float] | None = None
+    min_samples: Count = 512
+    max_samples: Count = 65536
+    seed: Seed = 0
+
+
+class TableInfo(BaseModel):
+    hash: str
+    model: dict[str, Any]
+    grid: dict[str, Any]
+    lobes: list[str]
+    channels: list[str]
+    split_direct: bool
+    rel_error_target: float
+    error: dict[str, float] = Field(description="relative standard error of the luminance: rms, p95, max")
+    samples: dict[str, float]
+    meta: dict[str, Any]
+    content_hash: str
+    bytes: int
+    links: dict[str, str]
+
+
+class TableList(BaseModel):
+    tables: list[TableInfo]
+
+
+class RenderRequest(Request):
+    scene: str = Field(description="a scene name (GET /v1/scenes)", examples=["sphere"])
+    options: dict[str, Any] = Field(default_factory=dict, description="the scene's own keywords",
+                                    examples=[{"variant": "diffuse"}])
+    width: int = Field(320, ge=1, le=16384)
+    height: int = Field(180, ge=1, le=16384)
+    spp: int = Field(16, ge=1, le=1 << 20)
+    seed: Seed = 0
+    max_depth: int | None = Field(None, ge=1, le=1024)
+
+
+class RenderInfo(BaseModel):
+    hash: str
+    state: Literal["queued", "running", "done", "failed", "cancelled"]
+    request: dict[str, Any]
+    job: JobInfo | None
+    summary: dict[str, str] | None
+    links: dict[str, str]
+
+
+class Health(BaseModel):
+    status: Literal["ok"]
+
+
+class VersionInfo(BaseModel):
+    bsdflab: str
+    core: dict[str, Any]
+    mitsuba: str | None
+    python: str
+    executor: str
+    workers: int
+    api_key_required: bool
+    limits: dict[str, int]

@@ -1,0 +1,76 @@
+"""/v1/jobs: a job's state and progress, its cancellation, and progress as server-sent
+events (so a page follows a job without polling)."""
+from __future__ import annotations
+
+import asyncio
+from collections.abc import AsyncIterable
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Depends, HTTPException, Path, Query
+from fastapi.concurrency import run_in_threadpool
+from fastapi.sse import EventSourceResponse, ServerSentEvent
+
+from bsdflab.jobs import FINISHED
+
+from ..deps import KEY, JobsDep, SettingsDep
+from ..errors import KEY_ERRORS, NOT_FOUND
+from ..models import JOB_ID_PATTERN, JobInfo, JobList
+from ..views import job_info
+
+router = APIRouter(prefix="/v1/jobs", tags=["jobs"], responses=NOT_FOUND)
+JobId = Annotated[str, Path(pattern=JOB_ID_PATTERN, description="a job id (32 hex digits)")]
+
+
+def existing_job(job_id: JobId, jobs: JobsDep) -> dict[str, Any]:
+    row = jobs.job(job_id)
+    if row is None:
+        raise HTTPException(404, f"no job {job_id}")
+    return row
+
+
+JobRow = Annotated[dict, Depends(existing_job)]
+
+
+@router.get("", response_model=JobList, summary="Recent jobs")
+def list_jobs(jobs: JobsDep, state: Annotated[str | None, Query(pattern="^(queued|running|done|failed|cancelled)$")] = None,
+              limit: Annotated[int, Query(ge=1, le=1000)] = 100) -> JobList:
+    return JobList(jobs=[job_info(r) for r in jobs.store.jobs(limit, state)])
+
+
+@router.get("/{job_id}", response_model=JobInfo, summary="A job's state and progress")
+def get_job(row: JobRow) -> JobInfo:
+    """State (queued, running, done, failed, cancelled), progress fraction, elapsed seconds
+    and the estimated seconds left."""
+    return job_info(row)
+
+
+@router.delete("/{job_id}", response_model=JobInfo, dependencies=[KEY],
+               responses={**KEY_ERRORS, 409: {"description": "the job has already finished"}},
+               summary="Cancel a job")
+def cancel_job(row: JobRow, jobs: JobsDep) -> JobInfo:
+    """Cancel a queued or running job: it stops within a moment and its state becomes
+    cancelled (``cancel_requested`` is true until then). Finished jobs answer 409."""
+    if row["state"] == "cancelled":
+        return job_info(row)
+    if row["state"] in FINISHED or not jobs.cancel(row["id"]):
+        raise HTTPException(409, f"job {row['id']} has already finished ({row['state']})")
+    return job_info(jobs.job(row["id"]))
+
+
+@router.get("/{job_id}/events", response_class=EventSourceResponse, summary="Progress as server-sent events")
+async def job_events(row: JobRow, jobs: JobsDep, settings: SettingsDep) -> AsyncIterable[ServerSentEvent]:
+    """A ``progress`` event (the job, as GET /v1/jobs/{id} returns it) whenever its state or
+    progress changes, then one ``done``, ``failed`` or ``cancelled`` event, and the stream
+    ends."""
+    job_id, last = row["id"], None
+    while True:
+        current = await run_in_threadpool(jobs.job, job_id)
+        info = job_info(current)
+        if info.state in FINISHED:
+            yield ServerSentEvent(data=info, event=info.state, id=job_id)
+            return
+        seen = (info.state, round(info.progress, 3), info.cancel_requested)
+        if seen != last:
+            last = seen
+            yield ServerSentEvent(data=info, event="progress", id=job_id)
+        await asyncio.sleep(settings.progress_interval_s)

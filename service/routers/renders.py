@@ -1,0 +1,82 @@
+"""/v1/renders: render a named scene (a job) and fetch its image as PNG or EXR."""
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, HTTPException, Path
+from fastapi.responses import FileResponse, JSONResponse
+
+from ..deps import KEY, JobsDep, SettingsDep
+from ..errors import ERRORS, KEY_ERRORS, NOT_FOUND, over_limit
+from ..jobs import JobService
+from ..models import HASH_PATTERN, RenderInfo, RenderRequest
+from ..views import job_info
+from .tables import QUEUED
+
+router = APIRouter(prefix="/v1/renders", tags=["renders"])
+Hash = Annotated[str, Path(pattern=HASH_PATTERN, description="the render's content hash (64 hex digits)")]
+KIND = "render"
+
+
+def _links(h: str) -> dict[str, str]:
+    return {"self": f"/v1/renders/{h}", "png": f"/v1/renders/{h}/image.png", "exr": f"/v1/renders/{h}/image.exr"}
+
+
+def render_info(jobs: JobService, h: str, request: dict[str, Any], result: dict[str, Any] | None) -> RenderInfo:
+    job = jobs.store.latest_for(KIND, h)
+    live = jobs.job(job["id"]) if job is not None else None
+    if result is None and live is None:   # a record whose files are gone, and no job
+        raise HTTPException(404, f"no render {h}")
+    state = "done" if result is not None else live["state"]
+    return RenderInfo(hash=h, state=state, request=request, job=job_info(live) if live else None,
+                      summary=None if result is None else result["summary"], links=_links(h))
+
+
+@router.post("", response_model=RenderInfo, dependencies=[KEY], responses={**QUEUED, **ERRORS, **KEY_ERRORS},
+             summary="Render a scene (or get the existing image)")
+def create_render(body: RenderRequest, jobs: JobsDep, settings: SettingsDep):
+    """200 with the render when this exact request (scene, options, size, spp, seed) was
+    rendered before, else 202 with its job; identical requests in flight share it."""
+    request, key = jobs.prepare(KIND, body.model_dump())
+    pixels = request["width"] * request["height"]
+    over_limit(settings, "limit_render_pixels", pixels, "width x height")
+    over_limit(settings, "limit_render_samples", pixels * request["spp"], "width x height x spp")
+    found = jobs.cached(KIND, key) or jobs.adopt(KIND, key, request)
+    if found is not None:
+        return render_info(jobs, key, request, found)
+    row, _ = jobs.submit(KIND, request, key)
+    info = job_info(jobs.job(row["id"]))
+    return JSONResponse(info.model_dump(mode="json"), status_code=202, headers={"Location": info.links["self"]})
+
+
+@router.get("/{key}", response_model=RenderInfo, responses=NOT_FOUND, summary="A render's state and summary")
+def get_render(key: Hash, jobs: JobsDep) -> RenderInfo:
+    row = jobs.store.artefact(key, KIND)
+    if row is not None:
+        return render_info(jobs, key, row["request"], jobs.cached(KIND, key))
+    job = jobs.store.latest_for(KIND, key)
+    if job is None:
+        raise HTTPException(404, f"no render {key}")
+    return render_info(jobs, key, job["request"], None)
+
+
+def _file(jobs: JobService, key: str, which: str) -> FileResponse:
+    result = jobs.cached(KIND, key)
+    if result is None:
+        job = jobs.store.latest_for(KIND, key)
+        hint = f"; job {job['id']} is {job['state']}" if job is not None else ""
+        raise HTTPException(404, f"no finished render {key}{hint}")
+    media = "image/png" if which == "png" else "image/x-exr"
+    return FileResponse(jobs.artefact_dir / result["files"][which], media_type=media, filename=f"{key}.{which}")
+
+
+@router.get("/{key}/image.png", response_class=FileResponse, summary="The image, tone-mapped sRGB PNG",
+            responses={**NOT_FOUND, 200: {"content": {"image/png": {}}, "description": "the image"}})
+def get_png(key: Hash, jobs: JobsDep) -> FileResponse:
+    return _file(jobs, key, "png")
+
+
+@router.get("/{key}/image.exr", response_class=FileResponse, summary="The image, linear OpenEXR",
+            responses={**NOT_FOUND, 200: {"content": {"image/x-exr": {}}, "description": "the image"}})
+def get_exr(key: Hash, jobs: JobsDep) -> FileResponse:
+    return _file(jobs, key, "exr")

@@ -1,0 +1,81 @@
+"""/v1/tables: tabulate a model (a job), list tables, read one's metadata, download it."""
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, HTTPException, Path, Query
+from fastapi.responses import FileResponse, JSONResponse
+
+from bsdflab.jobs import tabulate as tabulate_kind
+
+from ..deps import KEY, JobsDep, SettingsDep
+from ..errors import ERRORS, KEY_ERRORS, NOT_FOUND, over_limit
+from ..jobs import JobService
+from ..models import HASH_PATTERN, JobInfo, TableInfo, TableList, TableRequest
+from ..views import job_info
+
+router = APIRouter(prefix="/v1/tables", tags=["tables"])
+Hash = Annotated[str, Path(pattern=HASH_PATTERN, description="the table's key (64 hex digits)")]
+KIND = "tabulate"
+QUEUED = {202: {"model": JobInfo, "description": "tabulation queued (or already running): follow the job"},
+          429: {"description": "the job queue is full"}}
+
+
+def table_info(result: dict[str, Any]) -> TableInfo:
+    fields = {name: result[name] for name in TableInfo.model_fields if name not in ("hash", "links")}
+    h = result["hash"]
+    return TableInfo(hash=h, links={"self": f"/v1/tables/{h}", "file": f"/v1/tables/{h}/file"}, **fields)
+
+
+@router.post("", response_model=TableInfo, dependencies=[KEY], responses={**QUEUED, **ERRORS, **KEY_ERRORS},
+             summary="Tabulate a model (or get the existing table)")
+def create_table(body: TableRequest, jobs: JobsDep, settings: SettingsDep):
+    """200 with the table when it exists already (the same model, grid, target error and
+    channels: the table cache's key), else 202 with the job that makes it; identical
+    requests in flight share that job."""
+    request, key = jobs.prepare(KIND, body.model_dump(exclude_none=True))
+    over_limit(settings, "limit_table_cells", tabulate_kind.cells(request), "table cells (both lobes counted)")
+    if request["wavelengths"] is not None:
+        over_limit(settings, "limit_wavelengths", len(request["wavelengths"]), "wavelengths")
+    found = jobs.cached(KIND, key) or jobs.adopt(KIND, key, request)
+    if found is not None:
+        return table_info(found)
+    row, _ = jobs.submit(KIND, request, key)
+    info = job_info(jobs.job(row["id"]))
+    return JSONResponse(info.model_dump(mode="json"), status_code=202, headers={"Location": info.links["self"]})
+
+
+@router.get("", response_model=TableList, summary="The tables this server has made")
+def list_tables(jobs: JobsDep, limit: Annotated[int, Query(ge=1, le=1000)] = 100) -> TableList:
+    return TableList(tables=[table_info(r["result"]) for r in jobs.store.artefacts(KIND, limit)])
+
+
+def _found(jobs: JobService, key: str) -> dict[str, Any]:
+    result = jobs.cached(KIND, key)
+    if result is None:   # a table another job made (a render's), or a deleted record
+        path = jobs.artefact_dir / f"{key}.exr"
+        if path.is_file():
+            try:
+                result = {"hash": key, "files": {"exr": path.name}, **tabulate_kind.describe(path)}
+            except ValueError:   # not a table (a render's image has the same naming)
+                result = None
+    if result is None:
+        job = jobs.store.latest_for(KIND, key)
+        hint = f"; job {job['id']} is {job['state']}" if job is not None else ""
+        raise HTTPException(404, f"no table {key}{hint}")
+    return result
+
+
+@router.get("/{key}", response_model=TableInfo, responses=NOT_FOUND, summary="A table's metadata")
+def get_table(key: Hash, jobs: JobsDep) -> TableInfo:
+    """Model, grid, lobes, channels, effort (walks per cell) and the achieved relative
+    error of the luminance (rms, 95th percentile, max over significant cells)."""
+    return table_info(_found(jobs, key))
+
+
+@router.get("/{key}/file", response_class=FileResponse, summary="The table file (OpenEXR)",
+            responses={**NOT_FOUND, 200: {"content": {"image/x-exr": {}}, "description": "the table file"}})
+def get_table_file(key: Hash, jobs: JobsDep) -> FileResponse:
+    result = _found(jobs, key)
+    return FileResponse(jobs.artefact_dir / result["files"]["exr"], media_type="image/x-exr",
+                        filename=f"{key}.exr")

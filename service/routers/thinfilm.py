@@ -1,0 +1,57 @@
+"""/v1/thinfilm: a thin film's reflectance and transmittance spectra and its reflected
+colour vs incidence angle (bsdflab.optics and bsdflab.plots.film_colour)."""
+from __future__ import annotations
+
+import numpy as np
+from fastapi import APIRouter
+
+from bsdflab import _validate as check
+from bsdflab.optics import film_reflectance, film_transmittance
+from bsdflab.plots.film_colour import display_exposure, display_srgb, spectral_rgb
+
+from ..deps import KEY, SettingsDep
+from ..errors import ERRORS, KEY_ERRORS, over_limit
+from ..models import ThinFilmRequest, ThinFilmResponse
+
+router = APIRouter(prefix="/v1/thinfilm", tags=["thin film"], dependencies=[KEY],
+                   responses={**ERRORS, **KEY_ERRORS})
+DEFAULT_ANGLES = np.arange(0.0, 86.0, 5.0)
+# Physical ranges: indices of optical materials (1e-3..1e3), films up to 1 cm, wavelengths
+# from 1 nm to 1 mm; beyond them the film arithmetic loses all precision.
+IOR_RANGE = (1e-3, 1e3)
+MAX_THICKNESS_NM = 1e7
+WAVELENGTH_RANGE_NM = (1.0, 1e6)
+DEFAULT_WAVELENGTHS = np.arange(380.0, 781.0, 5.0)
+
+
+def _hex(encoded: np.ndarray) -> list[str]:
+    levels = np.round(np.clip(encoded, 0.0, 1.0) * 255).astype(int)
+    return ["#{:02x}{:02x}{:02x}".format(*row) for row in levels]
+
+
+@router.post("/spectrum", response_model=ThinFilmResponse, summary="Film spectra and colour vs angle")
+def spectrum(body: ThinFilmRequest, settings: SettingsDep) -> ThinFilmResponse:
+    """One film of index ``film_ior`` and ``thickness_nm`` between the incident medium and a
+    substrate (real indices): unpolarised R and T at each angle and wavelength, and the
+    reflected colour (CIE 1931 2 deg, D65, linear sRGB) at each angle, integrated on a grid
+    fine enough for the film's fringes."""
+    angles = DEFAULT_ANGLES if body.angles is None else np.asarray(body.angles, dtype=float)
+    wavelengths = DEFAULT_WAVELENGTHS if body.wavelengths is None else np.asarray(body.wavelengths, dtype=float)
+    over_limit(settings, "limit_angles", len(angles), "angles")
+    over_limit(settings, "limit_wavelengths", len(wavelengths), "wavelengths")
+    check.real_array("angles", angles, 0.0, 90.0)
+    check.real_array("wavelengths", wavelengths, *WAVELENGTH_RANGE_NM)
+    film = (check.real_scalar("ext_ior", body.ext_ior, *IOR_RANGE),
+            check.real_scalar("film_ior", body.film_ior, *IOR_RANGE),
+            check.real_scalar("thickness_nm", body.thickness_nm, 0.0, MAX_THICKNESS_NM),
+            check.real_scalar("substrate_ior", body.substrate_ior, *IOR_RANGE))
+    theta = np.radians(angles)[:, None]
+    r = film_reflectance(film, wavelengths[None, :], theta)
+    t = film_transmittance(film, wavelengths[None, :], theta)
+    rgb = spectral_rgb(film, np.radians(angles))
+    exposure = display_exposure(rgb, np.radians(angles))
+    if not all(np.all(np.isfinite(a)) for a in (r, t, rgb)):
+        raise ValueError("the film's reflectance is not finite for these indices and thickness")
+    return ThinFilmResponse(angles=angles.tolist(), wavelengths=wavelengths.tolist(), reflectance=r.tolist(),
+                            transmittance=t.tolist(), rgb=rgb.tolist(), srgb=_hex(display_srgb(rgb, exposure)),
+                            exposure=exposure)

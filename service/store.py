@@ -1,0 +1,188 @@
+"""The embedded job store: one SQLite file in WAL mode, its schema versioned.
+
+Two tables. ``jobs``: every job with its kind, content hash, state, progress and outcome.
+``artefacts``: finished results by content hash (the files themselves live in the
+content-addressed artefact folder). WAL with synchronous=NORMAL survives the server being
+killed (only an OS crash can lose the last commits); a fresh file gets the schema on start.
+"""
+from __future__ import annotations
+
+import json
+import sqlite3
+import threading
+import time
+import uuid
+from pathlib import Path
+from typing import Any
+
+SCHEMA_VERSION = 1
+ACTIVE = ("queued", "running")
+SCHEMA = """
+CREATE TABLE jobs (
+    id TEXT PRIMARY KEY,
+    kind TEXT NOT NULL,
+    hash TEXT NOT NULL,
+    state TEXT NOT NULL,
+    request TEXT NOT NULL,
+    result TEXT,
+    error TEXT,
+    error_type TEXT,
+    progress REAL NOT NULL DEFAULT 0,
+    elapsed REAL NOT NULL DEFAULT 0,
+    eta REAL,
+    created REAL NOT NULL,
+    started REAL,
+    finished REAL,
+    attempts INTEGER NOT NULL DEFAULT 0
+);
+CREATE INDEX jobs_by_hash ON jobs (kind, hash, state);
+CREATE INDEX jobs_by_state ON jobs (state);
+CREATE TABLE artefacts (
+    hash TEXT PRIMARY KEY,
+    kind TEXT NOT NULL,
+    created REAL NOT NULL,
+    request TEXT NOT NULL,
+    result TEXT NOT NULL
+);
+CREATE INDEX artefacts_by_kind ON artefacts (kind, created);
+"""
+
+
+class QueueFull(Exception):
+    """More active jobs than the queue limit allows."""
+
+
+class StoreError(Exception):
+    """The store file cannot be used (made by a newer version, or not a job store)."""
+
+
+def _row(cursor: sqlite3.Cursor, values: tuple) -> dict[str, Any]:
+    row = {d[0]: v for d, v in zip(cursor.description, values)}
+    for name in ("request", "result"):
+        if row.get(name) is not None:
+            row[name] = json.loads(row[name])
+    return row
+
+
+class JobStore:
+    """Thread-safe access to the store (one connection, serialised by a lock)."""
+
+    def __init__(self, path: Path):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self._lock = threading.Lock()
+        self._db = sqlite3.connect(str(path), check_same_thread=False, isolation_level=None, timeout=30)
+        self._db.row_factory = _row
+        with self._lock:
+            self._db.execute("PRAGMA journal_mode=WAL")
+            self._db.execute("PRAGMA synchronous=NORMAL")
+            self._migrate(path)
+
+    def _migrate(self, path: Path) -> None:
+        version = self._db.execute("PRAGMA user_version").fetchone()["user_version"]
+        if version > SCHEMA_VERSION:
+            raise StoreError(f"{path} has schema version {version}; this bsdflab reads up to "
+                             f"{SCHEMA_VERSION} (use a newer bsdflab or another --data-dir)")
+        if version == 0:
+            tables = self._db.execute("SELECT count(*) AS n FROM sqlite_master").fetchone()["n"]
+            if tables:
+                raise StoreError(f"{path} is an SQLite file but not a bsdflab job store")
+            self._db.executescript("BEGIN;" + SCHEMA + f"PRAGMA user_version={SCHEMA_VERSION}; COMMIT;")
+
+    def close(self) -> None:
+        with self._lock:
+            self._db.close()
+
+    # -- jobs ------------------------------------------------------------------------------
+    def submit(self, kind: str, content_hash: str, request: dict[str, Any], queue_limit: int
+               ) -> tuple[dict[str, Any], bool]:
+        """(job, created): the active job with this kind and hash, or a new queued one.
+        Raises QueueFull when a new job would exceed ``queue_limit`` active jobs."""
+        with self._lock:
+            self._db.execute("BEGIN IMMEDIATE")
+            try:
+                found = self._db.execute(
+                    "SELECT * FROM jobs WHERE kind = ? AND hash = ? AND state IN ('queued', 'running') "
+                    "ORDER BY created LIMIT 1", (kind, content_hash)).fetchone()
+                if found is not None:
+                    self._db.execute("COMMIT")
+                    return found, False
+                active = self._db.execute(
+                    "SELECT count(*) AS n FROM jobs WHERE state IN ('queued', 'running')").fetchone()["n"]
+                if active >= queue_limit:
+                    raise QueueFull(f"{active} jobs are queued or running, the limit")
+                job_id = uuid.uuid4().hex
+                self._db.execute(
+                    "INSERT INTO jobs (id, kind, hash, state, request, created) VALUES (?, ?, ?, 'queued', ?, ?)",
+                    (job_id, kind, content_hash, json.dumps(request), time.time()))
+                self._db.execute("COMMIT")
+            except BaseException:
+                self._db.execute("ROLLBACK")
+                raise
+            return self._get(job_id), True
+
+    def _get(self, job_id: str) -> dict[str, Any] | None:
+        return self._db.execute("SELECT * FROM jobs WHERE id = ?", (job_id,)).fetchone()
+
+    def job(self, job_id: str) -> dict[str, Any] | None:
+        with self._lock:
+            return self._get(job_id)
+
+    def jobs(self, limit: int = 100, state: str | None = None) -> list[dict[str, Any]]:
+        with self._lock:
+            if state is None:
+                return self._db.execute("SELECT * FROM jobs ORDER BY created DESC LIMIT ?", (limit,)).fetchall()
+            return self._db.execute("SELECT * FROM jobs WHERE state = ? ORDER BY created DESC LIMIT ?",
+                                    (state, limit)).fetchall()
+
+    def active(self) -> list[dict[str, Any]]:
+        """Queued and running jobs, oldest first (what a restart re-queues)."""
+        with self._lock:
+            return self._db.execute("SELECT * FROM jobs WHERE state IN ('queued', 'running') "
+                                    "ORDER BY created").fetchall()
+
+    def latest_for(self, kind: str, content_hash: str) -> dict[str, Any] | None:
+        with self._lock:
+            return self._db.execute("SELECT * FROM jobs WHERE kind = ? AND hash = ? ORDER BY created DESC "
+                                    "LIMIT 1", (kind, content_hash)).fetchone()
+
+    def requeue(self, job_id: str) -> None:
+        with self._lock:
+            self._db.execute("UPDATE jobs SET state = 'queued', progress = 0, elapsed = 0, eta = NULL, "
+                             "started = NULL, attempts = attempts + 1 WHERE id = ?", (job_id,))
+
+    def started(self, job_id: str) -> None:
+        with self._lock:
+            self._db.execute("UPDATE jobs SET state = 'running', started = ? WHERE id = ? AND state = 'queued'",
+                             (time.time(), job_id))
+
+    def progress(self, job_id: str, fraction: float, elapsed: float, eta: float | None) -> None:
+        with self._lock:
+            self._db.execute("UPDATE jobs SET progress = ?, elapsed = ?, eta = ? WHERE id = ? AND state = 'running'",
+                             (fraction, elapsed, eta, job_id))
+
+    def finish(self, job_id: str, state: str, elapsed: float, result: dict[str, Any] | None = None,
+               error: str | None = None, error_type: str | None = None) -> None:
+        with self._lock:
+            self._db.execute(
+                "UPDATE jobs SET state = ?, result = ?, error = ?, error_type = ?, finished = ?, elapsed = ?, "
+                "eta = NULL, progress = CASE WHEN ? = 'done' THEN 1 ELSE progress END "
+                "WHERE id = ? AND state IN ('queued', 'running')",
+                (state, None if result is None else json.dumps(result), error, error_type, time.time(),
+                 elapsed, state, job_id))
+
+    # -- artefacts -------------------------------------------------------------------------
+    def put_artefact(self, content_hash: str, kind: str, request: dict[str, Any], result: dict[str, Any]) -> None:
+        with self._lock:
+            self._db.execute("INSERT OR REPLACE INTO artefacts (hash, kind, created, request, result) "
+                             "VALUES (?, ?, ?, ?, ?)",
+                             (content_hash, kind, time.time(), json.dumps(request), json.dumps(result)))
+
+    def artefact(self, content_hash: str, kind: str | None = None) -> dict[str, Any] | None:
+        with self._lock:
+            row = self._db.execute("SELECT * FROM artefacts WHERE hash = ?", (content_hash,)).fetchone()
+        return row if row is not None and (kind is None or row["kind"] == kind) else None
+
+    def artefacts(self, kind: str, limit: int = 1000) -> list[dict[str, Any]]:
+        with self._lock:
+            return self._db.execute("SELECT * FROM artefacts WHERE kind = ? ORDER BY created DESC LIMIT ?",
+                                    (kind, limit)).fetchall()

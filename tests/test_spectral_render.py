@@ -1,0 +1,97 @@
+"""Spectral mode (render(spectral=True)): paths carry the 81 bins of the default grid, and
+spectra become sRGB only when light reaches the camera.
+
+* A film-coated mirror in a coloured constant environment, seen by a very narrow camera:
+  every camera ray reflects once (delta) into the environment, so the pixel is a closed
+  form, sum_l W[:, l] R(l, theta) E(l) with E the environment's spectral lift, against
+  which spectral mode is checked; RGB mode gives (W R) * e instead, and the two closed
+  forms differ by far more than the tolerance (so the check can tell them apart).
+  Tolerance: the camera's 0.05 deg field of view changes theta by < 5e-4 rad across the
+  image, which moves R by < 1e-4 (|dR/dtheta| < 0.2 on this film); 1e-3 bounds both that
+  and float rounding.
+* A grey world (grey Diffuse, grey lights): every spectral path's bins are equal, so the
+  spectral image equals the RGB image for the same seed, up to the basis' 1e-5 deviation
+  from a partition of unity.
+* Thread-count independence of spectral images (subprocesses with 1 and 2 threads).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bsdflab import Conductor
+from bsdflab.render import Camera, Environment, Material, Scene, Shape, render
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, rgb_to_spectrum, srgb_weights
+from thread_images import images_per_thread_count
+
+ENV_RGB = (0.15, 0.45, 0.9)                 # a blue sky
+FILM = [{"material": 1.45, "thickness_nm": 350.0}]
+THETA = np.radians(50.0)                    # incidence on the plate
+
+
+def film_mirror_scene(size=6):
+    plate = Shape({"type": "rectangle", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [50, 50]},
+                  material="film", name="plate")
+    camera = Camera(origin=(0.0, 3 * np.cos(THETA), 3 * np.sin(THETA)), target=(0.0, 0.0, 0.0),
+                    up=(0.0, 1.0, 0.0), fov_deg=0.05, width=size, height=size)
+    bsdf = {"type": "conductor", "material": "Au", "film": FILM}
+    return Scene(camera, (plate,), {"film": Material(bsdf)}, Environment("constant", radiance=ENV_RGB),
+                 max_depth=2, name="film-mirror")
+
+
+def film_reflectance(wavelengths):
+    """R(lambda) of the film on gold at THETA from the Python model (one wi per channel set)."""
+    wi = np.array([[np.sin(THETA), 0.0, np.cos(THETA)]])
+    # A smooth conductor reflects with probability 1: the sample weight is R per channel.
+    return Conductor(material="Au", film=FILM).sample(wi, wavelengths=wavelengths, seed=0).weight[0]
+
+
+def test_01_spectral_film_mirror_matches_the_spectral_closed_form():
+    wl = DEFAULT_WAVELENGTHS
+    W = srgb_weights(wl)
+    R = film_reflectance(wl)
+    E = rgb_to_spectrum(np.array(ENV_RGB), wl)
+    expected_spectral = W @ (R * E)
+    expected_rgb = (W @ R) * np.array(ENV_RGB)
+    assert np.max(np.abs(expected_spectral - expected_rgb)) > 20e-3  # the check can fail
+    spectral = render(film_mirror_scene(), spp=4, seed=3, progress=False, spectral=True)
+    rgb = render(film_mirror_scene(), spp=4, seed=3, progress=False)
+    assert np.all(np.abs(spectral.mean - expected_spectral) < 1e-3), (spectral.mean[0, 0], expected_spectral)
+    assert np.all(np.abs(rgb.mean - expected_rgb) < 1e-3), (rgb.mean[0, 0], expected_rgb)
+    assert spectral.settings["mode"] == "spectral"
+
+
+def grey_world(size=16):
+    floor = Shape({"type": "rectangle", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [20, 20]},
+                  material="floor", name="floor")
+    ball = Shape({"type": "sphere", "center": [0, 0.6, 0], "radius": 0.5, "subdivisions": 16},
+                 material="ball", name="ball")
+    light = Shape({"type": "rectangle", "center": [0, 3, 0], "normal": [0, -1, 0], "size": [1, 1]},
+                  emission=(4.0, 4.0, 4.0), name="light")
+    camera = Camera(origin=(0.0, 1.5, 4.0), target=(0.0, 0.5, 0.0), fov_deg=40.0, width=size, height=size)
+    materials = {"floor": Material({"type": "diffuse", "reflectance": 0.5}),
+                 "ball": Material({"type": "roughconductor", "alpha": 0.2})}
+    return Scene(camera, (floor, ball, light), materials, Environment("constant", radiance=(0.3, 0.3, 0.3)),
+                 max_depth=6, rr_depth=3, name="grey-world")
+
+
+def test_02_grey_world_spectral_equals_rgb_to_round_off():
+    a = render(grey_world(), spp=8, seed=4, progress=False, spectral=True)
+    b = render(grey_world(), spp=8, seed=4, progress=False)
+    assert np.max(b.mean) > 0.05
+    # Mallett & Yuksel's basis sums to 1 within 1e-5 per bin (not exactly), and a path lifts
+    # at most max_depth + 1 = 7 RGB values: |spectral - rgb| <= 7e-5 relative (1e-4 allowed).
+    # (Russian roulette decisions could flip on a 1e-5 change of a survival probability;
+    # with this seed none does.)
+    assert np.allclose(a.mean, b.mean, rtol=1e-4, atol=1e-9), np.max(np.abs(a.mean - b.mean))
+
+
+def test_03_spectral_image_does_not_depend_on_thread_count(tmp_path):
+    out = images_per_thread_count(tmp_path, "from test_spectral_render import grey_world; from bsdflab.render import render",
+                                  "render(grey_world(size=8), spp=2, seed=2, progress=False, spectral=True).mean")
+    assert np.array_equal(out["1"], out["2"])
+
+
+def test_04_bad_spectral_flag():
+    with pytest.raises(ValueError, match="spectral"):
+        render(grey_world(size=4), spp=1, progress=False, spectral="yes")
