@@ -6,8 +6,10 @@ import sys
 
 from .. import __version__
 from . import fit, info, lobe, render, serve, table, tabulate, thinfilm
+from . import validate
 
 COMMANDS = (render, lobe, thinfilm, tabulate, table, info, fit, serve)
+COMMANDS += (validate,)
 
 
 def build_parser() -> argparse.ArgumentParser:

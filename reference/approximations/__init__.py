@@ -1,0 +1,37 @@
+"""Comparison-only models of thin-film iridescence used by other tools (never bsdflab materials).
+
+These reproduce, from their published specifications, the approximations that renderers and
+material standards use for a single thin film, so that `bsdflab validate` can say how far
+each is from the exact spectral Airy reflectance (`bsdflab.optics.thin_film`):
+
+``belcour_barla``   Belcour & Barla 2017, "A practical extension to microfacet theory for the
+                    modeling of varying iridescence" (ACM TOG 36(4)): the Airy sum reordered
+                    as a Fourier series in the optical path difference, integrated in closed
+                    form against Gaussian fits of the CIE XYZ sensitivities, returned in
+                    linear sRGB. This is the formulation of MaterialX's ``thin_film_bsdf``,
+                    OpenPBR Surface's and Autodesk Standard Surface's thin film, and Blender
+                    Cycles >= 4.2 (exact s/p Fresnel, a few series terms).
+``gltf``            glTF ``KHR_materials_iridescence`` (Khronos, 2022, appendix "Implementation"):
+                    the same series with Schlick's Fresnel approximation, phases 0 or pi, two
+                    terms, the base index recovered from F0, negative colours clamped.
+``seed_film``       The snake paper's public code (Padron-Griffe et al. 2023, Mitsuba 0.6
+                    ``dielectricThinFilm``): the Airy sum with an extra reflection phase on top
+                    of signed amplitudes (counted twice) at three wavelengths taken as RGB.
+
+Every function returns linear sRGB (D65) reflectance, shape (..., 3), for unpolarised light,
+so the colour-difference study (``study.py``) compares them all in the same space.
+"""
+from .belcour_barla import belcour_barla_rgb, belcour_barla_xyz, xyz_sensitivity_exact, xyz_sensitivity_gaussian
+from .gltf import gltf_iridescence_rgb
+from .seed_film import seed_reflectance, seed_rgb
+
+MODELS = {
+    "Belcour-Barla (MaterialX, OpenPBR, Standard Surface, Cycles)": belcour_barla_rgb,
+    "Belcour-Barla fit alone (XYZ to sRGB with E to D65)":
+        lambda *a: belcour_barla_rgb(*a, sensitivity="gaussian-srgb"),
+    "glTF KHR_materials_iridescence": gltf_iridescence_rgb,
+    "seed code (double phase, 3 wavelengths)": seed_rgb,
+}
+
+__all__ = ["MODELS", "belcour_barla_rgb", "belcour_barla_xyz", "gltf_iridescence_rgb", "seed_reflectance", "seed_rgb",
+           "xyz_sensitivity_exact", "xyz_sensitivity_gaussian"]
