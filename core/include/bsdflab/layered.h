@@ -91,6 +91,8 @@ private:
     Walk bind_walk(EstimateWorkspace &workspace, std::size_t offset) const;
     std::size_t walk_doubles() const;
     void build_chain(const Vec3 &wo, int exit, const Query &q, PCG32 &rng, Walk &wk) const;
+    // The exact all-delta continuations of the chain (bounces inside the delta region).
+    void solve_delta_region(int exit, const Query &q, Walk &wk) const;
     void one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng, Walk &wk) const;
     void transmittance(int slab, double distance, double *tr) const;
     // Advances a flight of at most `room` depth in slab j along a direction of |z| = cz,
