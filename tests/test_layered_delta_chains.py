@@ -15,7 +15,7 @@ factor (n_entry / n_exit)^2 that `sample`'s weights carry in transmission; a cle
 Statistics: eval-albedo and sample-albedo are independent means of >= 3 * 10^4 bounded
 terms each (normal to well within the test level); z = difference / hypot of their
 standard errors, Sidak-corrected over every comparison of the module (FAMILY) at
-family-wise significance 0.01. On version 2 every case of test_02 fails (|z| 4.3 to 38).
+family-wise significance 0.01. On version 2 every case of test_02 fails (|z| 4.3 to 46).
 Review mutations (each caught, |z| >= 9): the eta^2 of a chain crossing back over a
 refracting interior boundary dropped ("clear over scattering, TIR"); the Jacobian of the
 connection away from the exit taken with the exit slab's cosine ("clear air gap ...").
