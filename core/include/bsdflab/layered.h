@@ -19,8 +19,12 @@
 // A path whose last non-delta vertex cannot connect (it is followed by delta events only:
 // a smooth base or interior reflection, or the rough entry of a reflection path) is
 // counted by strategy B alone, at the first rough exit-side boundary the walk reaches
-// through delta transmissions (the walk's `covered` flag tracks this). The walk itself
-// never leaves through the exit side, so no path is counted twice. Russian roulette after
+// through delta transmissions (the walk's `covered` flag tracks this). A path that leaves
+// its last non-delta vertex through delta events only, with at least one reflection (a
+// smooth exit over a smooth base or interior boundary), is counted by the exact
+// delta-region connection (solve_delta_region; neither A, which goes straight, nor B,
+// which needs a rough exit-side boundary, sees it). The walk itself never leaves through
+// the exit side, so no path is counted twice. Russian roulette after
 // a few bounces and a depth cap end every walk. The top boundary's own reflection is added
 // exactly (non-delta part); its delta part is not estimated: see delta_reflectance / sample.
 //
