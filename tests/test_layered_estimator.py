@@ -176,7 +176,7 @@ def test_04_golden_values():
 
 
 def test_05_estimator_version():
-    assert _core.estimator_version == 2
+    assert _core.estimator_version == 3
 
 
 # -- defect 4: eta, non-finite walks, explicit state ----------------------------------------------

@@ -51,13 +51,20 @@ struct LayeredBSDF::Walk {
     double pdf[kMaxSlabs];
     Vec3 u[kMaxSlabs], L[kMaxSlabs];
     double *a, *B;                        // [slab * C + c]
+    // Delta-chain connections (all-delta exit side, see solve_delta_region): per slab, the
+    // factor (over |u_j.z|) of leaving along -u_j and coming back by at least one delta
+    // reflection (up_extra), and of leaving along the mirror of -u_j, away from the exit
+    // (down). Zero outside the region.
+    double *up_extra, *down;              // [slab * C + c]
+    double *tau, *r_exit_side;            // region solve: slab transmittance, X_j's reflection
+    bool region[kMaxSlabs];
     double *beyond, *chain_w;             // chain construction
     double *beta, *tmp, *tr, *wgt, *fly_tr;
     double *contrib;                      // this walk's contribution, per channel
 };
 
 std::size_t LayeredBSDF::walk_doubles() const {
-    return (2 * slabs_.size() + 8) * std::size_t(channels());
+    return (6 * slabs_.size() + 8) * std::size_t(channels());
 }
 
 LayeredBSDF::Walk LayeredBSDF::bind_walk(EstimateWorkspace &ws, std::size_t offset) const {
@@ -66,7 +73,11 @@ LayeredBSDF::Walk LayeredBSDF::bind_walk(EstimateWorkspace &ws, std::size_t offs
     Walk wk;
     wk.a = p;
     wk.B = p + K * C;
-    p += 2 * K * C;
+    wk.up_extra = p + 2 * K * C;
+    wk.down = p + 3 * K * C;
+    wk.tau = p + 4 * K * C;
+    wk.r_exit_side = p + 5 * K * C;
+    p += 6 * K * C;
     double **bufs[] = {&wk.beyond, &wk.chain_w, &wk.beta, &wk.tmp, &wk.tr, &wk.wgt, &wk.fly_tr, &wk.contrib};
     for (double **b : bufs) {
         *b = p;
@@ -169,6 +180,98 @@ void LayeredBSDF::build_chain(const Vec3 &wo, int exit, const Query &q, PCG32 &r
         }
         L = -s.wo;
     }
+    solve_delta_region(exit, q, ch);
+}
+
+// The delta region: the slabs (in exit order from the exit) whose whole straight chain to
+// wo is delta, so that every direction in them is fixed by wo. A vertex there can leave
+// through delta events only, bouncing between the region's delta boundaries any number of
+// times; no other strategy counts those paths (strategy B needs a rough exit-side boundary,
+// and the walk never leaves through the exit side). Their total is a deterministic
+// 1-D transport problem in the chain's adjoint convention (each event the factor w eta^2
+// of a boundary sample in the chain's direction of travel, as build_chain), solved exactly:
+//   D_j: a beam entering slab j at its exit-side boundary X_j, travelling along u_j;
+//   U_j: a beam leaving slab j's other boundary N_j, travelling back toward X_j;
+//   D_j = [j exit slab ? t(X_j) : t(X_j) tau_j' D_j'] + r_in(X_j) tau_j U_j,
+//   U_j = rho_j tau_j D_j,  rho_j = r(N_j) + t_dn t_up tau_j''^2 rho_j'' / (1 - r_in(X_j'') tau_j''^2 rho_j''),
+// (j' the slab toward the exit, j'' the one away, tau the slab's transmittance along u).
+// The straight part of D_j (the chain's a_j |u_j.z| B_j) is strategy A's; the rest
+// (up_extra) and U_j (down) are new connections with MIS weight 1. Reflections keep
+// |u_j.z|, so the solid-angle Jacobian 1/|u_j.z| of A applies unchanged; every crossing
+// of an interior boundary carries its own eta^2 in the w eta^2 factor.
+void LayeredBSDF::solve_delta_region(int exit, const Query &q, Walk &ch) const {
+    const int K = static_cast<int>(slabs_.size()), C = channels();
+    int order[kMaxSlabs];
+    int m = 0;
+    for (int step = 0; step < K; ++step) {
+        const int j = exit == 0 ? step : K - 1 - step;
+        ch.region[j] = false;
+        if (m == step && ch.ok[j] && ch.delta[j]) order[m++] = j;
+    }
+    if (m == 0) return;
+    auto mirror = [](const Vec3 &u) { return Vec3{u.x, u.y, -u.z}; };
+    auto nb = [&](int j) { return exit == 0 ? j + 1 : j; };  // N_j
+    auto xb = [&](int j) { return exit == 0 ? j : j + 1; };  // X_j
+    double *w = ch.chain_w, *t_up = ch.beyond;
+    for (int k = 0; k < m; ++k) {
+        const int j = order[k];
+        ch.region[j] = true;
+        const double cu = std::abs(ch.u[j].z);
+        transmittance(j, slabs_[j].thickness / cu, ch.tau + j * C);
+        // X_j seen from inside: a beam travelling toward the exit along mirror(u_j).
+        double *rx = ch.r_exit_side + j * C;
+        BSDFSample r = boundaries_[xb(j)]->sample(-mirror(ch.u[j]), 0.5, 0.5, 0.5, kDeltaReflection, q, w);
+        for (int c = 0; c < C; ++c) rx[c] = (r.lobe & kDeltaReflection) ? w[c] : 0.0;
+    }
+    // Inward to outward: rho_j (stored in `down`).
+    for (int k = m - 1; k >= 0; --k) {
+        const int j = order[k];
+        double *rho = ch.down + j * C;
+        BSDFSample r = boundaries_[nb(j)]->sample(-ch.u[j], 0.5, 0.5, 0.5, kDeltaReflection, q, w);
+        for (int c = 0; c < C; ++c) rho[c] = (r.lobe & kDeltaReflection) ? w[c] : 0.0;
+        if (k + 1 == m) continue;
+        const int j2 = order[k + 1];
+        // Back across N_j from slab j2, toward the exit.
+        BSDFSample t = boundaries_[nb(j)]->sample(-mirror(ch.u[j2]), 0.5, 0.5, 0.5, kDeltaTransmission, q, t_up);
+        if (!(t.lobe & kDeltaTransmission)) continue;
+        const double cu2 = std::abs(ch.u[j2].z);
+        for (int c = 0; c < C; ++c) {
+            const double t_dn = ch.a[j2 * C + c] * cu2;
+            const double g = ch.tau[j2 * C + c] * ch.tau[j2 * C + c] * ch.down[j2 * C + c];
+            const double denom = 1.0 - ch.r_exit_side[j2 * C + c] * g;
+            if (denom > 1e-12) rho[c] += t_dn * t_up[c] * t.eta * t.eta * g / denom;
+        }
+    }
+    // Outward to inward: D_j (stored in `up_extra` for now), then the connection factors.
+    for (int k = 0; k < m; ++k) {
+        const int j = order[k];
+        const double cu = std::abs(ch.u[j].z);
+        for (int c = 0; c < C; ++c) {
+            const int i = j * C + c;
+            const double tau = ch.tau[i];
+            double d_in; // the beam arriving through X_j
+            if (k == 0) {
+                d_in = ch.a[i] * cu;
+            } else {
+                const int jp = order[k - 1], ip = jp * C + c;
+                d_in = ch.a[i] * cu * ch.tau[ip] * ch.up_extra[ip];
+            }
+            const double denom = 1.0 - ch.r_exit_side[i] * tau * tau * ch.down[i];
+            const double D = denom > 1e-12 ? d_in / denom : 0.0;
+            ch.up_extra[i] = D;
+            ch.down[i] *= tau * D; // U_j
+        }
+    }
+    for (int k = 0; k < m; ++k) {
+        const int j = order[k];
+        const double cu = std::abs(ch.u[j].z);
+        for (int c = 0; c < C; ++c) {
+            const int i = j * C + c;
+            const double straight = ch.a[i] * cu * ch.B[i];
+            ch.up_extra[i] = std::max(0.0, ch.up_extra[i] - straight) / cu;
+            ch.down[i] /= cu;
+        }
+    }
 }
 
 void LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng,
@@ -192,6 +295,20 @@ void LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
         transmittance(j, depth / std::abs(wk.u[j].z), tr);
         for (int c = 0; c < C; ++c)
             contrib[c] += beta[c] * value[c] * tr[c] * wk.a[j * C + c] * wk.B[j * C + c] * wA;
+        // In the delta region (wA is 1 there): the same departure, back by delta
+        // reflections before it leaves.
+        if (wk.region[j])
+            for (int c = 0; c < C; ++c) contrib[c] += beta[c] * value[c] * tr[c] * wk.up_extra[j * C + c];
+    };
+    // Delta-chain connection away from the exit (a scattering vertex at `depth` below the
+    // exit side of region slab j): along mirror(-u_j) to N_j, then delta events only.
+    auto connect_away = [&](int j, const Vec3 &w_in, double depth) {
+        if (!nee || !wk.region[j]) return;
+        const Vec3 &u = wk.u[j];
+        const double p = slabs_[j].phase.eval(w_in, Vec3{-u.x, -u.y, u.z});
+        if (!(p > 0)) return;
+        transmittance(j, (slabs_[j].thickness - depth) / std::abs(u.z), tr);
+        for (int c = 0; c < C; ++c) contrib[c] += beta[c] * p * tr[c] * wk.down[j * C + c];
     };
     // Strategy B: the walk heads along w toward slab j's rough exit-side boundary, `depth`
     // below it. `p_sampled` is the density of w at its vertex; `mis` false when no strategy
@@ -251,6 +368,7 @@ void LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
             double to_exit_pdf = wk.ok[j] ? S.phase.eval(w, -wk.u[j]) : 0.0;
             for (int c = 0; c < C; ++c) tmp[c] = to_exit_pdf;
             connect(j, tmp, zx, to_exit_pdf);
+            connect_away(j, w, zx);
             Vec3 w2 = sample_phase(S.phase, w, rng);
             covered = true;
             if (toward_exit(w2)) exit_through(j, w2, zx, S.phase.eval(w, w2), true);

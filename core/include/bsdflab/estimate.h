@@ -21,7 +21,7 @@ namespace bsdflab {
 
 // Bumped whenever the numbers an estimator produces for a given (model, directions, seed)
 // change (a fix, a different order of random draws). Cached tables key on it.
-constexpr int kEstimatorVersion = 2;
+constexpr int kEstimatorVersion = 3;
 
 // Growable scratch memory of one thread's estimates.
 class EstimateWorkspace {

@@ -19,8 +19,12 @@
 // A path whose last non-delta vertex cannot connect (it is followed by delta events only:
 // a smooth base or interior reflection, or the rough entry of a reflection path) is
 // counted by strategy B alone, at the first rough exit-side boundary the walk reaches
-// through delta transmissions (the walk's `covered` flag tracks this). The walk itself
-// never leaves through the exit side, so no path is counted twice. Russian roulette after
+// through delta transmissions (the walk's `covered` flag tracks this). A path that leaves
+// its last non-delta vertex through delta events only, with at least one reflection (a
+// smooth exit over a smooth base or interior boundary), is counted by the exact
+// delta-region connection (solve_delta_region; neither A, which goes straight, nor B,
+// which needs a rough exit-side boundary, sees it). The walk itself never leaves through
+// the exit side, so no path is counted twice. Russian roulette after
 // a few bounces and a depth cap end every walk. The top boundary's own reflection is added
 // exactly (non-delta part); its delta part is not estimated: see delta_reflectance / sample.
 //
@@ -91,6 +95,8 @@ private:
     Walk bind_walk(EstimateWorkspace &workspace, std::size_t offset) const;
     std::size_t walk_doubles() const;
     void build_chain(const Vec3 &wo, int exit, const Query &q, PCG32 &rng, Walk &wk) const;
+    // The exact all-delta continuations of the chain (bounces inside the delta region).
+    void solve_delta_region(int exit, const Query &q, Walk &wk) const;
     void one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng, Walk &wk) const;
     void transmittance(int slab, double distance, double *tr) const;
     // Advances a flight of at most `room` depth in slab j along a direction of |z| = cz,
