@@ -215,3 +215,26 @@ def test_12_extreme_indices_give_finite_answers_in_the_core(int_ior, ext_ior, di
         for a in (wo_s, weight, pdf, eta):
             assert np.all(np.isfinite(a))
         assert np.all((lobe == 0) | (pdf > 0))
+
+
+def test_13_near_matched_threshold_is_the_physical_limit_not_the_models():
+    """Review finding (documented in docs/rough_interfaces.md): below the 1e-6 threshold the
+    interface is a pass-through (albedo 1, Heitz et al.'s microsurface walk agrees), just
+    above it the single-scattering model keeps its own limit G1(wi) = 1/(1 + Lambda(wi)),
+    so albedo jumps; with energy compensation the energy is continuous (1 on both sides).
+    Tolerance: 4 standard errors of the 20 000-sample mean plus the tables' 2e-3."""
+    theta, alpha, n = 1.2, 0.5, 20000
+    wi = np.tile([np.sin(theta), 0.0, np.cos(theta)], (n, 1))
+    g1 = 2.0 / (1.0 + np.sqrt(1.0 + alpha**2 * np.tan(theta) ** 2))  # GGX: 1 / (1 + Lambda)
+
+    def albedo(d, multiscatter):
+        b = bl.RoughDielectric(alpha=alpha, int_ior=1.0 + d, ext_ior=1.0, multiscatter=multiscatter)
+        s = b.sample(wi, seed=0, wavelengths=[550.0])
+        w = np.where(s.lobe == 0, 0.0, s.weight[:, 0]) * np.where(s.wo[:, 2] < 0, s.eta**2, 1.0)
+        return w.mean(), w.std() / np.sqrt(n)
+
+    for multiscatter, above in ((False, g1), (True, 1.0)):
+        below_mean, _ = albedo(0.99e-6, multiscatter)
+        above_mean, above_se = albedo(1.01e-6, multiscatter)
+        assert below_mean == pytest.approx(1.0, abs=1e-12)
+        assert abs(above_mean - above) < 4 * above_se + 2e-3, (multiscatter, above_mean, above)
