@@ -147,6 +147,7 @@ def test_table_equals_the_local_table_bit_for_bit(client):
 
 
 def test_a_worker_killed_mid_tabulation_changes_nothing(client):
+    from bsdflab._jobs import monitored
     from bsdflab.distributed.tabulate_units import tabulate_on_cluster
     from bsdflab.tables import tabulate
 
@@ -154,12 +155,16 @@ def test_a_worker_killed_mid_tabulation_changes_nothing(client):
     kw = dict(rel_error=0.05, wavelengths=None, min_samples=32, max_samples=256, seed=12)
     local = tabulate(model, grid, progress=False, **kw)
     pids = list(client.run(os.getpid).values())
-    killer = threading.Timer(1.0, os.kill, (pids[1], signal.SIGKILL))
-    killer.start()
-    try:
+    killed = []
+
+    def progress(stage, fraction):  # after the first finished unit: the others are in flight
+        if not killed:
+            killed.append(stage)
+            os.kill(pids[1], signal.SIGKILL)
+
+    with monitored(progress, lambda: False):
         remote = tabulate_on_cluster(client, model, grid, progress=False, unit_cells=12, **kw)
-    finally:
-        killer.cancel()
+    assert killed
     client.wait_for_workers(2, timeout=60)
     assert pids[1] not in client.run(os.getpid).values()  # the worker really was replaced
     for name in ("values", "stderr", "samples"):

@@ -38,7 +38,10 @@ def test_tabulate_kind_equals_the_python_api(tmp_path):
     result = kind.run(request, tmp_path, seen.append, lambda: False)
     model = presets.xenopeltis_thin_film()
     grid = TableGrid(2, 3, 3)
-    assert result["hash"] == kind.key(request) == cache_key(model.to_dict(), grid, 0.2, ("R", "G", "B"), 64)
+    # The key holds every setting that changes the table: effort and seed too.
+    assert result["hash"] == kind.key(request) == cache_key(model.to_dict(), grid, 0.2, ("R", "G", "B"), 64,
+                                                            max_samples=64, seed=7)
+    assert kind.key(request) != kind.key({**request, "seed": 8})
     direct = tabulate(model, grid, rel_error=0.2, min_samples=64, max_samples=64, seed=7, progress=False)
     stored = read_table(tmp_path / result["files"]["exr"])
     np.testing.assert_array_equal(stored.values, direct.values)

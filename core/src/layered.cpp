@@ -109,6 +109,15 @@ LayeredBSDF::LayeredBSDF(std::vector<double> wavelengths,
 uint32_t LayeredBSDF::lobes() const {
     uint32_t l = kGlossyReflection | (boundaries_.front()->lobes() & kDeltaReflection);
     if (boundaries_.back()->lobes() & kTransmission) l |= kGlossyTransmission;
+    // Paths delta at every vertex (clear slabs between smooth boundaries) are delta lobes
+    // of the stack: sample() labels them so (they are not part of eval).
+    bool all_delta_t = true, any_delta_r = false;
+    for (const auto &b : boundaries_) {
+        all_delta_t = all_delta_t && (b->lobes() & kDeltaTransmission);
+        any_delta_r = any_delta_r || (b->lobes() & kDeltaReflection);
+    }
+    if ((boundaries_.front()->lobes() & kDeltaTransmission) && any_delta_r) l |= kDeltaReflection;
+    if (all_delta_t) l |= kDeltaTransmission;
     return l;
 }
 
@@ -574,6 +583,10 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
     }
     std::copy(w, w + C, beta);
     double eta = s.eta; // product of the relative indices crossed so far
+    // A path with no non-delta vertex is a delta lobe of the stack (eval has no density
+    // for it): it is labelled delta, with the probability of its discrete choices as pdf.
+    bool all_delta = (s.lobe & kDelta) != 0;
+    double delta_prob = s.pdf;
     const double beta_entry = *std::max_element(beta, beta + C);
     if (!(beta_entry > 0)) return {};
     int j = entry == 0 ? 0 : K - 1;
@@ -598,6 +611,7 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
         if (t >= 0) {
             zd += down ? t * cz : -t * cz;
             dir = sample_phase(S.phase, dir, rng);
+            all_delta = false;
             continue;
         }
         const int b = down ? j + 1 : j;
@@ -605,15 +619,20 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
         if (!s.lobe) return {};
         for (int c = 0; c < C; ++c) beta[c] *= w[c];
         dir = s.wo;
+        if (s.lobe & kDelta) delta_prob *= s.pdf;
+        else all_delta = false;
         if (s.lobe & kTransmission) {
             eta *= s.eta;
             if (b == 0 || b == K) { // left the stack
                 BSDFSample out;
                 out.wo = dir;
                 const bool reflected = wi.z * dir.z > 0;
-                out.lobe = reflected ? kGlossyReflection : kGlossyTransmission;
+                if (all_delta)
+                    out.lobe = reflected ? kDeltaReflection : kDeltaTransmission;
+                else
+                    out.lobe = reflected ? kGlossyReflection : kGlossyTransmission;
                 if (!(out.lobe & lobes)) return {};
-                out.pdf = pdf(wi, dir, kAll, q);
+                out.pdf = all_delta ? delta_prob : pdf(wi, dir, kAll, q);
                 out.eta = reflected ? 1.0 : eta;
                 std::copy(beta, beta + C, weight);
                 return out;
