@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from bsdflab.testing import image_z_test, relative_mse
+from bsdflab.testing import image_z_test, relative_mse, sidak_z_limit
 from bsdflab.testing.image_compare import block_average
 
 RATE_SIGNIFICANCE = 1e-3
@@ -76,7 +76,7 @@ def test_power_against_a_five_sigma_shift_matches_theory():
     detected = sum(not image_z_test(_draw(rng, shift, var), var, _draw(rng, mu, var), var, alpha=alpha).passed
                    for _ in range(trials))
     m = np.prod(SHAPE)
-    z_crit = stats.norm.isf(-np.expm1(np.log1p(-alpha) / m) / 2)
+    z_crit = sidak_z_limit(alpha, m)
     power = stats.norm.sf(z_crit - 5) + stats.norm.cdf(-z_crit - 5)
     expected = 1 - (1 - power) * (1 - alpha) ** ((m - 1) / m)
     assert _binomial_ok(detected, trials, expected), f"detected {detected}/{trials}, expected {expected:.3f}"

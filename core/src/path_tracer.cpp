@@ -3,8 +3,10 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include "bsdflab/frame.h"
 #include "bsdflab/parallel.h"
 #include "bsdflab/rng.h"
+#include "bsdflab/sampling.h"
 
 namespace bsdflab {
 
@@ -12,17 +14,6 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // Shadow rays stop this fraction short of the light point (float BVH precision).
 constexpr double kShadowEpsilon = 1e-4;
-
-Vec3 normalized(const Vec3 &v) {
-    double l = length(v);
-    return l > 0 ? v * (1 / l) : Vec3{0, 0, 0};
-}
-
-double power_heuristic(double a, double b) {
-    if (std::isinf(a)) return 1.0;
-    double a2 = a * a, b2 = b * b;
-    return a2 + b2 > 0 ? a2 / (a2 + b2) : 0.0;
-}
 
 // Ray origin just off the surface on the side `w` leaves to, scaled to float precision
 // at p (the BVH works in float).

@@ -3,14 +3,13 @@
 #include <cmath>
 #include <stdexcept>
 #include "bsdflab/sampling.h"
+#include "bsdflab/scratch.h"
 
 namespace bsdflab {
 
 namespace {
-constexpr double kLuminance[3] = {0.2126, 0.7152, 0.0722};
-
 double luminance(const double rgb[3]) {
-    return kLuminance[0] * rgb[0] + kLuminance[1] * rgb[1] + kLuminance[2] * rgb[2];
+    return kLuminanceRGB[0] * rgb[0] + kLuminanceRGB[1] * rgb[1] + kLuminanceRGB[2] * rgb[2];
 }
 
 Vec3 direction_of(double u, double v) {

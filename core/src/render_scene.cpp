@@ -7,19 +7,14 @@
 #include <limits>
 #include <mutex>
 #include <stdexcept>
+#include "bsdflab/frame.h"
 #include "bsdflab/parallel.h"
 #include "bsdflab/sampling.h"
+#include "bsdflab/scratch.h"
 
 namespace bsdflab {
 
 namespace {
-constexpr double kLuminance[3] = {0.2126, 0.7152, 0.0722};
-
-Vec3 normalized(const Vec3 &v) {
-    double l = length(v);
-    return l > 0 ? v * (1 / l) : Vec3{0, 0, 0};
-}
-
 // Embree reports errors through a callback; keep the last one for the exception text.
 void on_embree_error(void *user, RTCError code, const char *message) {
     auto *last = static_cast<std::string *>(user);
@@ -179,7 +174,7 @@ void RenderScene::commit() {
     light_prob_.assign(meshes_.size(), {});
     for (std::size_t m = 0; m < meshes_.size(); ++m) {
         const double *e = meshes_[m].in.emission;
-        double lum = kLuminance[0] * e[0] + kLuminance[1] * e[1] + kLuminance[2] * e[2];
+        double lum = kLuminanceRGB[0] * e[0] + kLuminanceRGB[1] * e[1] + kLuminanceRGB[2] * e[2];
         if (!(lum > 0)) continue;
         for (uint32_t f = 0; f < meshes_[m].area.size(); ++f) {
             if (!(meshes_[m].area[f] > 0)) continue;

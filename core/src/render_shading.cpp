@@ -1,24 +1,17 @@
 // Material::shade: the scale texture's gap BSDF, bump frame and film thickness.
 #include "bsdflab/render/shading.h"
 #include <cmath>
+#include "bsdflab/frame.h"
 #include "bsdflab/render/scene.h"
 
 namespace bsdflab {
-
-namespace {
-Vec3 normalized(const Vec3 &v) {
-    double l = length(v);
-    return l > 0 ? v * (1 / l) : Vec3{0, 0, 0};
-}
-} // namespace
 
 ShadingFrame frame_around(const Vec3 &n, const Vec3 &tangent) {
     Vec3 s = tangent - n * dot(n, tangent);
     double l = length(s);
     if (!(l > 1e-9 * (length(tangent) + 1e-300))) {
-        // No usable tangent: any perpendicular (Duff et al. 2017's branchless basis).
-        double sign = std::copysign(1.0, n.z), a = -1 / (sign + n.z), b = n.x * n.y * a;
-        s = {1 + sign * n.x * n.x * a, sign * b, -sign * n.x};
+        Vec3 t; // no usable tangent: any perpendicular (frame.h's basis)
+        orthonormal_basis(n, s, t);
     } else {
         s = s * (1 / l);
     }

@@ -6,12 +6,12 @@
 #include <stdexcept>
 #include <string>
 #include "bsdflab/rng.h"
+#include "bsdflab/sampling.h"
 
 namespace bsdflab {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kRowHeight = 0.86602540378443864676; // sqrt(3)/2: rows of unit-spaced hexagons
 constexpr uint64_t kSeedSalt = 0x5ca1e5eed0000001ULL;
 constexpr uint64_t kJitterSalt = 0x5ca1e0000000a001ULL;

@@ -4,6 +4,7 @@
 #pragma once
 #include <cmath>
 #include <stdexcept>
+#include "bsdflab/sampling.h"
 #include "bsdflab/vector.h"
 
 namespace bsdflab {
@@ -25,7 +26,7 @@ public:
         dir_ = d * (1 / ld);
         left_ = left * (1 / ll);
         up_ = cross(dir_, left_);
-        tan_half_ = std::tan(0.5 * fov_x_deg * 3.14159265358979323846 / 180.0);
+        tan_half_ = std::tan(0.5 * fov_x_deg * kPi / 180.0);
     }
 
     int width() const { return width_; }
