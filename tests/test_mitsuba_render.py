@@ -25,6 +25,7 @@ pytestmark = pytest.mark.mitsuba
 
 from bsdflab.render import Camera, Environment, Material, Scene, Shape  # noqa: E402
 from bsdflab.testing import image_z_test  # noqa: E402
+from bsdflab.validation.checks.renderer import sphere_on_floor  # noqa: E402
 
 ALPHA = 1e-3
 WIDTH, HEIGHT = 48, 36
@@ -89,14 +90,7 @@ def _has_diffuse(scene: Scene) -> bool:
 
 # -- scenes of our own (need only geometry) --------------------------------------------------
 def _sphere_on_floor(env: Environment) -> Scene:
-    diffuse = {"type": "diffuse", "reflectance": {"type": "rgb", "rgb": [0.8, 0.3, 0.1]}}
-    grey = {"type": "diffuse", "reflectance": {"type": "constant", "value": 0.6}}
-    return Scene(Camera(origin=(0.0, 1.6, 4.5), target=(0.0, 0.9, 0.0), fov_deg=45, width=WIDTH, height=HEIGHT),
-                 (Shape({"type": "sphere", "center": [0, 1, 0], "subdivisions": 32}, "red", name="ball"),
-                  Shape({"type": "rectangle", "size": [6, 6]}, "grey", name="floor"),
-                  Shape({"type": "rectangle", "center": [0, 3, 0], "normal": [0, -1, 0], "size": [2, 2]},
-                        None, (4.0, 4.0, 4.0), name="lamp")),
-                 {"red": Material(diffuse), "grey": Material(grey)}, env, max_depth=5, rr_depth=3)
+    return sphere_on_floor(WIDTH, HEIGHT, env)  # the validation registry's scene
 
 
 def _coarse_envmap(path: Path) -> Environment:

@@ -92,7 +92,9 @@ def _white_furnace(ctx):
     return Outcome(worst < limit, worst, limit, "<", f"max |z| {worst:.2f} over {z.size} pixel-channels")
 
 
-def _sphere_on_floor(width, height):
+def sphere_on_floor(width, height, environment=None):
+    """A red diffuse ball on a grey floor under a square lamp and an environment (default
+    a sky at scale 1.5): the scene of the image cross-checks (also tests/test_mitsuba_render.py)."""
     Camera, Environment, Material, Scene, Shape, _ = _scene_modules()
     diffuse = {"type": "diffuse", "reflectance": {"type": "rgb", "rgb": [0.8, 0.3, 0.1]}}
     grey = {"type": "diffuse", "reflectance": {"type": "constant", "value": 0.6}}
@@ -101,7 +103,8 @@ def _sphere_on_floor(width, height):
                   Shape({"type": "rectangle", "size": [6, 6]}, "grey", name="floor"),
                   Shape({"type": "rectangle", "center": [0, 3, 0], "normal": [0, -1, 0], "size": [2, 2]},
                         None, (4.0, 4.0, 4.0), name="lamp")),
-                 {"red": Material(diffuse), "grey": Material(grey)}, Environment("sky", scale=1.5),
+                 {"red": Material(diffuse), "grey": Material(grey)},
+                 Environment("sky", scale=1.5) if environment is None else environment,
                  max_depth=5, rr_depth=3)
 
 
@@ -157,7 +160,7 @@ def _sphere_vs_mitsuba(ctx):
 
     render = _scene_modules()[-1]
     e = ctx.effort
-    scene = _sphere_on_floor(int(e["width"]), int(e["height"]))
+    scene = sphere_on_floor(int(e["width"]), int(e["height"]))
     ours = render(scene, spp=int(e["spp"]), seed=ctx.seed, progress=False)
     theirs = render_mitsuba(scene, int(e["spp"]), seed=ctx.seed + 1)
     test = image_z_test(ours.mean, ours.variance, *theirs, alpha=1e-3)
