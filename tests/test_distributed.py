@@ -93,11 +93,9 @@ def test_a_worker_killed_mid_render_changes_nothing(client):
 
 def test_unreachable_scheduler_is_a_clear_error_before_any_work():
     address = f"tcp://127.0.0.1:{_free_port()}"
-    start = time.perf_counter()
-    with pytest.raises(ConnectionError, match="no Dask scheduler answers at tcp://127.0.0.1"):
+    with pytest.raises(ConnectionError, match=r"no Dask scheduler answers at tcp://127.0.0.1:\d+ \(waited 2 s\)"):
         with connect(scheduler=address, timeout=2):
             pass
-    assert time.perf_counter() - start < 30
 
 
 @pytest.mark.parametrize("kwargs, message", [
