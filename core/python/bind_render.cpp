@@ -102,16 +102,36 @@ void bind_render(py::module_ &m) {
                                                         scale));
              })
         .def("commit", &RenderScene::commit, py::call_guard<py::gil_scoped_release>())
-        .def("embree_seconds",
+        .def_property("robust", &RenderScene::robust, &RenderScene::set_robust,
+                      "Embree's robust (watertight) traversal; set before commit()")
+        .def("first_hits",
              [](const RenderScene &sc, py::array_t<float, py::array::c_style | py::array::forcecast> rays) {
+                 if (rays.ndim() != 2 || rays.shape(1) != 6) throw std::invalid_argument("rays must be (N, 6)");
+                 if (!sc.committed()) throw std::invalid_argument("commit() the scene first");
+                 const std::size_t n = rays.shape(0);
+                 py::array_t<int> out(n);
+                 const float *p = rays.data();
+                 int *o = out.mutable_data();
+                 {
+                     py::gil_scoped_release release;
+                     sc.first_hits(p, n, o);
+                 }
+                 return out;
+             },
+             py::arg("rays"), "mesh id of each ray's first hit (-1: none); rays (N, 6): origin, direction")
+        .def("embree_seconds",
+             [](const RenderScene &sc, py::array_t<float, py::array::c_style | py::array::forcecast> rays,
+                int packet) {
                  if (rays.ndim() != 2 || rays.shape(1) != 8) throw std::invalid_argument("rays must be (N, 8)");
                  if (!sc.committed()) throw std::invalid_argument("commit() the scene first");
+                 if (packet != 1 && packet != 16) throw std::invalid_argument("packet must be 1 or 16");
                  const float *p = rays.data();
                  std::size_t n = rays.shape(0);
                  py::gil_scoped_release release;
-                 return sc.trace_recorded(p, n);
+                 return sc.trace_recorded(p, n, packet);
              },
-             py::arg("rays"), "wall seconds Embree alone takes to trace recorded rays on all cores")
+             py::arg("rays"), py::arg("packet") = 1,
+             "wall seconds Embree alone takes to trace recorded rays on all cores (packet: 1 or 16 wide)")
         .def("environment_eval",
              [](const RenderScene &s, const Darr &d) {
                  require_rows3(d, "d");
@@ -130,19 +150,24 @@ void bind_render(py::module_ &m) {
                  return out;
              })
         .def("environment_sample",
-             [](const RenderScene &s, const Darr &u) {
+             [](const RenderScene &s, const Darr &u, bool radiance) -> py::tuple {
                  if (u.ndim() != 2 || u.shape(1) != 2) throw std::invalid_argument("u must have shape (N, 2)");
                  std::size_t n = u.shape(0);
-                 py::array_t<double> dirs({n, std::size_t(3)}), pdf(n);
+                 py::array_t<double> dirs({n, std::size_t(3)}), pdf(n), rgb({n, std::size_t(3)});
                  for (std::size_t i = 0; i < n; ++i) {
-                     Vec3 d = s.environment().sample(u.data()[2 * i], u.data()[2 * i + 1], pdf.mutable_data()[i]);
+                     Vec3 d = s.environment().sample(u.data()[2 * i], u.data()[2 * i + 1], pdf.mutable_data()[i],
+                                                     rgb.mutable_data() + 3 * i);
                      double *o = dirs.mutable_data() + 3 * i;
                      o[0] = d.x;
                      o[1] = d.y;
                      o[2] = d.z;
                  }
+                 if (radiance) return py::make_tuple(dirs, pdf, rgb);
                  return py::make_tuple(dirs, pdf);
-             });
+             },
+             py::arg("u"), py::arg("radiance") = false,
+             "directions and densities from uniform (N, 2) numbers; with radiance=True also the radiance "
+             "the sampler reads at each direction");
 
     py::class_<RenderJob, std::shared_ptr<RenderJob>>(m, "RenderJob")
         .def(py::init([](std::shared_ptr<RenderScene> scene, int spp, int pass_spp, int max_depth, int rr_depth,

@@ -141,10 +141,10 @@ void RenderJob::trace_path_in(double px, double py, uint64_t sample_seed, double
         log.add(o, d, kInf, false);
         if (!scene.intersect(o, d, kInf, hit)) {
             if (env.active()) {
-                double rgb[3], Le[N];
-                env.eval(d, rgb);
+                double rgb[3], Le[N], env_pdf;
+                scene.environment_radiance(d, rgb, env_pdf);
                 Colour::light(scene, rgb, Le);
-                double w = prev_delta ? 1.0 : mis_hit(prev_pdf, scene.environment_pdf(d));
+                double w = prev_delta ? 1.0 : mis_hit(prev_pdf, env_pdf);
                 Colour::add_emitted(scene, L, beta, w, Le);
             }
             break;

@@ -12,12 +12,6 @@ double luminance(const double rgb[3]) {
     return kLuminanceRGB[0] * rgb[0] + kLuminanceRGB[1] * rgb[1] + kLuminanceRGB[2] * rgb[2];
 }
 
-Vec3 direction_of(double u, double v) {
-    double phi = 2 * kPi * u, theta = kPi * v;
-    double st = std::sin(theta);
-    return {st * std::sin(phi), std::cos(theta), -st * std::cos(phi)};
-}
-
 void uv_of(const Vec3 &d, double &u, double &v) {
     u = std::atan2(d.x, -d.z) / (2 * kPi);
     u -= std::floor(u);
@@ -83,22 +77,17 @@ void Environment::texel(int i, int j, double rgb[3]) const {
     for (int c = 0; c < 3; ++c) rgb[c] = scale_ * t[c];
 }
 
-void Environment::eval(const Vec3 &d, double rgb[3]) const {
-    rgb[0] = rgb[1] = rgb[2] = 0.0;
-    if (kind_ == Kind::kConstant) {
-        for (int c = 0; c < 3; ++c) rgb[c] = constant_[c];
-        return;
-    }
-    if (kind_ != Kind::kMap || !all_finite(d)) return;
-    double u, v;
-    uv_of(d, u, v);
+void Environment::eval_uv(double u, double v, double rgb[3]) const {
     // Bilinear between texel centres: periodic in u, clamped in v.
-    double x = u * width_ - 0.5, y = std::clamp(v * height_ - 0.5, 0.0, height_ - 1.0);
+    const double x = u * width_ - 0.5, y = std::clamp(v * height_ - 0.5, 0.0, height_ - 1.0);
     int i0 = int(std::floor(x)), j0 = int(std::floor(y));
-    double fx = x - i0, fy = y - j0;
-    int j1 = std::min(j0 + 1, height_ - 1);
-    i0 = (i0 % width_ + width_) % width_;
-    int i1 = (i0 + 1) % width_;
+    const double fx = x - i0, fy = y - j0;
+    const int j1 = std::min(j0 + 1, height_ - 1);
+    // u in [0, 1) puts i0 in [-1, W - 1]: wrap by comparison (integer division is slow).
+    if (i0 < 0) i0 += width_;
+    else if (i0 >= width_) i0 -= width_;
+    i0 = std::clamp(i0, 0, width_ - 1);
+    const int i1 = i0 + 1 < width_ ? i0 + 1 : 0;
     double a[3], b[3], c3[3], e3[3];
     texel(i0, j0, a);
     texel(i1, j0, b);
@@ -108,35 +97,63 @@ void Environment::eval(const Vec3 &d, double rgb[3]) const {
         rgb[c] = (1 - fy) * ((1 - fx) * a[c] + fx * b[c]) + fy * ((1 - fx) * c3[c] + fx * e3[c]);
 }
 
+double Environment::pdf_uv(double u, double v, double sin_theta) const {
+    if (!(sin_theta > 0)) return 0.0;
+    const int i = std::min(int(u * width_), width_ - 1), j = std::min(int(v * height_), height_ - 1);
+    const double p_uv = rows_.prob(j) * columns_[j].prob(i) * width_ * height_;
+    return p_uv / (2 * kPi * kPi * sin_theta);
+}
+
+void Environment::eval(const Vec3 &d, double rgb[3]) const {
+    double pdf;
+    eval_pdf(d, rgb, pdf);
+}
+
 double Environment::pdf(const Vec3 &d) const {
     if (kind_ == Kind::kConstant) return 1.0 / (4 * kPi);
     if (kind_ != Kind::kMap || !all_finite(d)) return 0.0;
     double u, v;
     uv_of(d, u, v);
-    int i = std::min(int(u * width_), width_ - 1), j = std::min(int(v * height_), height_ - 1);
-    double sin_theta = std::sqrt(std::max(0.0, 1 - d.y * d.y));
-    if (sin_theta <= 0) return 0.0;
-    double p_uv = rows_.prob(j) * columns_[j].prob(i) * width_ * height_;
-    return p_uv / (2 * kPi * kPi * sin_theta);
+    return pdf_uv(u, v, std::sqrt(std::max(0.0, 1 - d.y * d.y)));
 }
 
-Vec3 Environment::sample(double u1, double u2, double &pdf_out) const {
+void Environment::eval_pdf(const Vec3 &d, double rgb[3], double &pdf) const {
+    rgb[0] = rgb[1] = rgb[2] = 0.0;
+    pdf = 0.0;
+    if (kind_ == Kind::kConstant) {
+        for (int c = 0; c < 3; ++c) rgb[c] = constant_[c];
+        pdf = 1.0 / (4 * kPi);
+        return;
+    }
+    if (kind_ != Kind::kMap || !all_finite(d)) return;
+    double u, v;
+    uv_of(d, u, v);
+    eval_uv(u, v, rgb);
+    pdf = pdf_uv(u, v, std::sqrt(std::max(0.0, 1 - d.y * d.y)));
+}
+
+Vec3 Environment::sample(double u1, double u2, double &pdf_out, double *rgb) const {
     pdf_out = 0;
+    if (rgb) rgb[0] = rgb[1] = rgb[2] = 0.0;
     if (kind_ == Kind::kConstant) {
         double z = 1 - 2 * u1, r = std::sqrt(std::max(0.0, 1 - z * z)), phi = 2 * kPi * u2;
         pdf_out = 1.0 / (4 * kPi);
+        if (rgb)
+            for (int c = 0; c < 3; ++c) rgb[c] = constant_[c];
         return {r * std::cos(phi), z, r * std::sin(phi)};
     }
     if (kind_ != Kind::kMap || rows_.empty()) return {};
     double ru, cu;
     std::size_t j = rows_.sample(u1, ru);
     std::size_t i = columns_[j].sample(u2, cu);
-    double u = (i + cu) / width_, v = (j + ru) / height_;
-    Vec3 d = direction_of(u, v);
-    double sin_theta = std::sin(kPi * v);
-    if (sin_theta <= 0) return {};
-    pdf_out = rows_.prob(j) * columns_[j].prob(i) * width_ * height_ / (2 * kPi * kPi * sin_theta);
-    return d;
+    const double u = (i + cu) / width_, v = (j + ru) / height_;
+    const double phi = 2 * kPi * u, theta = kPi * v;
+    const double st = std::sin(theta);
+    if (!(st > 0)) return {};
+    // The sampled texel's own density (pdf_uv(u, v) could round into the next texel).
+    pdf_out = rows_.prob(j) * columns_[j].prob(i) * width_ * height_ / (2 * kPi * kPi * st);
+    if (rgb) eval_uv(u, v, rgb);
+    return {st * std::sin(phi), std::cos(theta), -st * std::cos(phi)};
 }
 
 } // namespace bsdflab

@@ -77,8 +77,6 @@ struct RenderScene::Embree {
         if (!device) throw std::runtime_error("could not create an Embree device");
         rtcSetDeviceErrorFunction(device, on_embree_error, &last_error);
         scene = rtcNewScene(device);
-        // Robust: watertight hits on shared edges (no light leaks through a closed mesh).
-        rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
         rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
     }
     ~Embree() {
@@ -166,8 +164,16 @@ void RenderScene::set_environment(Environment e) {
     environment_ = std::move(e);
 }
 
+void RenderScene::set_robust(bool robust) {
+    if (committed_) throw std::logic_error("scene already committed: choose robust traversal before commit()");
+    robust_ = robust;
+}
+
 void RenderScene::commit() {
     if (committed_) return;
+    // Default traversal as Mitsuba 3 uses it; robust mode only on request (its cost and the
+    // default's measured leak rate: docs/rendering.md).
+    rtcSetSceneFlags(embree_->scene, robust_ ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
     rtcCommitScene(embree_->scene);
     if (!embree_->last_error.empty()) throw std::runtime_error(embree_->last_error);
     std::vector<double> power;
@@ -278,9 +284,64 @@ bool RenderScene::occluded(const Vec3 &o, const Vec3 &d, double tmax) const {
     return r.tfar < 0.0f;
 }
 
-double RenderScene::trace_recorded(const float *rays, std::size_t n) const {
+namespace {
+// Packs up to 16 recorded rays of one kind into Embree's SoA packet; returns the count.
+template <typename Ray16>
+int pack16(const float *rays, std::size_t begin, std::size_t end, bool shadow, Ray16 &p, int valid[16]) {
+    int k = 0;
+    for (std::size_t i = begin; i < end && k < 16; ++i) {
+        const float *r = &rays[8 * i];
+        if ((r[7] != 0) != shadow) continue;
+        p.org_x[k] = r[0], p.org_y[k] = r[1], p.org_z[k] = r[2];
+        p.dir_x[k] = r[3], p.dir_y[k] = r[4], p.dir_z[k] = r[5];
+        p.tnear[k] = 0.0f, p.tfar[k] = r[6], p.time[k] = 0.0f;
+        p.mask[k] = 0xffffffffu, p.id[k] = 0, p.flags[k] = 0;
+        valid[k++] = -1;
+    }
+    for (int j = k; j < 16; ++j) valid[j] = 0;
+    return k;
+}
+} // namespace
+
+double RenderScene::trace_recorded(const float *rays, std::size_t n, int packet) const {
+    if (packet != 1 && packet != 16) throw std::invalid_argument("packet width must be 1 or 16");
     std::atomic<std::size_t> hits{0}; // consumed, so the work cannot be optimised away
     const auto start = std::chrono::steady_clock::now();
+    if (packet == 16) {
+        // Each block is scanned twice, once per kind, so packets hold rays of one kind.
+        parallel_for(n, 4096, [&](std::size_t begin, std::size_t end) {
+            RTCIntersectContext ctx;
+            rtcInitIntersectContext(&ctx);
+            std::size_t local = 0;
+            alignas(64) int valid[16];
+            for (bool shadow : {false, true}) {
+                std::size_t i = begin;
+                while (i < end) {
+                    // Find the window of `end` that holds the next 16 rays of this kind.
+                    std::size_t j = i, taken = 0;
+                    while (j < end && taken < 16) taken += ((rays[8 * j++ + 7] != 0) == shadow);
+                    if (shadow) {
+                        alignas(64) RTCRay16 r;
+                        if (pack16(rays, i, j, true, r, valid)) {
+                            rtcOccluded16(valid, embree_->scene, &ctx, &r);
+                            for (int k = 0; k < 16; ++k) local += valid[k] && r.tfar[k] < 0.0f;
+                        }
+                    } else {
+                        alignas(64) RTCRayHit16 rh;
+                        if (pack16(rays, i, j, false, rh.ray, valid)) {
+                            for (int k = 0; k < 16; ++k) rh.hit.geomID[k] = rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+                            rtcIntersect16(valid, embree_->scene, &ctx, &rh);
+                            for (int k = 0; k < 16; ++k) local += valid[k] && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+                        }
+                    }
+                    i = j;
+                }
+            }
+            hits += local;
+        });
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        return hits.load() > n ? -1.0 : seconds;
+    }
     parallel_for(n, 4096, [&](std::size_t begin, std::size_t end) {
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
@@ -316,6 +377,18 @@ double RenderScene::trace_recorded(const float *rays, std::size_t n) const {
     return hits.load() > n ? -1.0 : seconds; // never true; keeps the hit count live
 }
 
+void RenderScene::first_hits(const float *rays, std::size_t n, int *mesh) const {
+    parallel_for(n, 4096, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const float *r = &rays[6 * i];
+            SurfaceHit hit;
+            mesh[i] = intersect({r[0], r[1], r[2]}, {r[3], r[4], r[5]}, std::numeric_limits<double>::infinity(), hit)
+                          ? hit.mesh
+                          : -1;
+        }
+    });
+}
+
 void RenderScene::emitted(const SurfaceHit &hit, const Vec3 &w, double rgb[3]) const {
     const double *e = meshes_[hit.mesh].in.emission;
     bool front = dot(hit.ns, w) > 0;
@@ -333,12 +406,14 @@ EmitterSample RenderScene::sample_emitter(const Vec3 &ref, double u0, double u1,
     if (p_env == 0 && lights_.empty()) return s;
     if (u0 < p_env) {
         double pdf;
-        Vec3 d = environment_.sample(u1, u2, pdf);
-        if (!(pdf > 0)) return s;
+        Vec3 d = environment_.sample(u1, u2, pdf, s.radiance);
+        if (!(pdf > 0)) {
+            s.radiance[0] = s.radiance[1] = s.radiance[2] = 0.0;
+            return s;
+        }
         s.wo = d;
         s.dist = std::numeric_limits<double>::infinity();
         s.pdf = pdf * p_env;
-        environment_.eval(d, s.radiance);
         return s;
     }
     double u_rest;
@@ -376,6 +451,11 @@ double RenderScene::emitter_pdf(const Vec3 &ref, const SurfaceHit &hit) const {
 double RenderScene::environment_pdf(const Vec3 &d) const {
     double p = env_selection();
     return p > 0 ? p * environment_.pdf(d) : 0.0;
+}
+
+void RenderScene::environment_radiance(const Vec3 &d, double rgb[3], double &pdf) const {
+    environment_.eval_pdf(d, rgb, pdf);
+    pdf *= env_selection();
 }
 
 } // namespace bsdflab

@@ -31,12 +31,18 @@ public:
     void eval(const Vec3 &d, double rgb[3]) const;
     // Solid-angle density of sample() returning d.
     double pdf(const Vec3 &d) const;
-    // A direction towards the sky; its density in `pdf` (0 = failed).
-    Vec3 sample(double u1, double u2, double &pdf) const;
+    // Both at once: the map coordinates (an atan2 and an acos) are found once.
+    void eval_pdf(const Vec3 &d, double rgb[3], double &pdf) const;
+    // A direction towards the sky; its density in `pdf` (0 = failed) and, when `rgb` is
+    // given, its radiance (read at the sampled map coordinates, no inverse mapping).
+    Vec3 sample(double u1, double u2, double &pdf, double *rgb = nullptr) const;
 
 private:
     enum class Kind { kNone, kConstant, kMap };
     void texel(int i, int j, double rgb[3]) const;
+    // Radiance and density at map coordinates (u, v); sin_theta = sin(pi v).
+    void eval_uv(double u, double v, double rgb[3]) const;
+    double pdf_uv(double u, double v, double sin_theta) const;
 
     Kind kind_ = Kind::kNone;
     double constant_[3] = {0, 0, 0};

@@ -88,6 +88,10 @@ public:
     void lift(const double rgb[3], double out[kSpectralBins]) const;
     const double *sensor() const { return W_.data(); }
     bool committed() const { return committed_; }
+    // Embree's robust traversal (watertight on shared edges, ~1.8x slower traversal on the
+    // project's scenes; see docs/rendering.md for the measured leak rate of the default).
+    void set_robust(bool robust);
+    bool robust() const { return robust_; }
     // Builds the BVH and the light distribution; the scene is read-only afterwards.
     void commit();
 
@@ -102,7 +106,12 @@ public:
     bool occluded(const Vec3 &o, const Vec3 &d, double tmax) const;
     // Embree alone: traces recorded rays (8 floats each, see RenderJob::record_rays) on all
     // cores with rtcIntersect1 / rtcOccluded1 and nothing else; returns the wall seconds.
-    double trace_recorded(const float *rays, std::size_t n) const;
+    // packet = 16: in 16-wide packets (rtcIntersect16 / rtcOccluded16, consecutive rays of
+    // one kind), the traversal a wavefront renderer such as Mitsuba's llvm variant uses.
+    double trace_recorded(const float *rays, std::size_t n, int packet = 1) const;
+    // First hit of each ray (origin, direction: 6 floats each) on all cores: the mesh id, or
+    // -1 for a miss (for watertightness tests).
+    void first_hits(const float *rays, std::size_t n, int *mesh) const;
 
     // Radiance a surface emits at `hit` towards direction `w` (unit, away from the surface).
     void emitted(const SurfaceHit &hit, const Vec3 &w, double rgb[3]) const;
@@ -112,6 +121,8 @@ public:
     double emitter_pdf(const Vec3 &ref, const SurfaceHit &hit) const;
     // ... or the environment in direction d.
     double environment_pdf(const Vec3 &d) const;
+    // The environment radiance arriving from direction d, and environment_pdf(d), in one lookup.
+    void environment_radiance(const Vec3 &d, double rgb[3], double &pdf) const;
 
 private:
     struct Mesh;
@@ -132,6 +143,7 @@ private:
     std::vector<double> U_, W_;
     bool spectral_capable_ = true;
     bool committed_ = false;
+    bool robust_ = false;
 };
 
 } // namespace bsdflab
