@@ -9,17 +9,18 @@ Distribution1D::Distribution1D(const std::vector<double> &weights) {
     const std::size_t n = weights.size();
     if (n > UINT32_MAX) throw std::invalid_argument("distribution: too many bins");
     prob_.assign(n, 0.0);
+    double largest = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
         const double w = weights[i];
         prob_[i] = (std::isfinite(w) && w > 0) ? w : 0.0;
-        total_ += prob_[i];
+        largest = std::max(largest, prob_[i]);
     }
-    if (!(total_ > 0.0) || !std::isfinite(total_)) {
-        total_ = 0.0;
-        std::fill(prob_.begin(), prob_.end(), 0.0);
-        return;
-    }
-    for (double &p : prob_) p /= total_;
+    if (!(largest > 0.0)) return;
+    // Summed relative to the largest weight, so finite weights near DBL_MAX cannot overflow.
+    double relative = 0.0;
+    for (double &p : prob_) relative += (p /= largest);
+    total_ = relative * largest; // may be inf for such weights; the probabilities stay exact
+    for (double &p : prob_) p /= relative;
 
     // Vose: pair each under-full slot with an over-full bin that tops it up.
     keep_.assign(n, 1.0);
@@ -56,7 +57,7 @@ std::size_t Distribution1D::sample(double u, double &u_rest) const {
     const std::size_t n = prob_.size();
     u_rest = 0.5;
     if (n == 0 || empty()) return 0;
-    const double x = std::clamp(u, 0.0, 1.0) * double(n);
+    const double x = (u > 0 ? (u < 1 ? u : 1.0) : 0.0) * double(n); // NaN -> 0
     const std::size_t k = std::min(std::size_t(x), n - 1);
     const double f = std::clamp(x - double(k), 0.0, 0x1.fffffffffffffp-1);
     const double keep = keep_[k];

@@ -83,7 +83,7 @@ void Environment::eval_uv(double u, double v, double rgb[3]) const {
     int i0 = int(std::floor(x)), j0 = int(std::floor(y));
     const double fx = x - i0, fy = y - j0;
     const int j1 = std::min(j0 + 1, height_ - 1);
-    // u in [0, 1) puts i0 in [-1, W - 1]: wrap by comparison (integer division is slow).
+    // u in [0, 1] puts i0 in [-1, W - 1]: wrap by comparison (integer division is slow).
     if (i0 < 0) i0 += width_;
     else if (i0 >= width_) i0 -= width_;
     i0 = std::clamp(i0, 0, width_ - 1);
