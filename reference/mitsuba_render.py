@@ -46,7 +46,7 @@ _moment_variants: set[str] = set()
 
 
 @contextlib.contextmanager
-def _variant(name: str | None):
+def use_variant(name: str | None):
     """Make ``name`` the reference variant for the duration (None: keep the usual one)."""
     if name is None or name == mitsuba_env.variant():
         yield
@@ -161,7 +161,7 @@ def render_mitsuba(scene: Scene, spp: int, seed: int = 0, variant: str | None = 
                              f"{', '.join(mitsuba_env.SPECTRAL_VARIANTS)}, got {variant!r}")
     elif variant is not None and variant not in mitsuba_env.VARIANTS:
         raise ValueError(f"variant must be None or one of {', '.join(mitsuba_env.VARIANTS)}, got {variant!r}")
-    with _variant(variant):
+    with use_variant(variant):
         mi = mitsuba_env.mitsuba()
         _register_moments(mi)
         d = to_mitsuba_scene(scene, base_dir=base_dir, bsdflab_fallback=bsdflab_fallback,

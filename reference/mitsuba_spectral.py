@@ -81,9 +81,12 @@ def step_nodes(values, outside: str) -> tuple[np.ndarray, np.ndarray]:
     raise ValueError(f"outside must be 'zero' or 'hold', got {outside!r}")
 
 
-def step_spectrum_dict(values, outside: str) -> dict[str, Any]:
-    """Mitsuba's ``irregular`` spectrum of ``step_nodes``."""
+def step_spectrum_dict(values, outside: str) -> dict[str, Any] | float:
+    """Mitsuba's ``irregular`` spectrum of ``step_nodes``; a plain float where that is the
+    same function (zero, or constant and held), since Mitsuba refuses an all-zero one."""
     wl, v = step_nodes(values, outside)
+    if not np.any(v) or (outside == "hold" and np.all(v == v[0])):
+        return float(v[0])
     return {"type": "irregular", "wavelengths": _text(wl), "values": _text(v)}
 
 
