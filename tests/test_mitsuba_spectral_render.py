@@ -42,12 +42,12 @@ SKY = Environment("constant", radiance=(0.6, 0.7, 0.9))
 COPPER = {"type": "roughconductor", "material": "Cu", "alpha": 0.15}
 
 
-def _scene(name: str) -> Scene:
+def _scene(name: str, width: int = WIDTH, height: int = HEIGHT) -> Scene:
     from bsdflab.scenes import scene
 
     if name == "basic-materials":
-        return scene("basic-materials").with_resolution(WIDTH, HEIGHT)
-    ball = sphere_on_floor(WIDTH, HEIGHT, SKY)  # the validation registry's scene, coloured constant sky
+        return scene("basic-materials").with_resolution(width, height)
+    ball = sphere_on_floor(width, height, SKY)  # the validation registry's scene, coloured constant sky
     if name == "sphere-on-floor":
         return ball
     if name == "copper-sphere":  # a spectral model: the metal's complex index per wavelength
@@ -191,6 +191,16 @@ def test_residual_of_the_mapping_is_far_below_the_noise():
 @pytest.mark.parametrize("name", ["basic-materials", "sphere-on-floor", "copper-sphere"])
 def test_spectral_image_matches_mitsuba_spectral(name, tmp_path):
     _check(name, _ours(_scene(name)), _theirs(name), tmp_path)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["basic-materials", "sphere-on-floor", "copper-sphere"])
+def test_spectral_image_matches_mitsuba_spectral_at_four_times_the_resolution_and_spp(name, tmp_path):
+    """96 x 72 at 4096 spp: half the noise per pixel, four times the pixels."""
+    from bsdflab.reference.mitsuba_render import render_mitsuba
+
+    scene = _scene(name, 96, 72)
+    _check(f"{name}-large", _ours(scene, 4096, seed=5), render_mitsuba(scene, 4096, seed=6, spectral=True), tmp_path)
 
 
 def test_a_three_percent_brighter_albedo_is_rejected():
