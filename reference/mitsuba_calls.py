@@ -16,7 +16,7 @@ import numpy as np
 
 from bsdflab.lobes import Lobe
 
-from .mitsuba_env import is_vectorised, mitsuba
+from .mitsuba_env import mitsuba
 
 
 @dataclass(frozen=True)
@@ -31,18 +31,28 @@ class MitsubaResults:
 
 
 def query(plugin: dict, wi: np.ndarray, wo: np.ndarray, u1: np.ndarray,
-          u2: np.ndarray) -> MitsubaResults:
+          u2: np.ndarray, wavelengths: np.ndarray | None = None) -> MitsubaResults:
     """Evaluate, and sample, the Mitsuba BSDF described by ``plugin`` (a load_dict dict).
 
     wi, wo: (N, 3); u1: (N,); u2: (N, 2). All are rounded to float32 here.
+    wavelengths: (N,) nm, for a spectral variant that the caller made active (all of a
+    query's wavelengths are set to it; results keep the first three of them). None: the
+    reference RGB variant.
     """
     f32 = lambda a: np.ascontiguousarray(a, dtype=np.float32)
     wi, wo, u1, u2 = f32(wi), f32(wo), f32(u1), f32(u2)
-    mi = mitsuba()
+    if wavelengths is None:
+        mi = mitsuba()
+    else:
+        import mitsuba as mi
+
+        if not mi.is_spectral:
+            raise ValueError(f"wavelengths need a spectral variant active, not {mi.variant()!r}")
+        wavelengths = f32(wavelengths)
     bsdf = mi.load_dict(plugin)
-    if is_vectorised():
-        return _query_vectorised(mi, bsdf, wi, wo, u1, u2)
-    return _query_scalar(mi, bsdf, wi, wo, u1, u2)
+    if mi.variant().startswith("llvm"):
+        return _query_vectorised(mi, bsdf, wi, wo, u1, u2, wavelengths)
+    return _query_scalar(mi, bsdf, wi, wo, u1, u2, wavelengths)
 
 
 def mitsuba_answers(plugin: dict, q) -> dict[str, np.ndarray]:
@@ -73,18 +83,20 @@ def _identity_frame(mi):
     return mi.Frame3f(mi.Vector3f(1, 0, 0), mi.Vector3f(0, 1, 0), mi.Vector3f(0, 0, 1))
 
 
-def _query_vectorised(mi, bsdf, wi, wo, u1, u2) -> MitsubaResults:
+def _query_vectorised(mi, bsdf, wi, wo, u1, u2, wavelengths=None) -> MitsubaResults:
     import drjit as dr
 
     n = len(wi)
     vec = lambda a: mi.Vector3f(a[:, 0], a[:, 1], a[:, 2])
     # A field a plugin sets to a constant (e.g. pdf = 1) comes back with one lane.
     lanes = lambda v, dtype=np.float64: np.broadcast_to(np.array(v, dtype=dtype), (n,)).copy()
-    rows = lambda v: np.stack([lanes(c) for c in v], axis=1)  # Mitsuba gives (3, N)
+    rows = lambda v: np.stack([lanes(c) for c in list(v)[:3]], axis=1)  # Mitsuba gives (3 or 4, N)
     ctx = mi.BSDFContext()
     si = dr.zeros(mi.SurfaceInteraction3f, n)
     si.wi = vec(wi)
     si.sh_frame = _identity_frame(mi)
+    if wavelengths is not None:
+        si.wavelengths = mi.Spectrum(*[mi.Float(wavelengths)] * 4)
     value = bsdf.eval(ctx, si, vec(wo))
     pdf = bsdf.pdf(ctx, si, vec(wo))
     bs, weight = bsdf.sample(ctx, si, mi.Float(u1), mi.Point2f(u2[:, 0], u2[:, 1]))
@@ -94,7 +106,7 @@ def _query_vectorised(mi, bsdf, wi, wo, u1, u2) -> MitsubaResults:
         sample_eta=lanes(bs.eta))
 
 
-def _query_scalar(mi, bsdf, wi, wo, u1, u2) -> MitsubaResults:
+def _query_scalar(mi, bsdf, wi, wo, u1, u2, wavelengths=None) -> MitsubaResults:
     n = len(wi)
     out = {k: np.zeros((n, 3)) for k in ("eval", "sample_wo", "sample_weight")}
     out.update({k: np.zeros(n) for k in ("pdf", "sample_pdf", "sample_eta")})
@@ -103,13 +115,15 @@ def _query_scalar(mi, bsdf, wi, wo, u1, u2) -> MitsubaResults:
     si = mi.SurfaceInteraction3f()
     si.sh_frame = _identity_frame(mi)
     for j in range(n):
+        if wavelengths is not None:
+            si.wavelengths = mi.Spectrum(*[float(wavelengths[j])] * 4)
         si.wi = mi.Vector3f(*wi[j].tolist())
         w = mi.Vector3f(*wo[j].tolist())
-        out["eval"][j] = list(bsdf.eval(ctx, si, w))
+        out["eval"][j] = list(bsdf.eval(ctx, si, w))[:3]
         out["pdf"][j] = bsdf.pdf(ctx, si, w)
         bs, weight = bsdf.sample(ctx, si, float(u1[j]), mi.Point2f(*u2[j].tolist()))
         out["sample_wo"][j] = list(bs.wo)
-        out["sample_weight"][j] = list(weight)
+        out["sample_weight"][j] = list(weight)[:3]
         out["sample_pdf"][j] = bs.pdf
         out["sample_type"][j] = int(bs.sampled_type)
         out["sample_eta"][j] = bs.eta

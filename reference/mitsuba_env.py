@@ -7,7 +7,8 @@ llvm_ad_* variants, so any other version falls back to scalar.
 
 Dr.Jit reads ``DRJIT_LIBLLVM_PATH`` when it loads LLVM, so it is set here before the
 first import of drjit/mitsuba (an explicit value from the environment is kept).
-Set ``BSDFLAB_MITSUBA_VARIANT`` to 'scalar_rgb' or 'llvm_ad_rgb' to force a choice.
+Set ``BSDFLAB_MITSUBA_VARIANT`` to 'scalar_rgb' or 'llvm_ad_rgb' to force a choice (the
+spectral cross-checks then use 'scalar_spectral' or 'llvm_ad_spectral').
 """
 from __future__ import annotations
 
@@ -18,6 +19,10 @@ from pathlib import Path
 LLVM_VARIANT = "llvm_ad_rgb"
 SCALAR_VARIANT = "scalar_rgb"
 VARIANTS = (LLVM_VARIANT, SCALAR_VARIANT)
+# For spectral-mode cross-checks (reference/mitsuba_spectral.py), chosen by the same rule.
+LLVM_SPECTRAL_VARIANT = "llvm_ad_spectral"
+SCALAR_SPECTRAL_VARIANT = "scalar_spectral"
+SPECTRAL_VARIANTS = (LLVM_SPECTRAL_VARIANT, SCALAR_SPECTRAL_VARIANT)
 VERIFIED_LLVM_MAJOR = 19
 
 # Where Debian's libllvm19 puts the shared library (the versioned file and its links).
@@ -90,6 +95,12 @@ def variant() -> str:
     mitsuba()
     assert _chosen is not None
     return _chosen
+
+
+def spectral_variant() -> str:
+    """The spectral variant matching the reference variant: 'llvm_ad_spectral' where the
+    LLVM one is used, else 'scalar_spectral'."""
+    return LLVM_SPECTRAL_VARIANT if variant() == LLVM_VARIANT else SCALAR_SPECTRAL_VARIANT
 
 
 def is_vectorised() -> bool:

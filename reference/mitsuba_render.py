@@ -14,6 +14,13 @@ worse: Mitsuba's own ``moment`` integrator records second moments of *XYZ*, not 
 over seeds give only K - 1 degrees of freedom, whose heavy t tails would raise the false
 alarm rate of a test that looks at thousands of pixels at the 1e-6 level.
 
+Spectral mode (``spectral=True``, a Mitsuba spectral variant): the nested integrator's
+radiance is at the sample's four wavelengths, and the integrator scores it with our sensor
+instead of Mitsuba's CIE film: RGB = mean_j W[:, l(λ_j)] L(λ_j) / (Δλ p(λ_j)), the step
+function of our colour weights W (mitsuba_spectral.py), whose expectation is exactly our
+renderer's Σ_l W[:, l] v_l for the step spectra the converter hands Mitsuba. The moments
+are then of that RGB, as above.
+
 Samples go in passes of at most ``MAX_LANES`` paths (one ``mi.render`` each, seeds drawn
 from ``numpy.random.SeedSequence([seed, pass])``), and the passes' moments are combined in
 float64 (Chan et al.'s pairwise update), so neither memory nor float32 film accumulation
@@ -29,6 +36,7 @@ from bsdflab.render.scene import Scene
 
 from . import mitsuba_env
 from .mitsuba_scene import path_integrator, to_mitsuba_scene
+from .mitsuba_spectral import EDGES, sensor_bins
 from .table_plugin import scene_uses_plugin, wavefront_mode
 
 MOMENTS_PLUGIN = "bsdflab_moments"
@@ -38,13 +46,14 @@ _moment_variants: set[str] = set()
 
 
 @contextlib.contextmanager
-def _variant(name: str | None):
+def use_variant(name: str | None):
     """Make ``name`` the reference variant for the duration (None: keep the usual one)."""
     if name is None or name == mitsuba_env.variant():
         yield
         return
-    if name not in mitsuba_env.VARIANTS:
-        raise ValueError(f"variant must be None or one of {', '.join(mitsuba_env.VARIANTS)}, got {name!r}")
+    known = mitsuba_env.VARIANTS + mitsuba_env.SPECTRAL_VARIANTS
+    if name not in known:
+        raise ValueError(f"variant must be None or one of {', '.join(known)}, got {name!r}")
     previous = mitsuba_env._chosen
     mitsuba_env._chosen = name  # the module's policy is unchanged; this call just overrides it
     try:
@@ -68,7 +77,7 @@ def _register_moments(mi) -> None:
 
         def sample(self, scene, sampler, ray, medium=None, active=True):
             spectrum, valid, _ = self.nested.sample(scene, sampler, ray, medium, active)
-            c = mi.Color3f(spectrum)
+            c = _sensed_rgb(mi, spectrum, ray.wavelengths) if mi.is_spectral else mi.Color3f(spectrum)
             return spectrum, valid, [c.x, c.y, c.z, c.x * c.x, c.y * c.y, c.z * c.z]
 
         def aov_names(self):
@@ -79,6 +88,38 @@ def _register_moments(mi) -> None:
 
     mi.register_integrator(MOMENTS_PLUGIN, lambda props: MomentsIntegrator(props))
     _moment_variants.add(mi.variant())
+
+
+def _sensed_rgb(mi, spectrum, wavelengths):
+    """Our sensor's RGB score of a spectral sample (module doc): W / Δλ of the band each
+    wavelength falls in, times L / p(λ), averaged over the sample's wavelengths."""
+    import drjit as dr
+
+    table = _sensor_tables(mi)
+    value = mi.unpolarized_spectrum(spectrum) / mi.pdf_rgb_spectrum(wavelengths)
+    rgb = [0.0, 0.0, 0.0]
+    n = len(wavelengths)
+    for j in range(n):
+        lam = wavelengths[j]
+        inside = (lam >= float(EDGES[0])) & (lam < float(EDGES[-1]))
+        band = mi.UInt32(dr.clip((lam - float(EDGES[0])) / float(EDGES[1] - EDGES[0]), 0, len(EDGES) - 2))
+        for r in range(3):
+            w = dr.gather(mi.Float, table[r], band, inside) if dr.is_jit_v(mi.Float) else (
+                table[r][int(band)] if inside else 0.0)
+            rgb[r] = rgb[r] + w * value[j] / n
+    return mi.Color3f(*rgb)
+
+
+_tables: dict[str, list] = {}
+
+
+def _sensor_tables(mi):
+    """sensor_bins() rows as arrays Mitsuba's variant can gather from."""
+    if mi.variant() not in _tables:
+        rows = sensor_bins()
+        _tables[mi.variant()] = [mi.Float(row) if hasattr(mi.Float, "__len__") else [float(x) for x in row]
+                                 for row in rows]
+    return _tables[mi.variant()]
 
 
 def _check(scene, spp, seed) -> None:
@@ -99,21 +140,32 @@ def _passes(spp: int, pixels: int) -> list[int]:
 
 def render_mitsuba(scene: Scene, spp: int, seed: int = 0, variant: str | None = None,
                    base_dir: str | None = None, bsdflab_fallback: bool = False,
-                   cache_dir=None) -> tuple[np.ndarray, np.ndarray]:
+                   cache_dir=None, spectral: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Render ``scene`` with Mitsuba 3's ``path`` integrator.
 
     Returns (mean, var_of_mean), both (H, W, 3) float64 linear sRGB: the box-filtered pixel
     means and the variance of each mean. variant: None for the reference variant
     (mitsuba_env.py), or 'llvm_ad_rgb' / 'scalar_rgb'. base_dir, bsdflab_fallback and
     cache_dir as in ``to_mitsuba_scene``. Scenes with the table plugin render in
-    ``wavefront_mode`` (slower: one kernel per bounce).
+    ``wavefront_mode`` (slower: one kernel per bounce). ``spectral=True``: the scene of our
+    spectral mode in a spectral variant (default ``mitsuba_env.spectral_variant()``, or
+    'llvm_ad_spectral' / 'scalar_spectral'), scored by our sensor (module doc).
     """
     _check(scene, spp, seed)
-    with _variant(variant):
+    if not isinstance(spectral, (bool, np.bool_)):
+        raise ValueError(f"spectral must be True or False, got {spectral!r}")
+    if spectral:
+        variant = mitsuba_env.spectral_variant() if variant is None else variant
+        if variant not in mitsuba_env.SPECTRAL_VARIANTS:
+            raise ValueError(f"spectral=True needs variant None or one of "
+                             f"{', '.join(mitsuba_env.SPECTRAL_VARIANTS)}, got {variant!r}")
+    elif variant is not None and variant not in mitsuba_env.VARIANTS:
+        raise ValueError(f"variant must be None or one of {', '.join(mitsuba_env.VARIANTS)}, got {variant!r}")
+    with use_variant(variant):
         mi = mitsuba_env.mitsuba()
         _register_moments(mi)
         d = to_mitsuba_scene(scene, base_dir=base_dir, bsdflab_fallback=bsdflab_fallback,
-                             cache_dir=cache_dir)
+                             cache_dir=cache_dir, spectral=bool(spectral))
         d["integrator"] = {"type": MOMENTS_PLUGIN, "nested": path_integrator(scene)}
         mi_scene = mi.load_dict(d)
         plugin = scene_uses_plugin(mi_scene) and mitsuba_env.is_vectorised()

@@ -21,6 +21,9 @@ What goes over, and how it matches our renderer (bsdflab/render/build.py):
     The two codes place rows differently, see ``mitsuba_latlong``.
   * camera: ``perspective`` from ``look_at`` with the horizontal fov; box-filtered
     ``hdrfilm``; ``path`` integrator with max_depth / rr_depth; ``independent`` sampler.
+  * ``spectral=True`` (for a Mitsuba spectral variant; our ``render(spectral=True)``):
+    emission, constant environments and BSDF parameters as the explicit 81-bin spectra our
+    renderer uses (mitsuba_spectral.py, with the conventions and what cannot go over).
 """
 from __future__ import annotations
 
@@ -33,6 +36,9 @@ from bsdflab.render.scene import Material, Scene, Shape
 
 from .mitsuba_bsdf import to_mitsuba
 from .mitsuba_env import mitsuba
+from .mitsuba_spectral import emission as spectral_emission
+from .mitsuba_spectral import environment as spectral_environment
+from .mitsuba_spectral import to_mitsuba_spectral
 
 # Mitsuba's perspective camera clips at near_clip (ours does not clip): a small fraction of
 # the camera's distance to its target keeps the clip far below any scene feature.
@@ -42,25 +48,30 @@ BLACK = {"type": "diffuse", "reflectance": 0.0}
 
 
 def to_mitsuba_scene(scene: Scene, spp: int = 16, base_dir: str | None = None,
-                     bsdflab_fallback: bool = False, cache_dir=None) -> dict[str, Any]:
+                     bsdflab_fallback: bool = False, cache_dir=None, spectral: bool = False) -> dict[str, Any]:
     """The ``mi.load_dict`` dict of ``scene`` (Mitsuba's reference variant must stay active
     while it is loaded: shapes are already Mitsuba objects).
 
     spp: the sampler's default sample count (``mi.render(..., spp=)`` overrides it).
     base_dir: where relative mesh and map paths are resolved, as for our renderer.
     bsdflab_fallback: render BSDFs without a Mitsuba counterpart with bsdflab's own code
-    through the plugin instead of raising ValueError.
+    through the plugin instead of raising ValueError (RGB only).
+    spectral: the scene of our spectral mode, for a Mitsuba spectral variant (active).
     """
     if not isinstance(scene, Scene):
         raise ValueError(f"scene must be a bsdflab.render.Scene, got {type(scene).__name__}")
-    mi = mitsuba()
-    bsdfs = {name: _material(name, m, bsdflab_fallback, cache_dir) for name, m in scene.materials.items()}
+    mi = mitsuba() if not spectral else _spectral_mitsuba()
+    if spectral and bsdflab_fallback:
+        raise ValueError("bsdflab_fallback is RGB only: the bsdflab plugin answers in RGB, a spectral "
+                         "Mitsuba path needs the answer at its own wavelengths")
+    material = _spectral_material if spectral else _material
+    bsdfs = {name: material(name, m, bsdflab_fallback, cache_dir) for name, m in scene.materials.items()}
     out: dict[str, Any] = {"type": "scene", "sensor": _sensor(mi, scene, spp),
                            "integrator": path_integrator(scene)}
     for i, shape in enumerate(scene.shapes):
         bsdf = bsdfs[shape.material] if shape.material is not None else BLACK
-        out[f"shape_{i}"] = _mesh(mi, shape, i, bsdf, base_dir)
-    env = _environment(mi, scene, base_dir)
+        out[f"shape_{i}"] = _mesh(mi, shape, i, bsdf, base_dir, spectral)
+    env = spectral_environment(scene.environment) if spectral else _environment(mi, scene, base_dir)
     if env is not None:
         out["environment"] = env
     return out
@@ -96,7 +107,27 @@ def _material(name: str, material: Material, fallback: bool, cache_dir) -> dict[
     return plugin_dict(from_dict(material.bsdf))
 
 
-def _mesh(mi, shape: Shape, index: int, bsdf: dict[str, Any], base_dir):
+def _spectral_mitsuba():
+    import mitsuba as mi
+
+    if not mi.variant() or "spectral" not in mi.variant():
+        raise ValueError(f"spectral=True needs a Mitsuba spectral variant active, not {mi.variant()!r}")
+    return mi
+
+
+def _spectral_material(name: str, material: Material, fallback: bool, cache_dir) -> dict[str, Any]:
+    if material.scales is not None:
+        raise ValueError(f"material {name!r} has scales: Mitsuba has no scale texture")
+    if material.bsdf.get("type") in ("tabulated", "table"):
+        raise ValueError(f"material {name!r}: a table answers in RGB (our spectral mode lifts its answer); "
+                         "Mitsuba's spectral variants would need the answer at each path's wavelengths")
+    try:
+        return to_mitsuba_spectral(material.bsdf)
+    except ValueError as e:
+        raise ValueError(f"material {name!r}: {e}") from None
+
+
+def _mesh(mi, shape: Shape, index: int, bsdf: dict[str, Any], base_dir, spectral: bool = False):
     from bsdflab.scenes.geometry import build_mesh
 
     try:
@@ -111,7 +142,8 @@ def _mesh(mi, shape: Shape, index: int, bsdf: dict[str, Any], base_dir):
     props = mi.Properties()
     props["bsdf"] = mi.load_dict(bsdf)
     if shape.emission is not None:
-        props["emitter"] = mi.load_dict({"type": "area", "radiance": _rgb(shape.emission)})
+        radiance = spectral_emission(shape.emission) if spectral else _rgb(shape.emission)
+        props["emitter"] = mi.load_dict({"type": "area", "radiance": radiance})
     m = mi.Mesh(shape.name or f"shape_{index}", len(positions), len(faces), props=props,
                 has_vertex_normals=normals is not None, has_vertex_texcoords=uvs is not None)
     params = mi.traverse(m)

@@ -13,6 +13,8 @@ spectra become sRGB only when light reaches the camera.
   spectral image equals the RGB image for the same seed, up to the basis' 1e-5 deviation
   from a partition of unity.
 * Thread-count independence of spectral images (subprocesses with 1 and 2 threads).
+* A Diffuse with a *tabulated* reflectance spectrum keeps that spectrum (regression: it was
+  rendered with the lift of its RGB, U W R, a different spectrum).
 """
 from __future__ import annotations
 
@@ -95,3 +97,26 @@ def test_03_spectral_image_does_not_depend_on_thread_count(tmp_path):
 def test_04_bad_spectral_flag():
     with pytest.raises(ValueError, match="spectral"):
         render(grey_world(size=4), spp=1, progress=False, spectral="yes")
+
+
+def test_05_tabulated_diffuse_reflectance_keeps_its_own_spectrum():
+    """A narrow-band diffuse plate under a blue constant sky, seen straight down by a
+    narrow camera with one bounce: the pixel is sum_l W[:, l] R(l) E(l) (a diffuse plate
+    under a uniform sky reflects rho times the sky; the plate hides nothing above it).
+    Tolerance: 5 standard errors of the image mean (the render's own variance; 16 pixels
+    x 64 spp) -- the old lift of R's RGB is off by 0.065 in R, > 40 of them."""
+    wl = DEFAULT_WAVELENGTHS
+    R = 0.05 + 0.9 * np.exp(-0.5 * ((wl - 500.0) / 15.0) ** 2)
+    plate = Shape({"type": "rectangle", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [1000, 1000]},
+                  material="plate", name="plate")
+    camera = Camera(origin=(0.0, 1.0, 0.0), target=(0.0, 0.0, 0.0), up=(0.0, 0.0, 1.0), fov_deg=1.0,
+                    width=4, height=4)
+    bsdf = {"type": "diffuse", "reflectance": {"type": "tabulated", "wavelengths": wl.tolist(), "values": R.tolist()}}
+    scene = Scene(camera, (plate,), {"plate": Material(bsdf)}, Environment("constant", radiance=ENV_RGB),
+                  max_depth=2, name="narrow-band-plate")
+    r = render(scene, spp=64, seed=1, progress=False, spectral=True)
+    W, E = srgb_weights(wl), rgb_to_spectrum(np.array(ENV_RGB), wl)
+    expected, old = W @ (R * E), W @ (rgb_to_spectrum(W @ R, wl) * E)
+    mean, err = r.mean.mean(axis=(0, 1)), np.sqrt(r.variance.sum(axis=(0, 1))) / 16
+    assert np.all(np.abs(mean - expected) < 5 * err), (mean, expected, err)
+    assert np.max(np.abs(old - expected) / err) > 10  # the old spectrum would fail

@@ -114,6 +114,12 @@ class BSDF(abc.ABC):
             return self._core(np.array([FLAT_PROBE_NM])), P.sum(axis=1, keepdims=True)
         return core, P
 
+    def render_lift(self) -> np.ndarray | None:
+        """(81, C) matrix taking ``render_core()``'s channels to the model's own spectrum on
+        the default grid, for spectral rendering; None: the renderer's generic lift
+        (render/build.py ``spectral_lift``) is exact for this model."""
+        return None
+
     # -- serialisation ----------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         """A plain dict: {'type': ..., parameters...}; inverse of ``from_dict``."""

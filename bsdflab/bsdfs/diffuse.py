@@ -39,5 +39,16 @@ class Diffuse(BSDF):
         rgb = srgb_weights(DEFAULT_WAVELENGTHS) @ self.reflectance.at(DEFAULT_WAVELENGTHS)
         return _core.Diffuse(np.array([1.0, 2.0, 3.0]), rgb, self.two_sided), None
 
+    def render_lift(self):
+        # The core answers rgb * c (c = cos / pi, or 1 for a sample weight) with rgb = W R,
+        # so R rgb^T / |rgb|^2 returns R * c: the reflectance's own spectrum, also when it is
+        # tabulated (the generic RGB lift would give U W R, a different spectrum).
+        from ..spectra import DEFAULT_WAVELENGTHS, srgb_weights
+
+        R = self.reflectance.at(DEFAULT_WAVELENGTHS)
+        rgb = srgb_weights(DEFAULT_WAVELENGTHS) @ R
+        norm = float(rgb @ rgb)
+        return np.outer(R, rgb / norm) if norm > 0 else np.zeros((len(R), 3))
+
     def _params(self):
         return {"reflectance": self.reflectance.to_dict(), "two_sided": self.two_sided}

@@ -64,13 +64,19 @@ def _projection(P) -> list[float]:
     return [] if P is None else np.asarray(P, dtype=float).ravel().tolist()
 
 
-def spectral_lift(core, P) -> list[float]:
+def spectral_lift(core, P, bsdf: BSDF | None = None) -> list[float]:
     """The (81 x C) lift of a render core's channels to the spectral bins of the default grid
-    ([] when its channels are those bins): RGB cores (P None) through Mallett & Yuksel's
-    linear basis -- exact for Diffuse, whose spectral reflectance is that lift; for RGB
-    tables an approximation (the table was integrated to RGB) --, one-channel (spectrally
-    flat) cores by broadcasting."""
+    ([] when its channels are those bins): the model's own (``BSDF.render_lift``, e.g.
+    Diffuse's reflectance spectrum, tabulated ones included); else RGB cores (P None)
+    through Mallett & Yuksel's linear basis -- for RGB tables an approximation (the table
+    was integrated to RGB) --, one-channel (spectrally flat) cores by broadcasting."""
     n = len(DEFAULT_WAVELENGTHS)
+    own = bsdf.render_lift() if bsdf is not None else None
+    if own is not None:
+        own = np.asarray(own, dtype=float)
+        if own.shape != (n, core.channels):
+            raise ValueError(f"render_lift must be ({n}, {core.channels}), got {own.shape}")
+        return own.ravel().tolist()
     if P is None:
         return rgb_to_spectrum(np.eye(3), DEFAULT_WAVELENGTHS).T.ravel().tolist()
     if core.channels == n:
@@ -103,11 +109,12 @@ def _add_material(core_scene, material: Material, resolve) -> int:
     core, P = surface.render_core()
     gap_core, gap_P, gap_U = None, None, []
     if material.gap_bsdf is not None:
-        gap_core, gap_P = resolve(material.gap_bsdf).render_core()
-        gap_U = spectral_lift(gap_core, gap_P)
+        gap = resolve(material.gap_bsdf)
+        gap_core, gap_P = gap.render_core()
+        gap_U = spectral_lift(gap_core, gap_P, gap)
     scales = ScaleTexture.from_dict(material.scales).to_core() if material.scales is not None else None
     return core_scene.add_material(core, _projection(P), gap_core, _projection(gap_P), scales,
-                                   film_thickness(surface), spectral_lift(core, P), gap_U)
+                                   film_thickness(surface), spectral_lift(core, P, surface), gap_U)
 
 
 def build_render_scene(scene: Scene, base_dir: str | None = None, progress: bool = False, cache_dir=None):

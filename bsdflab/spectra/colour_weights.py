@@ -31,8 +31,21 @@ class ColourSpace:
     rgb: str = "sRGB"
 
 
+@dataclass(frozen=True)
+class SensorModel:
+    """The parts of W on a grid: W = xyz_to_rgb @ (cmf * illuminant / sum(ybar * illuminant)).
+
+    cmf (3, L) and illuminant (L,) are sampled at the grid (zero outside the tables);
+    xyz_to_rgb (3, 3) is the RGB space's matrix after the Bradford adaptation of the grid's
+    white. Mitsuba's spectral cross-check (reference/mitsuba_spectral.py) uses the parts."""
+
+    cmf: np.ndarray
+    illuminant: np.ndarray
+    xyz_to_rgb: np.ndarray
+
+
 @lru_cache(maxsize=32)
-def _weights(grid: tuple[float, ...], space: ColourSpace) -> np.ndarray:
+def _sensor(grid: tuple[float, ...], space: ColourSpace) -> SensorModel:
     import colour
 
     wl = np.asarray(grid)
@@ -49,9 +62,24 @@ def _weights(grid: tuple[float, ...], space: ColourSpace) -> np.ndarray:
     white = xyz_w.sum(axis=1)
     target = colour.xy_to_XYZ(rgb_space.whitepoint)
     cat = colour.adaptation.matrix_chromatic_adaptation_VonKries(white, target, transform="Bradford")
-    W = rgb_space.matrix_XYZ_to_RGB @ cat @ xyz_w
+    parts = SensorModel(cmf, s, rgb_space.matrix_XYZ_to_RGB @ cat)
+    for a in (parts.cmf, parts.illuminant, parts.xyz_to_rgb):
+        a.setflags(write=False)
+    return parts
+
+
+@lru_cache(maxsize=32)
+def _weights(grid: tuple[float, ...], space: ColourSpace) -> np.ndarray:
+    p = _sensor(grid, space)
+    W = p.xyz_to_rgb @ (p.cmf * p.illuminant / np.sum(p.cmf[1] * p.illuminant))
     W.setflags(write=False)
     return W
+
+
+def sensor_model(wavelengths, space: ColourSpace = ColourSpace()) -> SensorModel:
+    """The CMFs, illuminant and XYZ -> RGB matrix that make up ``srgb_weights``."""
+    wl = real_array("wavelengths", wavelengths, 0.0, lo_open=True, ndim=1)
+    return _sensor(tuple(float(x) for x in wl), space)
 
 
 def rgb_colourspace(space: ColourSpace = ColourSpace()):

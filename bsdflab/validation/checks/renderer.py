@@ -145,26 +145,51 @@ def image_figure(ctx, ours, theirs, test, labels=("bsdflab", "Mitsuba 3")):
     return float(flip_mean)
 
 
+MITSUBA_IMAGE_TOLERANCE = ("0 rejections at family-wise alpha 1e-3 (Sidak over all pixel-channels; "
+                           "both images' per-pixel variances of the mean, plus 1e-4 relative for float32)")
+MITSUBA_IMAGE_EFFORT = effort({"width": 32, "height": 24, "spp": 256}, {"width": 48, "height": 36, "spp": 1024},
+                              {"width": 96, "height": 72, "spp": 4096})
+
+
 @REGISTRY.check(name="renderer/mitsuba/sphere-on-floor", family="renderer",
                 title="Sphere on a floor under an area light and a sky: bsdflab against Mitsuba 3",
                 model="bsdflab.render (path tracer, MIS)", reference="Mitsuba 3 path integrator (moments for variance)",
                 statistic="rejected pixel-channels of the per-pixel two-sample z-test",
-                tolerance="0 rejections at family-wise alpha 1e-3 (Sidak over all pixel-channels; "
-                          "both images' per-pixel variances of the mean, plus 1e-4 relative for float32)",
-                effort=effort({"width": 32, "height": 24, "spp": 256}, {"width": 48, "height": 36, "spp": 1024},
-                              {"width": 96, "height": 72, "spp": 4096}),
+                tolerance=MITSUBA_IMAGE_TOLERANCE, effort=MITSUBA_IMAGE_EFFORT,
                 seed=53, requires=("mitsuba", "flip_evaluator"))
 def _sphere_vs_mitsuba(ctx):
+    e = ctx.effort
+    return _versus_mitsuba(ctx, sphere_on_floor(int(e["width"]), int(e["height"])), spectral=False)
+
+
+@REGISTRY.check(name="renderer/mitsuba/sphere-on-floor-spectral", family="renderer",
+                title="Spectral mode: the sphere on a floor under a coloured constant sky against Mitsuba 3's "
+                      "spectral variant",
+                model="bsdflab.render(spectral=True) (81 bins, MIS)",
+                reference="Mitsuba 3 llvm_ad_spectral (scalar_spectral without LLVM 19) path integrator, given "
+                          "our spectra as 5 nm step functions and scored by our sensor W "
+                          "(reference/mitsuba_spectral.py; residual <= 1e-4 relative)",
+                statistic="rejected pixel-channels of the per-pixel two-sample z-test",
+                tolerance=MITSUBA_IMAGE_TOLERANCE, effort=MITSUBA_IMAGE_EFFORT,
+                seed=54, requires=("mitsuba", "flip_evaluator"))
+def _sphere_vs_mitsuba_spectral(ctx):
+    Environment = _scene_modules()[1]
+    e = ctx.effort
+    sky = Environment("constant", radiance=(0.6, 0.7, 0.9))  # Mitsuba takes no per-texel spectra
+    return _versus_mitsuba(ctx, sphere_on_floor(int(e["width"]), int(e["height"]), sky), spectral=True)
+
+
+def _versus_mitsuba(ctx, scene, spectral: bool):
     from ...reference.mitsuba_render import render_mitsuba
     from ...testing import image_z_test
 
     render = _scene_modules()[-1]
-    e = ctx.effort
-    scene = sphere_on_floor(int(e["width"]), int(e["height"]))
-    ours = render(scene, spp=int(e["spp"]), seed=ctx.seed, progress=False)
-    theirs = render_mitsuba(scene, int(e["spp"]), seed=ctx.seed + 1)
+    spp = int(ctx.effort["spp"])
+    ours = render(scene, spp=spp, seed=ctx.seed, progress=False, spectral=spectral)
+    theirs = render_mitsuba(scene, spp, seed=ctx.seed + 1, spectral=spectral)
     test = image_z_test(ours.mean, ours.variance, *theirs, alpha=1e-3)
-    flip_mean = image_figure(ctx, ours.mean, theirs[0], test)
+    labels = ("bsdflab spectral", "Mitsuba 3 spectral") if spectral else ("bsdflab", "Mitsuba 3")
+    flip_mean = image_figure(ctx, ours.mean, theirs[0], test, labels)
     return Outcome(test.passed, test.n_rejected, 0, "<=", test.summary(),
                    {"flip_mean": flip_mean, "min_p": test.min_p, "worst_z": test.worst_z,
                     "pixel_channels": test.n_tested})
