@@ -120,3 +120,57 @@ def test_05_tabulated_diffuse_reflectance_keeps_its_own_spectrum():
     mean, err = r.mean.mean(axis=(0, 1)), np.sqrt(r.variance.sum(axis=(0, 1))) / 16
     assert np.all(np.abs(mean - expected) < 5 * err), (mean, expected, err)
     assert np.max(np.abs(old - expected) / err) > 10  # the old spectrum would fail
+
+
+# -- tables: a spectral render reads a spectral table ----------------------------------------
+FILM_TOP = {"type": "dielectric", "int_ior": 1.55, "ext_ior": 1.0,
+            "film": [{"material": {"model": "constant", "n": 2.4, "k": 0.0}, "thickness_nm": 400.0}]}
+# A black base under a clear slab: the layered model's scattered part is exactly zero, so its
+# table is the top film's exact reflection alone and the mirror pixel has a closed form.
+BLACK_LAYERED = {"type": "layered", "interfaces": [FILM_TOP], "slabs": [{"thickness_um": 1.0, "sigma_a": 0.0}],
+                 "base": {"type": "diffuse", "reflectance": 0.0}, "samples": 16}
+
+
+def tabulated_film_mirror_scene(size=6):
+    from bsdflab.tables import TableGrid
+
+    s = film_mirror_scene(size)
+    bsdf = {"type": "tabulated", "model": BLACK_LAYERED, "grid": TableGrid(3, 4, 3).to_dict(), "rel_error": 0.5,
+            "min_samples": 4, "max_samples": 8}
+    return Scene(s.camera, s.shapes, {"film": Material(bsdf)}, s.environment, max_depth=2, name="table-film-mirror")
+
+
+def test_06_spectral_render_of_a_table_uses_the_spectral_table(tmp_path):
+    """Spectral mode builds (and caches) a table of the 81 bins, so the film's spectrum
+    multiplies the sky's bin by bin: the pixel is W (R E), the closed form of test_01 for
+    the top film alone. The RGB table lifted back to bins (what spectral mode did before)
+    gives W (U (W R) . E) instead, which differs by more than the tolerance (checked)."""
+    from bsdflab.render.build import resolve_bsdf
+
+    wl = DEFAULT_WAVELENGTHS
+    W = srgb_weights(wl)
+    wi = np.array([[np.sin(THETA), 0.0, np.cos(THETA)]])
+    from bsdflab.bsdfs.base import from_dict
+
+    # A smooth dielectric picks reflection or transmission: a reflected sample's weight x
+    # its probability is R per channel.
+    b = from_dict(FILM_TOP).sample(np.tile(wi, (64, 1)), wavelengths=wl, seed=5)
+    k = int(np.flatnonzero(b.wo[:, 2] > 0)[0])
+    R = b.weight[k] * b.pdf[k]
+    E = rgb_to_spectrum(np.array(ENV_RGB), wl)
+    expected = W @ (R * E)
+    lifted = W @ (rgb_to_spectrum(W @ R, wl) * E)
+    assert np.max(np.abs(expected - lifted)) > 5e-3  # the check can tell the two apart
+
+    scene = tabulated_film_mirror_scene()
+    table_dict = scene.materials["film"].bsdf
+    spectral_table = resolve_bsdf(table_dict, cache_dir=tmp_path, spectral=True)
+    rgb_table = resolve_bsdf(table_dict, cache_dir=tmp_path)
+    assert len(spectral_table.table.channels) == len(wl) and rgb_table.table.channels == ("R", "G", "B")
+    assert len(list(tmp_path.rglob("*.exr"))) == 2  # two cache entries
+
+    spectral = render(scene, spp=4, seed=3, progress=False, spectral=True, cache_dir=tmp_path)
+    # Same 1e-3 tolerance as test_01 (the camera's field of view and float rounding).
+    assert np.all(np.abs(spectral.mean - expected) < 1e-3), (spectral.mean[0, 0], expected, lifted)
+    rgb = render(scene, spp=4, seed=3, progress=False, cache_dir=tmp_path)
+    assert np.all(np.abs(rgb.mean - (W @ R) * np.array(ENV_RGB)) < 1e-3)

@@ -18,7 +18,7 @@ def render_on_cluster(client, scene, spp: int, seed: int, pass_spp: int, strateg
     from .. import _core
     from ..render.render import RenderResult
 
-    scene_dict, tables = resolve_tables(scene, progress, cache_dir)
+    scene_dict, tables = resolve_tables(scene, progress, cache_dir, spectral=spectral)
     settings = job_settings(scene_dict, spp, pass_spp, seed, strategy, spectral)
     width, height = scene.camera.width, scene.camera.height
     units = plan_units(width, height, spp, pass_spp, unit_samples)

@@ -62,9 +62,10 @@ def job_settings(scene_dict: dict[str, Any], spp: int, pass_spp: int, seed: int,
             "rr_depth": int(scene_dict["rr_depth"])}
 
 
-def resolve_tables(scene, progress: bool, cache_dir) -> tuple[dict[str, Any], dict[str, bytes]]:
+def resolve_tables(scene, progress: bool, cache_dir, spectral: bool = False) -> tuple[dict[str, Any], dict[str, bytes]]:
     """The scene's dict with every tabulated material replaced by a reference to its table
-    file's content hash, and those files' bytes (tabulating missing tables here, once)."""
+    file's content hash, and those files' bytes (tabulating missing tables here, once;
+    spectral tables for a spectral render, as in-process)."""
     from ..render.build import TABULATED, resolve_bsdf
 
     d = scene.to_dict()
@@ -73,7 +74,7 @@ def resolve_tables(scene, progress: bool, cache_dir) -> tuple[dict[str, Any], di
     def swap(bsdf_dict):
         if not isinstance(bsdf_dict, dict) or bsdf_dict.get("type") != TABULATED:
             return bsdf_dict
-        table = resolve_bsdf(bsdf_dict, progress=progress, cache_dir=cache_dir)
+        table = resolve_bsdf(bsdf_dict, progress=progress, cache_dir=cache_dir, spectral=spectral)
         data = Path(table.path).read_bytes()
         digest = hashlib.sha256(data).hexdigest()
         files[digest] = data
@@ -124,7 +125,7 @@ def _job_for(scene_dict: dict[str, Any], tables: dict[str, bytes], settings: dic
                 b = m.get(name)
                 if isinstance(b, dict) and b.get("type") == "table" and "sha256" in b:
                     m[name] = {"type": "table", "path": _local_table(b["sha256"], tables[b["sha256"]])}
-        core_scene = build_render_scene(Scene.from_dict(d), progress=False)
+        core_scene = build_render_scene(Scene.from_dict(d), progress=False, spectral=settings["spectral"])
         job = _core.RenderJob(core_scene, settings["spp"], settings["pass_spp"], settings["max_depth"],
                               settings["rr_depth"], settings["seed"], 16, settings["strategy"],
                               settings["spectral"])

@@ -99,7 +99,8 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, progress: bool = True, pa
 
         return render_on_cluster(client, scene, spp, int(seed), pass_spp, STRATEGIES[strategy],
                                  spectral=bool(spectral), progress=progress, cache_dir=cache_dir)
-    core_scene = build_render_scene(scene, base_dir=base_dir, progress=progress, cache_dir=cache_dir)
+    core_scene = build_render_scene(scene, base_dir=base_dir, progress=progress, cache_dir=cache_dir,
+                                    spectral=bool(spectral))
     job = _core.RenderJob(core_scene, spp, pass_spp, scene.max_depth, scene.rr_depth, int(seed), 16,
                           STRATEGIES[strategy], bool(spectral))
     start = time.perf_counter()

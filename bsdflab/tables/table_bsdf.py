@@ -73,9 +73,16 @@ class TableBSDF(BSDF):
         return own, None
 
     def render_core(self):
-        if self._wavelengths is not None:
-            raise ValueError(f"the renderer needs an RGB table; this one stores wavelengths {self.table.channels}")
-        return self._core(self._channels(None)[0]), None
+        """RGB tables answer in RGB; a spectral table on the default grid's 81 bins answers in
+        those bins (projected to RGB by the sensor weights, used as is by spectral renders)."""
+        own = self._wavelengths
+        if own is None:
+            return self._core(self._channels(None)[0]), None
+        if own.shape != DEFAULT_WAVELENGTHS.shape or not np.allclose(own, DEFAULT_WAVELENGTHS):
+            raise ValueError(f"the renderer needs an RGB table or one on the default {len(DEFAULT_WAVELENGTHS)} "
+                             f"wavelengths ({DEFAULT_WAVELENGTHS[0]:g}-{DEFAULT_WAVELENGTHS[-1]:g} nm); this one "
+                             f"stores {len(own)} wavelengths")
+        return self._core(own), srgb_weights(DEFAULT_WAVELENGTHS)
 
     @property
     def film_thickness_nm(self) -> float:
