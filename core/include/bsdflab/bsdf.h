@@ -10,6 +10,7 @@
 // construction and therefore safe to share between threads.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <vector>
 #include "vector.h"
 
@@ -63,6 +64,14 @@ public:
                               const Query &q, double *weight) const = 0;
     // Monte Carlo models (eval is an estimate) expose their estimator; others return null.
     virtual const StochasticEstimator *stochastic() const { return nullptr; }
+    // The same BSDF for queries at film thickness `thickness_nm` (< 0: the model's own)
+    // with its thin-film terms tabulated over the cosine (film_lookup.h): a faster copy
+    // for callers whose thickness is fixed for many queries (the tabulator's cells).
+    // nullptr: no such copy (no film, or no lookup reached its measured error bound).
+    // `max_error` is raised to the largest measured error of the lookups made.
+    virtual std::shared_ptr<const BSDF> with_film_lookup(double /*thickness_nm*/, double & /*max_error*/) const {
+        return nullptr;
+    }
 
 protected:
     void zero(double *out) const {
