@@ -11,13 +11,15 @@
 // [k, 1] and [0, k] (no kink: k = 0, one segment) and each segment is parametrised by
 //     cos = k + (end - k) v^2,   v uniform in [0, 1],
 // which turns sqrt(cos - k) into a multiple of v: smooth in v, with a node exactly at the
-// kink. Between nodes: the 4-point cubic (Lagrange) interpolant in v (one-sided at the
-// segment ends), error O(h^4).
+// kink (holding the limit, extrapolated from the smooth side: the exact term is
+// ill-conditioned right at the kink). Between nodes: the 4-point cubic (Lagrange)
+// interpolant in v (one-sided at the segment ends), error O(h^4).
 //
 // The error is MEASURED at construction, not assumed: at every interval's midpoint (and the
 // quarter points of each segment's end intervals) the interpolant is compared with the
 // exact term for every channel; the node count doubles (from kStartIntervals to
-// kMaxIntervals) until the largest |error| of R and T is <= max_error, else build() gives
+// kMaxIntervals) until the largest |error| of R and T there is <= max_error / 2 (margin
+// for the error between check points), else build() gives
 // nullptr and callers keep the exact term (a kink the split does not know of, e.g. a film
 // layer less dense than the incident medium, or a dispersive substrate with a critical
 // angle per channel).
