@@ -180,7 +180,7 @@ def floor_scale(model: BSDF, grid: TableGrid, pilot: PilotBlock, *, wavelengths=
     """The per-lobe error floor scale (mean |pilot luminance| of the lobe's cells, summed
     in cell order by the core): the one cross-cell input of the finish stage. ``pilot``
     must cover every cell (see :func:`merge_pilots`)."""
-    tab = _tabulator(model, grid, wavelengths, min_samples, min_samples, seed, 0.01)
+    tab = _tabulator(model, grid, wavelengths, min_samples, min_samples, seed, 0.01, film_lookup=False)  # no walks
     _full(pilot, tab.cells)
     return np.asarray(tab.floor_scale(pilot.lum.tolist()))
 

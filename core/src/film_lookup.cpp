@@ -67,6 +67,13 @@ std::shared_ptr<const FilmLookupTerm> FilmLookupTerm::build(std::shared_ptr<cons
     return nullptr;
 }
 
+std::size_t FilmLookupTerm::bytes() const {
+    std::size_t n = 0;
+    for (const auto &side : segments_)
+        for (const Segment &s : side) n += s.nodes.size() * sizeof(double);
+    return n;
+}
+
 void FilmLookupTerm::exact_at(int side, double cos, double *R, double *T) const {
     Query q;
     q.film_thickness_nm = thickness_;
@@ -161,10 +168,13 @@ void FilmLookupTerm::eval(double cos_i, const Query &q, double *R, double *T) co
 }
 
 std::shared_ptr<const FresnelTerm> film_lookup_for(const std::shared_ptr<const FresnelTerm> &term,
-                                                   double thickness_nm, double &max_error) {
+                                                   double thickness_nm, FilmLookupStats &stats) {
     if (!std::dynamic_pointer_cast<const FilmTerm>(term)) return nullptr;
     auto lookup = FilmLookupTerm::build(term, thickness_nm);
-    if (lookup) max_error = std::max(max_error, lookup->measured_error());
+    if (lookup) {
+        stats.max_error = std::max(stats.max_error, lookup->measured_error());
+        stats.bytes += lookup->bytes();
+    }
     return lookup;
 }
 

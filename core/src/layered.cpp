@@ -531,11 +531,11 @@ void ScatteredPart::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Q
     estimate(wi, wo, lobes, q, req, walks.get(), out, errors.get().doubles(channels()));
 }
 
-std::shared_ptr<const BSDF> LayeredBSDF::with_film_lookup(double thickness_nm, double &max_error) const {
+std::shared_ptr<const BSDF> LayeredBSDF::with_film_lookup(double thickness_nm, FilmLookupStats &stats) const {
     std::vector<std::shared_ptr<const BSDF>> boundaries = boundaries_;
     bool changed = false;
     for (auto &b : boundaries)
-        if (auto fast = b->with_film_lookup(thickness_nm, max_error)) {
+        if (auto fast = b->with_film_lookup(thickness_nm, stats)) {
             b = std::move(fast);
             changed = true;
         }
@@ -543,8 +543,8 @@ std::shared_ptr<const BSDF> LayeredBSDF::with_film_lookup(double thickness_nm, d
     return std::make_shared<LayeredBSDF>(wavelengths_, std::move(boundaries), slabs_, options_);
 }
 
-std::shared_ptr<const BSDF> ScatteredPart::with_film_lookup(double thickness_nm, double &max_error) const {
-    auto fast = std::dynamic_pointer_cast<const LayeredBSDF>(model_->with_film_lookup(thickness_nm, max_error));
+std::shared_ptr<const BSDF> ScatteredPart::with_film_lookup(double thickness_nm, FilmLookupStats &stats) const {
+    auto fast = std::dynamic_pointer_cast<const LayeredBSDF>(model_->with_film_lookup(thickness_nm, stats));
     return fast ? std::make_shared<ScatteredPart>(fast) : nullptr;
 }
 

@@ -249,9 +249,9 @@ BSDFSample RoughInterface::sample_single(const Vec3 &wi_, double u1, double u2x,
     return s;
 }
 
-std::shared_ptr<const BSDF> RoughInterface::with_film_lookup(double thickness_nm, double &max_error) const {
+std::shared_ptr<const BSDF> RoughInterface::with_film_lookup(double thickness_nm, FilmLookupStats &stats) const {
     if (matched_ || ms_) return nullptr;
-    auto lookup = film_lookup_for(term_, thickness_nm, max_error);
+    auto lookup = film_lookup_for(term_, thickness_nm, stats);
     if (!lookup) return nullptr;
     return std::make_shared<RoughInterface>(wavelengths_, lookup, mf_.alpha(), two_sided_, mf_.type(), false);
 }

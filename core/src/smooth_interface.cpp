@@ -56,8 +56,8 @@ BSDFSample SmoothInterface::sample(const Vec3 &wi, double u1, double, double, ui
     return s;
 }
 
-std::shared_ptr<const BSDF> SmoothInterface::with_film_lookup(double thickness_nm, double &max_error) const {
-    auto lookup = film_lookup_for(term_, thickness_nm, max_error);
+std::shared_ptr<const BSDF> SmoothInterface::with_film_lookup(double thickness_nm, FilmLookupStats &stats) const {
+    auto lookup = film_lookup_for(term_, thickness_nm, stats);
     return lookup ? std::make_shared<SmoothInterface>(wavelengths_, lookup, two_sided_) : nullptr;
 }
 

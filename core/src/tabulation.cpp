@@ -20,13 +20,21 @@ Tabulator::Tabulator(std::shared_ptr<const BSDF> model, TableGrid grid, std::vec
     if (settings_.min_samples < 1 || settings_.max_samples < settings_.min_samples)
         throw std::invalid_argument("need 1 <= min_samples <= max_samples");
     if (grid_.thickness.empty()) grid_.thickness = {-1.0};
+    std::size_t lookup_bytes = 0;
     for (double t : grid_.thickness) {
         // Only walks gain from the lookup: a deterministic model is evaluated once per cell.
-        double error = -1;
-        auto fast = estimator_ && settings_.film_lookup ? model_->with_film_lookup(t, error) : nullptr;
+        // Nodes past the memory budget keep the exact film (a decision from sizes alone, so
+        // every block and thread count makes the same one).
+        FilmLookupStats stats;
+        const bool want = estimator_ && settings_.film_lookup && lookup_bytes < kFilmLookupBudgetBytes;
+        auto fast = want ? model_->with_film_lookup(t, stats) : nullptr;
+        if (fast && lookup_bytes + stats.bytes > kFilmLookupBudgetBytes) fast = nullptr;
+        if (fast) {
+            lookup_bytes += stats.bytes;
+            film_lookup_error_ = std::max(film_lookup_error_, stats.max_error);
+        }
         node_models_.push_back(fast ? fast : model_);
         node_estimators_.push_back(node_models_.back()->stochastic());
-        if (fast) film_lookup_error_ = std::max(film_lookup_error_, error);
     }
 }
 

@@ -46,6 +46,7 @@ public:
     double measured_error() const { return measured_error_; } // max |lookup - exact| checked
     int intervals() const { return intervals_; }              // per segment
     double kink(int side) const { return segments_[side][0].kink; }
+    std::size_t bytes() const;                                 // memory of the nodes
 
     struct Segment {
         double kink = 0, end = 1; // cos = kink + (end - kink) v^2
@@ -70,8 +71,8 @@ private:
 
 // The lookup of `term` at `thickness_nm` when it is a thin-film term and a lookup meets
 // the default bound; nullptr otherwise (keep the exact term).
-// `max_error` is raised to the lookup's measured error.
+// `stats` accumulates the lookup's measured error and memory.
 std::shared_ptr<const FresnelTerm> film_lookup_for(const std::shared_ptr<const FresnelTerm> &term,
-                                                   double thickness_nm, double &max_error);
+                                                   double thickness_nm, FilmLookupStats &stats);
 
 } // namespace bsdflab

@@ -31,6 +31,10 @@
 
 namespace bsdflab {
 
+// Memory the film lookups of one Tabulator may take (a snake node: ~1 MB); nodes beyond
+// it keep the exact film.
+constexpr std::size_t kFilmLookupBudgetBytes = std::size_t(256) << 20;
+
 struct TabulationSettings {
     double rel_error = 0.01;
     double floor = 0.05;   // fraction of the lobe's mean luminance below which error is absolute
