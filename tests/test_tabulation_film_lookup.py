@@ -166,3 +166,10 @@ def test_06_every_film_boundary_is_looked_up_and_agrees():
     m_z = (la.mean() - lb.mean()) / (np.sqrt((ea ** 2).sum() + (eb ** 2).sum()) / la.size)
     assert abs(m_z) < sidak_z_limit(ALPHA, 1), m_z
     assert 0 < _tabulator(model, grid, kw["wavelengths"], 1, 1, 0, 0.01).film_lookup_error <= MAX_ERROR
+
+
+def test_07_film_lookup_flag_is_validated():
+    with pytest.raises(ValueError, match="film_lookup"):
+        tabulate(snake_model(), GRID, film_lookup="yes", progress=False)
+    with pytest.raises(ValueError, match="film_lookup"):
+        pilot_cells(snake_model(), GRID, range(3), film_lookup=1)
