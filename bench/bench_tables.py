@@ -8,7 +8,13 @@ For the xenopeltis preset (RGB tables, 81 wavelengths per walk), in one run:
       with BSDFLAB_THREADS=1 and =2 (tabulation time only, as the job measures it, so
       interpreter start-up is not counted); the two tables must be identical;
   (c) queries/s of the table from (a) -- eval, pdf, sample -- against direct PFMC
-      (xenopeltis, samples=256): eval and sample, and their ratios.
+      (xenopeltis, samples=256): eval and sample, and their ratios;
+  (d) the snake's table at first use (bsdflab.scenes.snake.tabulated: 8 x 16 x 9 x 3
+      thickness nodes, 2 %, min_samples 512), old vs new in this run: film_lookup=False
+      (every film crossing by the exact Airy sums: the walks and values of estimator
+      version 3, bit for bit) against the default film lookup (version 4), with wall and
+      CPU seconds, walks, and the achieved RMS / 95th percentile relative error of both
+      (~3 minutes at load 0 on 2 cores; --no-snake skips it).
 The README figure (default grid 12 x 24 x 13, 1 %) takes ~6-7 minutes on 2 cores:
     python bench/bench_tables.py --grid default --rel-error 0.01
 The defaults are a quick run (~1 minute): --grid small (6 x 12 x 7) --rel-error 0.02.
@@ -73,6 +79,8 @@ def main() -> None:
     ap.add_argument("--rel-error", type=float, default=0.02, help="target relative error (default 0.02)")
     ap.add_argument("--queries", type=int, default=200_000, help="table queries for (c)")
     ap.add_argument("--pfmc-queries", type=int, default=1000, help="PFMC queries for (c)")
+    ap.add_argument("--no-snake", action="store_true", help="skip (d), the snake table old vs new")
+    ap.add_argument("--only-snake", action="store_true", help="run (d) only")
     ap.add_argument("--worker", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.worker is not None:
@@ -86,6 +94,9 @@ def main() -> None:
     from bsdflab.testing import random_unit_vectors
 
     threads = _core.worker_count()
+    if args.only_snake:
+        snake_old_vs_new(threads)
+        return
     grid = GRIDS[args.grid]
     cells = int(np.prod(grid))
     print(f"xenopeltis preset, RGB tables (81 wavelengths per walk), {threads} threads")
@@ -124,6 +135,34 @@ def main() -> None:
     print(f"    table eval / PFMC eval {r['table eval'] / r['PFMC eval (256 walks)']:,.0f}x, "
           f"table sample / PFMC sample {r['table sample'] / r['PFMC sample']:,.1f}x, "
           f"table sample / PFMC eval {r['table sample'] / r['PFMC eval (256 walks)']:,.0f}x")
+    if not args.no_snake:
+        snake_old_vs_new(threads)
+
+
+def snake_old_vs_new(threads: int) -> None:
+    """(d): the snake's first-use table, exact film (old) then film lookup (new)."""
+    import bsdflab as bl
+    from bsdflab.scenes.snake import tabulated
+    from bsdflab.tables import TableGrid, tabulate
+
+    spec = tabulated(bl.presets.xenopeltis().to_dict())
+    grid = TableGrid.from_dict(spec["grid"])
+    runs = {}
+    for name, lookup in (("old (exact film)", False), ("new (film lookup)", True)):
+        load = os.getloadavg()[0]
+        cpu0, wall0 = time.process_time(), time.perf_counter()
+        table = tabulate(bl.presets.xenopeltis(), grid, rel_error=spec["rel_error"], progress=False,
+                         film_lookup=lookup)
+        wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
+        m = table.meta
+        walks = int(table.samples.sum()) + m["pilot_walks"]
+        runs[name] = (wall, cpu)
+        print(f"(d) snake table {name}: {wall:.1f} s wall, {cpu:.1f} CPU-s ({threads} threads, load {load:.1f} "
+              f"at start); {walks:,} walks ({cpu / walks * 1e6:.1f} CPU-us per walk); rel. error RMS "
+              f"{m['rel_error_rms']:.4f}, 95 % {m['rel_error_p95']:.4f}, max {m['rel_error_max']:.4f}; "
+              f"film lookup error {m['film_lookup_error']}")
+    (w0, c0), (w1, c1) = runs.values()
+    print(f"    new / old: wall {w1 / w0:.2f}x, CPU {c1 / c0:.2f}x (speed-up {w0 / w1:.2f}x wall, {c0 / c1:.2f}x CPU)")
 
 
 if __name__ == "__main__":

@@ -178,7 +178,9 @@ def test_04_golden_values():
 
 
 def test_05_estimator_version():
-    assert _core.estimator_version == 3
+    # 4: the tabulator's walks read the film from a lookup (tables change by < 1e-7 in R, T);
+    # Layered.eval/sample are unchanged, so the golden values above still hold.
+    assert _core.estimator_version == 4
 
 
 # -- defect 4: eta, non-finite walks, explicit state ----------------------------------------------

@@ -3,6 +3,7 @@
 // table BSDF.
 #include <pybind11/stl.h>
 #include "arrays.h"
+#include "bsdflab/film_lookup.h"
 #include "bsdflab/projected_term.h"
 #include "bsdflab/table_bsdf.h"
 #include "bsdflab/tabulation.h"
@@ -28,8 +29,8 @@ void bind_tables(py::module_ &m) {
         .def(py::init([](std::shared_ptr<BSDF> model, int n_lobes, int n_theta_i, int n_theta_o,
                          int n_phi, std::vector<double> thickness, std::vector<double> P, int rows,
                          double rel_error, double floor, int min_samples, int max_samples,
-                         uint64_t seed) {
-                 TabulationSettings s{rel_error, floor, min_samples, max_samples, seed};
+                         uint64_t seed, bool film_lookup) {
+                 TabulationSettings s{rel_error, floor, min_samples, max_samples, seed, film_lookup};
                  return std::make_shared<Tabulator>(
                      model, make_grid(n_lobes, n_theta_i, n_theta_o, n_phi, std::move(thickness)),
                      std::move(P), rows, s);
@@ -37,8 +38,10 @@ void bind_tables(py::module_ &m) {
              py::arg("model"), py::arg("n_lobes"), py::arg("n_theta_i"), py::arg("n_theta_o"),
              py::arg("n_phi"), py::arg("thickness"), py::arg("P"), py::arg("rows"),
              py::arg("rel_error"), py::arg("floor"), py::arg("min_samples"), py::arg("max_samples"),
-             py::arg("seed"))
+             py::arg("seed"), py::arg("film_lookup") = true)
         .def_property_readonly("cells", &Tabulator::cells)
+        .def_property_readonly("film_lookup_error", &Tabulator::film_lookup_error,
+                               "largest measured error of the film lookups in use (-1: none)")
         .def_property_readonly("out_channels", &Tabulator::out_channels)
         .def_property_readonly("stochastic", &Tabulator::stochastic)
         .def("floor_scale", &Tabulator::floor_scale, py::arg("lum"),
@@ -95,4 +98,14 @@ void bind_tables(py::module_ &m) {
              py::arg("thickness_hi"), py::arg("default_thickness"), py::arg("n_cos"), py::arg("n_thickness"))
         .def_property_readonly("n_cos", &ProjectedFresnelTerm::n_cos)
         .def_property_readonly("n_thickness", &ProjectedFresnelTerm::n_thickness);
+
+    py::class_<FilmLookupTerm, FresnelTerm, std::shared_ptr<FilmLookupTerm>>(m, "FilmLookupTerm")
+        .def_static("build", [](std::shared_ptr<const FresnelTerm> exact, double thickness, double max_error) {
+            // None when no lookup meets max_error (the caller keeps the exact term).
+            return std::const_pointer_cast<FilmLookupTerm>(FilmLookupTerm::build(std::move(exact), thickness, max_error));
+        }, py::arg("exact"), py::arg("thickness_nm"), py::arg("max_error") = FilmLookupTerm::kDefaultMaxError)
+        .def_property_readonly("measured_error", &FilmLookupTerm::measured_error)
+        .def_property_readonly("intervals", &FilmLookupTerm::intervals)
+        .def_property_readonly("thickness_nm", &FilmLookupTerm::thickness_nm)
+        .def("kink", &FilmLookupTerm::kink, py::arg("side"), "critical cosine of light from side 0 (above) or 1");
 }

@@ -531,6 +531,23 @@ void ScatteredPart::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Q
     estimate(wi, wo, lobes, q, req, walks.get(), out, errors.get().doubles(channels()));
 }
 
+std::shared_ptr<const BSDF> LayeredBSDF::with_film_lookup(double thickness_nm, FilmLookupStats &stats) const {
+    std::vector<std::shared_ptr<const BSDF>> boundaries = boundaries_;
+    bool changed = false;
+    for (auto &b : boundaries)
+        if (auto fast = b->with_film_lookup(thickness_nm, stats)) {
+            b = std::move(fast);
+            changed = true;
+        }
+    if (!changed) return nullptr;
+    return std::make_shared<LayeredBSDF>(wavelengths_, std::move(boundaries), slabs_, options_);
+}
+
+std::shared_ptr<const BSDF> ScatteredPart::with_film_lookup(double thickness_nm, FilmLookupStats &stats) const {
+    auto fast = std::dynamic_pointer_cast<const LayeredBSDF>(model_->with_film_lookup(thickness_nm, stats));
+    return fast ? std::make_shared<ScatteredPart>(fast) : nullptr;
+}
+
 void LayeredBSDF::delta_reflectance(const Vec3 &wi, const Query &q, double *out) const {
     zero(out);
     if (!usable_direction(wi) || wi.z <= 0) return;

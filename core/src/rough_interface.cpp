@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 #include "bsdflab/complex_fresnel.h"
+#include "bsdflab/film_lookup.h"
 #include "bsdflab/frame.h"
 #include "bsdflab/interfaces.h"
 #include "bsdflab/sampling.h"
@@ -246,6 +247,13 @@ BSDFSample RoughInterface::sample_single(const Vec3 &wi_, double u1, double u2x,
     }
     if (flipped) s.wo.z = -s.wo.z;
     return s;
+}
+
+std::shared_ptr<const BSDF> RoughInterface::with_film_lookup(double thickness_nm, FilmLookupStats &stats) const {
+    if (matched_ || ms_) return nullptr;
+    auto lookup = film_lookup_for(term_, thickness_nm, stats);
+    if (!lookup) return nullptr;
+    return std::make_shared<RoughInterface>(wavelengths_, lookup, mf_.alpha(), two_sided_, mf_.type(), false);
 }
 
 } // namespace bsdflab

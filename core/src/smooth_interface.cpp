@@ -1,5 +1,6 @@
 #include <stdexcept>
 #include "bsdflab/complex_fresnel.h"
+#include "bsdflab/film_lookup.h"
 #include "bsdflab/frame.h"
 #include "bsdflab/interfaces.h"
 #include "bsdflab/scratch.h"
@@ -53,6 +54,11 @@ BSDFSample SmoothInterface::sample(const Vec3 &wi, double u1, double, double, ui
     double scale = f.eta_ti * f.eta_ti / prob;
     for (int c = 0; c < C; ++c) weight[c] = T[c] * scale;
     return s;
+}
+
+std::shared_ptr<const BSDF> SmoothInterface::with_film_lookup(double thickness_nm, FilmLookupStats &stats) const {
+    auto lookup = film_lookup_for(term_, thickness_nm, stats);
+    return lookup ? std::make_shared<SmoothInterface>(wavelengths_, lookup, two_sided_) : nullptr;
 }
 
 } // namespace bsdflab

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 #include "bsdflab/estimate.h"
+#include "bsdflab/film_lookup.h"
 #include "bsdflab/parallel.h"
 #include "bsdflab/rng.h"
 #include "bsdflab/scratch.h"
@@ -19,6 +20,22 @@ Tabulator::Tabulator(std::shared_ptr<const BSDF> model, TableGrid grid, std::vec
     if (settings_.min_samples < 1 || settings_.max_samples < settings_.min_samples)
         throw std::invalid_argument("need 1 <= min_samples <= max_samples");
     if (grid_.thickness.empty()) grid_.thickness = {-1.0};
+    std::size_t lookup_bytes = 0;
+    for (double t : grid_.thickness) {
+        // Only walks gain from the lookup: a deterministic model is evaluated once per cell.
+        // Nodes past the memory budget keep the exact film (a decision from sizes alone, so
+        // every block and thread count makes the same one).
+        FilmLookupStats stats;
+        const bool want = estimator_ && settings_.film_lookup && lookup_bytes < kFilmLookupBudgetBytes;
+        auto fast = want ? model_->with_film_lookup(t, stats) : nullptr;
+        if (fast && lookup_bytes + stats.bytes > kFilmLookupBudgetBytes) fast = nullptr;
+        if (fast) {
+            lookup_bytes += stats.bytes;
+            film_lookup_error_ = std::max(film_lookup_error_, stats.max_error);
+        }
+        node_models_.push_back(fast ? fast : model_);
+        node_estimators_.push_back(node_models_.back()->stochastic());
+    }
 }
 
 uint64_t Tabulator::cell_seed(std::size_t cell, uint64_t stage) const {
@@ -37,7 +54,7 @@ std::uint64_t Tabulator::estimate(std::size_t cell, int n, uint64_t seed, double
     if (estimator_) {
         ThreadWorkspace lease;
         EstimateRequest req{n, seed, P_.data(), rows_};
-        nonfinite = estimator_->estimate(wi, wo, kAll, q, req, lease.get(), mean, err);
+        nonfinite = node_estimators_[t]->estimate(wi, wo, kAll, q, req, lease.get(), mean, err);
     } else { // deterministic model: one evaluation, no error
         ThreadWorkspace lease;
         double *v = lease.get().doubles(model_->channels());
@@ -117,10 +134,19 @@ FinishedCells Tabulator::finish(const std::vector<std::size_t> &cells, const std
     out.lum_error.assign(cells.size(), 0.0);
     out.samples.assign(cells.size(), 0);
     std::atomic<std::uint64_t> nonfinite{0};
-    parallel_for_each(cells.size(), [&](std::size_t i) {
+    // Largest effort first, so that no long cell starts last and leaves the other cores
+    // idle (each result goes to its own slot: the order changes no bit).
+    std::vector<int> efforts(cells.size());
+    std::vector<std::size_t> order(cells.size());
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+        efforts[i] = effort(cells[i], pilot_lum[i], pilot_error[i], scale);
+        order[i] = i;
+    }
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return efforts[a] > efforts[b]; });
+    parallel_for_each(cells.size(), [&](std::size_t k) {
         if (ctl.stop()) return;
-        const std::size_t cell = cells[i];
-        const int n = effort(cell, pilot_lum[i], pilot_error[i], scale);
+        const std::size_t i = order[k], cell = cells[i];
+        const int n = efforts[i];
         std::vector<double> m(rows_), e(rows_);
         nonfinite += estimate(cell, n, cell_seed(cell, 1), m.data(), e.data());
         std::copy(m.begin(), m.begin() + C, out.value.begin() + i * C);

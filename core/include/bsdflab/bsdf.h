@@ -9,7 +9,9 @@
 // core never interpolates spectra in a hot loop. Implementations are immutable after
 // construction and therefore safe to share between threads.
 #pragma once
+#include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 #include "vector.h"
 
@@ -45,6 +47,13 @@ struct BSDFSample {
     double eta = 1;     // relative index crossed (n_t / n_i), 1 for reflection
 };
 
+// What BSDF::with_film_lookup made: the largest measured error of its lookups (-1: none)
+// and their memory.
+struct FilmLookupStats {
+    double max_error = -1;
+    std::size_t bytes = 0;
+};
+
 class BSDF {
 public:
     explicit BSDF(std::vector<double> wavelengths) : wavelengths_(std::move(wavelengths)) {}
@@ -63,6 +72,14 @@ public:
                               const Query &q, double *weight) const = 0;
     // Monte Carlo models (eval is an estimate) expose their estimator; others return null.
     virtual const StochasticEstimator *stochastic() const { return nullptr; }
+    // The same BSDF for queries at film thickness `thickness_nm` (< 0: the model's own)
+    // with its thin-film terms tabulated over the cosine (film_lookup.h): a faster copy
+    // for callers whose thickness is fixed for many queries (the tabulator's cells).
+    // nullptr: no such copy (no film, or no lookup reached its measured error bound).
+    // `stats` accumulates the lookups' measured error and memory.
+    virtual std::shared_ptr<const BSDF> with_film_lookup(double /*thickness_nm*/, FilmLookupStats & /*stats*/) const {
+        return nullptr;
+    }
 
 protected:
     void zero(double *out) const {

@@ -21,7 +21,8 @@ namespace bsdflab {
 
 // Bumped whenever the numbers an estimator produces for a given (model, directions, seed)
 // change (a fix, a different order of random draws). Cached tables key on it.
-constexpr int kEstimatorVersion = 3;
+// 4: the tabulator's walks read thin films from a per-thickness lookup (film_lookup.h).
+constexpr int kEstimatorVersion = 4;
 
 // Growable scratch memory of one thread's estimates.
 class EstimateWorkspace {

@@ -24,6 +24,7 @@ public:
     double pdf(const Vec3 &, const Vec3 &, uint32_t, const Query &) const override { return 0.0; }
     BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
                       const Query &q, double *weight) const override;
+    std::shared_ptr<const BSDF> with_film_lookup(double thickness_nm, FilmLookupStats &stats) const override;
 
 private:
     std::shared_ptr<const FresnelTerm> term_;
@@ -52,6 +53,8 @@ public:
     // The energy compensation, or nullptr for the single-scattering model.
     const MultiScatter *multiscatter() const { return ms_.get(); }
     bool pass_through() const { return matched_ != nullptr; }
+    // nullptr with the energy compensation, whose tables are the exact term's.
+    std::shared_ptr<const BSDF> with_film_lookup(double thickness_nm, FilmLookupStats &stats) const override;
 
 private:
     // Folds a one- or two-sided opaque interface's directions to the upper side; false

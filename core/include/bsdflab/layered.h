@@ -71,6 +71,8 @@ public:
     BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
                       const Query &q, double *weight) const override;
     const StochasticEstimator *stochastic() const override { return this; }
+    // The same stack with every boundary's film looked up (BSDF::with_film_lookup).
+    std::shared_ptr<const BSDF> with_film_lookup(double thickness_nm, FilmLookupStats &stats) const override;
 
     // The whole non-delta BSDF: the multiply scattered light plus the top's own reflection.
     std::uint64_t estimate(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
@@ -137,6 +139,7 @@ public:
         return model_->estimate_scattered(wi, wo, lobes, q, request, workspace, mean, stderr_out);
     }
     const LayeredBSDF &model() const { return *model_; }
+    std::shared_ptr<const BSDF> with_film_lookup(double thickness_nm, FilmLookupStats &stats) const override;
 
 private:
     std::shared_ptr<const LayeredBSDF> model_;

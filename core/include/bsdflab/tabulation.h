@@ -31,12 +31,20 @@
 
 namespace bsdflab {
 
+// Memory the film lookups of one Tabulator may take (a snake node: ~1 MB); nodes beyond
+// it keep the exact film.
+constexpr std::size_t kFilmLookupBudgetBytes = std::size_t(256) << 20;
+
 struct TabulationSettings {
     double rel_error = 0.01;
     double floor = 0.05;   // fraction of the lobe's mean luminance below which error is absolute
     int min_samples = 64;  // pilot walks, and the least number of final walks
     int max_samples = 1 << 16;
     uint64_t seed = 0;
+    // Walks of a thickness node use the model's with_film_lookup copy at that thickness
+    // (film R and T interpolated, error measured at construction: film_lookup.h); false
+    // evaluates every film exactly (the reference).
+    bool film_lookup = true;
 };
 
 // Progress and cancellation shared by the stages of one job (both may be null).
@@ -74,6 +82,8 @@ public:
     bool stochastic() const { return estimator_ != nullptr; }
     const TableGrid &grid() const { return grid_; }
     const TabulationSettings &settings() const { return settings_; }
+    // Largest measured |error| of the film lookups in use (film_lookup.h); -1: none in use.
+    double film_lookup_error() const { return film_lookup_error_; }
 
     PilotCells pilot(const std::vector<std::size_t> &cells, const TabulationControl &ctl = {}) const;
     // Per lobe: the mean |pilot luminance| over the lobe's cells, summed in cell order.
@@ -94,6 +104,11 @@ private:
 
     std::shared_ptr<const BSDF> model_;
     const StochasticEstimator *estimator_;
+    // Per thickness node: the model whose walks estimate that node's cells (model_ or its
+    // film-lookup copy) and its estimator.
+    std::vector<std::shared_ptr<const BSDF>> node_models_;
+    std::vector<const StochasticEstimator *> node_estimators_;
+    double film_lookup_error_ = -1;
     TableGrid grid_;
     std::vector<double> P_;
     int rows_;
