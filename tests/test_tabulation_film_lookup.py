@@ -123,6 +123,7 @@ def test_04_paired_tables_measure_the_lookup_bias():
     big = b > 0.01 * b.max()
     assert np.abs(a[big] / b[big] - 1).max() < 1e-5
     assert np.array_equal(new.samples, old.samples)
+    assert not np.array_equal(new.values, old.values)  # the walks did read the lookup
 
 
 def luminance(film_lookup, seed, model=None, grid=GRID, wavelengths=None, rel_error=0.03, min_samples=128):
@@ -173,3 +174,36 @@ def test_07_film_lookup_flag_is_validated():
         tabulate(snake_model(), GRID, film_lookup="yes", progress=False)
     with pytest.raises(ValueError, match="film_lookup"):
         pilot_cells(snake_model(), GRID, range(3), film_lookup=1)
+
+
+def dense_probe(lookup, per_interval=16):
+    """Cosines at `per_interval` points of every interval of every segment (in the lookup's
+    variable v, cos = k + (end - k) v^2), plus s = (3 - sqrt 5) / 2 from each segment end,
+    where the one-sided cubic stencil's error factor |s (s-1) (s-2) (s-3)| peaks (1.0; the
+    midpoint gives 0.94): the build's check points do not sit there."""
+    n = lookup.intervals
+    s_peak = (3 - np.sqrt(5)) / 2
+    v = np.concatenate([(np.arange(n)[:, None] + (np.arange(per_interval) + 0.5) / per_interval).ravel() / n,
+                        [s_peak / n, 1 - s_peak / n]])
+    out = []
+    for side, sign in ((0, 1.0), (1, -1.0)):
+        k = lookup.kink(side)
+        for lo, hi in ((k, 1.0), (0.0, k)) if k > 0 else ((0.0, 1.0),):
+            cos = lo + (hi - lo) * v ** 2 if lo == k else hi - (hi - lo) * v ** 2
+            out.append(sign * cos[(cos > 0) & (cos < 1)])
+    return np.concatenate(out)
+
+
+@pytest.mark.parametrize("thickness", [FILM_THICKNESS_NM, 2540.0])
+def test_08_bound_holds_between_the_build_check_points(thickness):
+    """The stated bound is an upper bound, not the build's check-point maximum: the
+    independent review found the check points ~7 % below the true maximum (a 2540 nm film
+    was accepted at 9.4e-8 checked with 1.01e-7 true when the build accepted at the bound
+    itself); the build now accepts at half the bound, and the dense probe confirms it."""
+    top = preset("xenopeltis").interfaces[0]
+    exact = exact_term(top)
+    lookup = _core.FilmLookupTerm.build(exact, thickness)
+    assert lookup is not None
+    worst = max_error(lookup, exact, dense_probe(lookup), thickness)
+    assert worst <= MAX_ERROR, worst
+    assert worst <= 1.1 * lookup.measured_error, (worst, lookup.measured_error)

@@ -20,9 +20,9 @@
 // exact term for every channel; the node count doubles (from kStartIntervals to
 // kMaxIntervals) until the largest |error| of R and T there is <= max_error / 2 (margin
 // for the error between check points), else build() gives
-// nullptr and callers keep the exact term (a kink the split does not know of, e.g. a film
-// layer less dense than the incident medium, or a dispersive substrate with a critical
-// angle per channel).
+// nullptr and callers keep the exact term (a kink the split does not know of, e.g. a
+// dispersive substrate with a critical angle per channel; film layers add none, even one
+// less dense than the incident medium: a layer's response depends on q^2 only).
 #pragma once
 #include <memory>
 #include <vector>
