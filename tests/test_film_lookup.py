@@ -95,13 +95,17 @@ def sph(theta, phi):
     return np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
 
 
+def random_queries(rng, n):
+    """n random (wi, wo) pairs in the upper hemisphere and film thicknesses in the range."""
+    wi = np.array([sph(t, 0.0) for t in rng.uniform(0.05, 1.4, n)])
+    wo = np.array([sph(t, p) for t, p in zip(rng.uniform(0.05, 1.4, n), rng.uniform(0, 2 * np.pi, n))])
+    return wi, wo, rng.uniform(LO, HI, n)
+
+
 def test_04_table_bsdf_with_lookup_matches_the_spectral_top():
     table = synthetic_table()
     fast, slow = TableBSDF(table, film_lookup=True), TableBSDF(table, film_lookup=False)
-    rng = np.random.default_rng(5)
-    wi = np.array([sph(t, 0.0) for t in rng.uniform(0.05, 1.4, 300)])
-    wo = np.array([sph(t, p) for t, p in zip(rng.uniform(0.05, 1.4, 300), rng.uniform(0, 2 * np.pi, 300))])
-    d = rng.uniform(LO, HI, 300)
+    wi, wo, d = random_queries(np.random.default_rng(5), 300)
     a, b = fast.eval(wi, wo, thickness=d), slow.eval(wi, wo, thickness=d)
     # |a - b| = D G / (4 cos_i) |R_lookup - R_exact| <= (eval_top / R_exact_lum) * bound: use
     # the grey factor from the exact evaluation of a white (R = 1) surface, i.e. a bound
@@ -185,10 +189,7 @@ def test_09_spectral_table_bsdf_with_lookup_matches_the_spectral_top():
     spectral evaluation, bin by bin, within the bound times the grey microfacet factor."""
     table = spectral_table()
     fast, slow = TableBSDF(table, film_lookup=True), TableBSDF(table, film_lookup=False)
-    rng = np.random.default_rng(6)
-    wi = np.array([sph(t, 0.0) for t in rng.uniform(0.05, 1.4, 200)])
-    wo = np.array([sph(t, p) for t, p in zip(rng.uniform(0.05, 1.4, 200), rng.uniform(0, 2 * np.pi, 200))])
-    d = rng.uniform(LO, HI, 200)
+    wi, wo, d = random_queries(np.random.default_rng(6), 200)
     wl = DEFAULT_WAVELENGTHS
     a = fast.eval(wi, wo, thickness=d, wavelengths=wl)
     b = slow.eval(wi, wo, thickness=d, wavelengths=wl)
