@@ -70,6 +70,20 @@ def test_render_api_takes_a_client(client):
     assert np.array_equal(a.mean, b.mean) and np.array_equal(a.variance, b.variance)
 
 
+def test_spectral_render_of_a_table_equals_the_local_one(client, tmp_path):
+    """A spectral render on the cluster ships the spectral table (81 bins), as the
+    in-process render builds it: the images are bit-identical."""
+    sys.path.insert(0, os.path.dirname(__file__))
+    from test_spectral_render import tabulated_film_mirror_scene
+
+    s = tabulated_film_mirror_scene(size=8)
+    local = render(s, spp=4, seed=2, progress=False, spectral=True, cache_dir=tmp_path)
+    remote = render(s, spp=4, seed=2, progress=False, spectral=True, cache_dir=tmp_path, client=client)
+    assert np.array_equal(local.mean, remote.mean) and np.array_equal(local.variance, remote.variance)
+    rgb = render(s, spp=4, seed=2, progress=False, cache_dir=tmp_path, client=client)
+    assert not np.allclose(rgb.mean, remote.mean, atol=1e-3)  # the RGB table gives another image
+
+
 def test_a_worker_killed_mid_render_changes_nothing(client):
     from bsdflab.distributed.render import render_on_cluster
 

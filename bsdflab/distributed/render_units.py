@@ -75,7 +75,7 @@ def resolve_tables(scene, progress: bool, cache_dir, spectral: bool = False) -> 
         if not isinstance(bsdf_dict, dict) or bsdf_dict.get("type") != TABULATED:
             return bsdf_dict
         table = resolve_bsdf(bsdf_dict, progress=progress, cache_dir=cache_dir, spectral=spectral)
-        data = Path(table.path).read_bytes()
+        data = _table_bytes(table)
         digest = hashlib.sha256(data).hexdigest()
         files[digest] = data
         return {"type": "table", "sha256": digest}
@@ -85,6 +85,19 @@ def resolve_tables(scene, progress: bool, cache_dir, spectral: bool = False) -> 
         if m.get("gap_bsdf") is not None:
             m["gap_bsdf"] = swap(m["gap_bsdf"])
     return d, files
+
+
+def _table_bytes(table) -> bytes:
+    """The table file's bytes: the cache file, or (a cache folder that was not writable)
+    the table written to a temporary file here."""
+    if table.path is not None:
+        return Path(table.path).read_bytes()
+    from ..tables.file_format import write_table
+
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "table.exr"
+        write_table(path, table.table)
+        return path.read_bytes()
 
 
 # -- on the worker -----------------------------------------------------------------------

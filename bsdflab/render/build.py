@@ -55,7 +55,7 @@ def resolve_bsdf(d: dict[str, Any], progress: bool = False, cache_dir=None, spec
         log.warning("table %s does not reach its target error %g everywhere (cells stopped at "
                     "max_samples)", path, rel_error)
     log.info("table %s %s", path, "reused from the cache" if hit else "tabulated")
-    return TableBSDF(table)
+    return TableBSDF(table, path=None if path is None else str(path))  # the file: what Dask ships
 
 
 def _spectrally_flat(model: BSDF) -> bool:
