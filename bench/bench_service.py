@@ -84,7 +84,7 @@ def load(url: str, requests: int, concurrency: int, seconds: float) -> dict:
 # -- the direct calls (this process) ----------------------------------------------------------
 def direct(requests: int) -> dict:
     from bsdflab import from_dict
-    from bsdflab.lobe_views import evaluate
+    from bsdflab.slices import evaluate
 
     wi, wo = directions()
     out = {}

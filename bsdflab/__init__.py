@@ -7,12 +7,12 @@ Quick use::
     s = bsdf.sample(np.array([[0.0, 0.6, 0.8]]))
     rgb = bl.Diffuse(0.5).eval([0, 0, 1], [0, 0.6, 0.8])      # (1, 3) linear sRGB
 """
-from . import optics, presets, spectra
-from .bsdfs import (BSDF, BSDFSample, Conductor, Dielectric, Diffuse, RoughConductor,
+from bsdflab import optics, presets, spectra
+from bsdflab.bsdfs import (BSDF, BSDFSample, Conductor, Dielectric, Diffuse, RoughConductor,
                     RoughDielectric, from_dict)
-from .layered import Layered, PhaseFunction, Slab
-from .lobes import Lobe
-from .spectra import DEFAULT_WAVELENGTHS, Spectrum, spectrum_to_rgb
+from bsdflab.layered import Layered, PhaseFunction, Slab
+from bsdflab.lobes import Lobe
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, spectrum_to_rgb
 
 __version__ = "0.1.0"
 

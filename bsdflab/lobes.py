@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import enum
 
-from . import _core
+from bsdflab import _core
 
 
 class Lobe(enum.IntFlag):

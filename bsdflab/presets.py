@@ -30,11 +30,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _validate as check
-from .bsdfs import Diffuse, RoughDielectric
-from .bsdfs.interface_term import MAX_FILM_LAYERS
-from .layered import Layered, Slab
-from .spectra import Spectrum
+from bsdflab.util import args as check
+from bsdflab.bsdfs import Diffuse, RoughDielectric
+from bsdflab.bsdfs.interface_term import MAX_FILM_LAYERS
+from bsdflab.layered import Layered, Slab
+from bsdflab.spectra import Spectrum
 
 KERATIN_CAUCHY = {"model": "cauchy", "A": 1.532, "B": 5890.0}
 KERATIN_IOR_550 = KERATIN_CAUCHY["A"] + KERATIN_CAUCHY["B"] / 550.0**2

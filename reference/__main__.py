@@ -5,8 +5,8 @@ eval / pdf / sample, both sides); exit status 1 if any disagrees.
 """
 from __future__ import annotations
 
-from .mitsuba_bsdf import compare_bsdf, standard_cases
-from .mitsuba_rough import compare_rough, rough_cases
+from bsdflab.reference.mitsuba_bsdf import compare_bsdf, standard_cases
+from bsdflab.reference.mitsuba_rough import compare_rough, rough_cases
 
 
 def main() -> int:

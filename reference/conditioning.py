@@ -24,8 +24,8 @@ import numpy as np
 from bsdflab.bsdfs import from_dict
 from bsdflab.lobes import Lobe
 
-from .comparison import QUANTITIES, TARGET, errors_between, rel_error
-from .query_sets import bsdflab_answers
+from bsdflab.reference.comparison import QUANTITIES, TARGET, errors_between, rel_error
+from bsdflab.reference.query_sets import bsdflab_answers
 
 UNIT_ROUNDOFF_F32 = 2.0**-24
 INPUT_PERTURBATION = 8 * UNIT_ROUNDOFF_F32

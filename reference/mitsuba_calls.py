@@ -16,7 +16,7 @@ import numpy as np
 
 from bsdflab.lobes import Lobe
 
-from .mitsuba_env import mitsuba
+from bsdflab.reference.mitsuba_env import mitsuba
 
 
 @dataclass(frozen=True)

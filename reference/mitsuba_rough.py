@@ -40,13 +40,13 @@ import numpy as np
 from bsdflab.bsdfs import BSDF, from_dict
 from bsdflab.oracles.microsurface import smith_lambda
 
-from .comparison import QUANTITIES, Comparison, errors_between, rel_error
-from .conditioning import ILL_CONDITIONED, INPUT_PERTURBATION
-from .mitsuba_bsdf import comparison_notes, comparison_setup, critical_side, summarise, to_mitsuba
-from .mitsuba_calls import mitsuba_answers
-from .query_sets import bsdflab_answers, draw_queries
-from .rough_conditioning import pair_values, rough_reasons, rough_sensitivity
-from .visible_normals import bsdflab_uniforms, warp_frame_shift
+from bsdflab.reference.comparison import QUANTITIES, Comparison, errors_between, rel_error
+from bsdflab.reference.conditioning import ILL_CONDITIONED, INPUT_PERTURBATION
+from bsdflab.reference.mitsuba_bsdf import comparison_notes, comparison_setup, critical_side, summarise, to_mitsuba
+from bsdflab.reference.mitsuba_calls import mitsuba_answers
+from bsdflab.reference.query_sets import bsdflab_answers, draw_queries
+from bsdflab.reference.rough_conditioning import pair_values, rough_reasons, rough_sensitivity
+from bsdflab.reference.visible_normals import bsdflab_uniforms, warp_frame_shift
 
 ROUGH_TYPES = ("roughconductor", "roughdielectric")
 CROSS_QUANTITIES = ("weight@bsdflab_wo", "pdf@bsdflab_wo", "weight@mitsuba_wo", "pdf@mitsuba_wo")

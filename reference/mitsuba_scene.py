@@ -34,11 +34,11 @@ import numpy as np
 
 from bsdflab.render.scene import Material, Scene, Shape
 
-from .mitsuba_bsdf import to_mitsuba
-from .mitsuba_env import mitsuba
-from .mitsuba_spectral import emission as spectral_emission
-from .mitsuba_spectral import environment as spectral_environment
-from .mitsuba_spectral import to_mitsuba_spectral
+from bsdflab.reference.mitsuba_bsdf import to_mitsuba
+from bsdflab.reference.mitsuba_env import mitsuba
+from bsdflab.reference.mitsuba_spectral import emission as spectral_emission
+from bsdflab.reference.mitsuba_spectral import environment as spectral_environment
+from bsdflab.reference.mitsuba_spectral import to_mitsuba_spectral
 
 # Mitsuba's perspective camera clips at near_clip (ours does not clip): a small fraction of
 # the camera's distance to its target keeps the clip far below any scene feature.
@@ -83,7 +83,7 @@ def path_integrator(scene: Scene) -> dict[str, Any]:
 
 # -- pieces -----------------------------------------------------------------------------------
 def _material(name: str, material: Material, fallback: bool, cache_dir) -> dict[str, Any]:
-    from .table_plugin import plugin_dict
+    from bsdflab.reference.table_plugin import plugin_dict
 
     if material.scales is not None:
         raise ValueError(f"material {name!r} has scales: Mitsuba has no scale texture (bump and "

@@ -43,7 +43,7 @@ import numpy as np
 
 from bsdflab.spectra import DEFAULT_STEP_NM, DEFAULT_WAVELENGTHS, Spectrum, rgb_to_spectrum, sensor_model, srgb_weights
 
-from .mitsuba_bsdf import _bsdf_dict, to_mitsuba
+from bsdflab.reference.mitsuba_bsdf import _bsdf_dict, to_mitsuba
 
 GRID = DEFAULT_WAVELENGTHS
 STEP_NM = DEFAULT_STEP_NM

@@ -25,9 +25,9 @@ from bsdflab.bsdfs import from_dict
 from bsdflab.lobes import Lobe
 from bsdflab.optics.fresnel import fresnel_reflectance
 
-from .comparison import SAMPLE_QUANTITIES, errors_between, rel_error
-from .conditioning import GRAZING_COS, INPUT_PERTURBATION, NEAR_CRITICAL_COS2, perturbations
-from .query_sets import Queries
+from bsdflab.reference.comparison import SAMPLE_QUANTITIES, errors_between, rel_error
+from bsdflab.reference.conditioning import GRAZING_COS, INPUT_PERTURBATION, NEAR_CRITICAL_COS2, perturbations
+from bsdflab.reference.query_sets import Queries
 
 PAIR_QUANTITIES = ("eval", "pdf", "ratio")
 FRESNEL_NEAR_ONE = 0.9   # a transmitted pair with F above this is reported as "F near 1"

@@ -28,7 +28,7 @@ import numpy as np
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.lobes import Lobe
 
-from .mitsuba_env import mitsuba
+from bsdflab.reference.mitsuba_env import mitsuba
 
 PLUGIN_NAME = "bsdflab_table"
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from bsdflab.lobes import Lobe
 
-from .mitsuba_env import is_vectorised, mitsuba
+from bsdflab.reference.mitsuba_env import is_vectorised, mitsuba
 
 
 def mitsuba_disk_points(u2: np.ndarray) -> np.ndarray:

@@ -4,7 +4,7 @@ Ships inside the wheel as ``bsdflab.service`` (see pyproject.toml, wheel.package
 with ``bsdflab serve``. ``create_app(Settings(...))`` builds the application; nothing here
 computes physics (docs/service.md).
 """
-from .app import create_app
-from .settings import Settings
+from bsdflab.service.app import create_app
+from bsdflab.service.settings import Settings
 
 __all__ = ["Settings", "create_app"]

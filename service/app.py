@@ -8,10 +8,10 @@ from fastapi.staticfiles import StaticFiles
 
 import bsdflab
 
-from . import errors
-from .jobs import JobService
-from .routers import bsdf, catalog, jobs, meta, page, renders, tables, thinfilm
-from .settings import Settings
+from bsdflab.service import errors
+from bsdflab.service.job_service import JobService
+from bsdflab.service.routers import bsdf, catalog, jobs, meta, page, renders, tables, thinfilm
+from bsdflab.service.settings import Settings
 
 DESCRIPTION = """BSDF queries, thin-film spectra, tables and renders from bsdflab's Python API.
 

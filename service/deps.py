@@ -7,8 +7,8 @@ from typing import Annotated
 from fastapi import Depends, HTTPException, Request, Security
 from fastapi.security import APIKeyHeader, HTTPAuthorizationCredentials, HTTPBearer
 
-from .jobs import JobService
-from .settings import Settings
+from bsdflab.service.job_service import JobService
+from bsdflab.service.settings import Settings
 
 _key_header = APIKeyHeader(name="X-API-Key", auto_error=False, description="the service's API key")
 _bearer = HTTPBearer(auto_error=False, description="the service's API key as a bearer token")

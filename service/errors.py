@@ -8,9 +8,9 @@ import json
 from fastapi import FastAPI, HTTPException, Request
 from fastapi.responses import JSONResponse
 
-from .models import Error
-from .settings import limit_variable
-from .store import QueueFull
+from bsdflab.service.schemas import Error
+from bsdflab.service.settings import limit_variable
+from bsdflab.service.store import QueueFull
 
 CLIENT_ERRORS = (ValueError, TypeError, OverflowError)
 # Documented on every route that takes a body or parameters (FastAPI adds 422's schema).

@@ -3,7 +3,7 @@
 
 Request caps are ``limit_*`` fields; a request beyond one is answered 4xx naming the cap
 and its variable. They bound the work one request can ask of the server, independently of
-the Python API's own resource caps (bsdflab.limits).
+the Python API's own resource caps (bsdflab.util.limits).
 """
 from __future__ import annotations
 

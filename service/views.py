@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .models import JobInfo
+from bsdflab.service.schemas import JobInfo
 
 KIND_PATHS = {"tabulate": "tables", "render": "renders"}
 

@@ -15,9 +15,9 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .. import _validate as check
-from ..lobes import Lobe
-from ..spectra import DEFAULT_WAVELENGTHS, srgb_weights
+from bsdflab.util import args as check
+from bsdflab.lobes import Lobe
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
 
 _REGISTRY: dict[str, type["BSDF"]] = {}
 

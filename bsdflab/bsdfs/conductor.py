@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _core
-from .base import BSDF
-from .interface_term import DEFAULT_EXT_IOR, ConductorParams
+from bsdflab import _core
+from bsdflab.bsdfs.base import BSDF
+from bsdflab.bsdfs.interface_term import DEFAULT_EXT_IOR, ConductorParams
 
 
 class Conductor(ConductorParams, BSDF):

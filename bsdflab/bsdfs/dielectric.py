@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _core
-from .base import BSDF
-from .interface_term import (DEFAULT_EXT_IOR, DEFAULT_INT_IOR, ext_ior_param, film_to_list,
+from bsdflab import _core
+from bsdflab.bsdfs.base import BSDF
+from bsdflab.bsdfs.interface_term import (DEFAULT_EXT_IOR, DEFAULT_INT_IOR, ext_ior_param, film_to_list,
                              int_ior_param, make_term, parse_film)
 
 

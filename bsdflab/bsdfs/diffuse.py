@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _core
-from .. import _validate as check
-from ..spectra import Spectrum
-from .base import BSDF
+from bsdflab import _core
+from bsdflab.util import args as check
+from bsdflab.spectra import Spectrum
+from bsdflab.bsdfs.base import BSDF
 
 
 class Diffuse(BSDF):
@@ -34,7 +34,7 @@ class Diffuse(BSDF):
     def render_core(self):
         # eval is linear in the reflectance, so a 3-channel Diffuse with the projected
         # reflectance gives exactly the RGB the spectral one does.
-        from ..spectra import DEFAULT_WAVELENGTHS, srgb_weights
+        from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
 
         rgb = srgb_weights(DEFAULT_WAVELENGTHS) @ self.reflectance.at(DEFAULT_WAVELENGTHS)
         return _core.Diffuse(np.array([1.0, 2.0, 3.0]), rgb, self.two_sided), None
@@ -43,7 +43,7 @@ class Diffuse(BSDF):
         # The core answers rgb * c (c = cos / pi, or 1 for a sample weight) with rgb = W R,
         # so R rgb^T / |rgb|^2 returns R * c: the reflectance's own spectrum, also when it is
         # tabulated (the generic RGB lift would give U W R, a different spectrum).
-        from ..spectra import DEFAULT_WAVELENGTHS, srgb_weights
+        from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
 
         R = self.reflectance.at(DEFAULT_WAVELENGTHS)
         rgb = srgb_weights(DEFAULT_WAVELENGTHS) @ R

@@ -19,7 +19,7 @@ def client_from_args(args):
     if args.scheduler is None and args.cluster is None:
         yield None
         return
-    from ..distributed import connect
+    from bsdflab.distributed import connect
 
     with contextlib.ExitStack() as stack:
         try:

@@ -10,7 +10,7 @@ import errno
 import os
 import sys
 
-from .._validate import one_line
+from bsdflab.util.args import one_line
 
 USAGE_ERROR = 2
 INTERRUPTED = 130
@@ -38,7 +38,7 @@ def run_command(args) -> int:
     except RecursionError:
         message = "the input is nested too deeply"
     except MemoryError:
-        message = "out of memory (lower the request, or the caps in bsdflab.limits)"
+        message = "out of memory (lower the request, or the caps in bsdflab.util.limits)"
     print(f"{name}: error: {message}", file=sys.stderr)
     return USAGE_ERROR
 

@@ -30,8 +30,8 @@ def run(args: argparse.Namespace) -> int:
     import os
 
     if args.data == "simulate":
-        from ..fit.config import SimulationConfig
-        from ..fit.simulate import simulate
+        from bsdflab.fit.config import SimulationConfig
+        from bsdflab.fit.simulate import simulate
 
         if not args.out.lower().endswith(".csv"):
             raise ValueError(f"--out must end in .csv, got {args.out!r}")
@@ -45,8 +45,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {len(dataset)} synthetic rows to {args.out} (noise seed {config.seed})")
         return 0
 
-    from ..fit.config import FitConfig
-    from ..fit.study import run_study
+    from bsdflab.fit.config import FitConfig
+    from bsdflab.fit.study import run_study
 
     config = FitConfig.load(args.config)
     try:

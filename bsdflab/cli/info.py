@@ -12,8 +12,8 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .. import __version__, _core
-    from ..optics.metals import METALS, metal_provenance
+    from bsdflab import __version__, _core
+    from bsdflab.optics.metals import METALS, metal_provenance
 
     print(f"bsdflab       {__version__}")
     print(f"core threads  {_core.worker_count()}  (set BSDFLAB_THREADS to change)")

@@ -5,8 +5,8 @@ import argparse
 
 import numpy as np
 
-from .._validate import real_scalar
-from .materials import add_material_options, material_from_args
+from bsdflab.util.args import real_scalar
+from bsdflab.cli.materials import add_material_options, material_from_args
 
 
 def register(sub) -> None:
@@ -23,7 +23,7 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..plots.lobe import lobe_figure
+    from bsdflab.plots.lobe import lobe_figure
 
     theta = real_scalar("--theta-i", args.theta_i, 0.0, 90.0, hi_open=True)
     if args.samples <= 0:

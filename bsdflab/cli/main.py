@@ -4,9 +4,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .. import __version__
-from . import fit, info, lobe, render, serve, table, tabulate, thinfilm
-from . import validate
+from bsdflab import __version__
+from bsdflab.cli import fit, info, lobe, render, serve, table, tabulate, thinfilm
+from bsdflab.cli import validate
 
 COMMANDS = (render, lobe, thinfilm, tabulate, table, info, fit, serve)
 COMMANDS += (validate,)
@@ -24,7 +24,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .errors import run_command
+    from bsdflab.cli.errors import run_command
 
     parser = build_parser()
     args = parser.parse_args(argv)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from ..bsdfs import BSDF, from_dict
+from bsdflab.bsdfs import BSDF, from_dict
 
 MATERIALS = ("diffuse", "conductor", "dielectric")
 
@@ -34,7 +34,7 @@ def material_from_args(args: argparse.Namespace) -> BSDF:
             raise ValueError(f"--json is not valid JSON: {e}") from None
         return from_dict(d)
     if args.preset is not None:
-        from ..presets import preset
+        from bsdflab.presets import preset
 
         return preset(args.preset)
     if args.material == "diffuse":

@@ -5,7 +5,7 @@ import argparse
 import json
 import os
 
-from .cluster_options import add_cluster_options, client_from_args
+from bsdflab.cli.cluster_options import add_cluster_options, client_from_args
 
 
 def register(sub) -> None:
@@ -54,8 +54,8 @@ def _options(pairs: list[str]) -> dict:
 
 def _scenes(args):
     """[(label, Scene)] and the folder relative paths resolve against."""
-    from ..scenes import SCENE_SETS, SCENES, scene, scene_set
-    from ..scenes.scene_file import load_scene
+    from bsdflab.scenes import SCENE_SETS, SCENES, scene, scene_set
+    from bsdflab.scenes.scene_file import load_scene
 
     kwargs = _options(args.option)
     if args.scene.endswith(".json"):
@@ -73,13 +73,13 @@ def _scenes(args):
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
-    from ..files import write_together
-    from ..plots.contact_sheet import contact_sheet, mosaic
-    from ..render import render
-    from ..render.image_io import EXR_SUFFIX, PNG_SUFFIX, exr_writer, write_exr_and_png
-    from ..scenes import SCENE_SETS, SCENES
-    from ..scenes.scene_file import save_scene
-    from .errors import check_writable
+    from bsdflab.util.files import write_together
+    from bsdflab.plots.contact_sheet import contact_sheet, mosaic
+    from bsdflab.render import render
+    from bsdflab.render.image_io import EXR_SUFFIX, PNG_SUFFIX, exr_writer, write_exr_and_png
+    from bsdflab.scenes import SCENE_SETS, SCENES
+    from bsdflab.scenes.scene_file import save_scene
+    from bsdflab.cli.errors import check_writable
 
     if args.list:
         for name, make in {**SCENES, **SCENE_SETS}.items():
@@ -124,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
         summary = result.summary()
         write_exr_and_png(args.out, png, result.mean, summary, args.exposure)
         if args.denoise:  # a preview beside the unbiased EXR, never instead of it
-            from ..render.denoise import denoise
+            from bsdflab.render.denoise import denoise
 
             stem = os.path.splitext(args.out)[0] + ".denoised"
             preview = denoise(result)

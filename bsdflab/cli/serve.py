@@ -24,7 +24,7 @@ def run(args: argparse.Namespace) -> int:
     import uvicorn
     from pydantic import ValidationError
 
-    from ..service import Settings, create_app
+    from bsdflab.service import Settings, create_app
 
     overrides = {k: v for k, v in (("host", args.host), ("port", args.port), ("data_dir", args.data_dir),
                                    ("workers", args.workers)) if v is not None}

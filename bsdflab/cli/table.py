@@ -38,8 +38,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def run_plot(args: argparse.Namespace) -> int:
-    from ..plots.table import table_figure
-    from ..tables.file_format import read_table
+    from bsdflab.plots.table import table_figure
+    from bsdflab.tables.file_format import read_table
 
     table = read_table(args.file)
     if not 0 <= args.thickness_index < table.n_thickness:
@@ -52,8 +52,8 @@ def run_plot(args: argparse.Namespace) -> int:
 
 
 def run_info(args: argparse.Namespace) -> int:
-    from ..tables.file_format import read_attributes, read_table
-    from ..tables.summary import relative_error_summary
+    from bsdflab.tables.file_format import read_attributes, read_table
+    from bsdflab.tables.summary import relative_error_summary
 
     table = read_table(args.file)  # verifies everything, the hash included
     attributes = read_attributes(args.file)
@@ -94,7 +94,7 @@ def run_info(args: argparse.Namespace) -> int:
 
 
 def _signature(attributes) -> str:
-    from ..tables import signing
+    from bsdflab.tables import signing
 
     if "bsdflab.signature" not in attributes:
         return "none" + (" (refused: a key is set)" if signing.resolve_key(None) else "")

@@ -4,8 +4,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .cluster_options import add_cluster_options, client_from_args
-from .materials import add_material_options, material_from_args
+from bsdflab.cli.cluster_options import add_cluster_options, client_from_args
+from bsdflab.cli.materials import add_material_options, material_from_args
 
 
 def register(sub) -> None:
@@ -34,9 +34,9 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..tables import TableGrid, tabulate
-    from ..tables.data import check_table_memory
-    from .errors import check_writable
+    from bsdflab.tables import TableGrid, tabulate
+    from bsdflab.tables.data import check_table_memory
+    from bsdflab.cli.errors import check_writable
 
     if args.out is not None:
         check_writable(args.out, "--out")  # before the tabulation, not after it
@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
 def _tabulate(args, model, grid, channels, make) -> int:
     import shutil
 
-    from ..tables import cached_table, write_table
+    from bsdflab.tables import cached_table, write_table
 
     if args.no_cache:
         if args.out is None:
@@ -70,7 +70,7 @@ def _tabulate(args, model, grid, channels, make) -> int:
                                         max_samples=args.max_samples, seed=args.seed)
     if args.out is not None:
         if path is not None and hit:
-            from ..files import write_atomically
+            from bsdflab.util.files import write_atomically
 
             write_atomically(args.out, lambda tmp: shutil.copyfile(path, tmp), suffix=".tmp.exr")
         else:

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import argparse
 
-from .._validate import real_scalar
-from ..presets import (AIR_IOR, CYTOPLASM_IOR, FILM_THICKNESS_NM, GUANINE_IOR, KERATIN_IOR_550,
+from bsdflab.util.args import real_scalar
+from bsdflab.presets import (AIR_IOR, CYTOPLASM_IOR, FILM_THICKNESS_NM, GUANINE_IOR, KERATIN_IOR_550,
                        iridophore_stack)
 
 DEFAULT_THICKNESS_RANGE_NM = (0.0, 1200.0)
@@ -39,7 +39,7 @@ def register(sub) -> None:
 
 def film_from_args(args: argparse.Namespace):
     """(film, title, thickness label) from the options; ValueError for bad values."""
-    from ..optics import FilmStack, Layer
+    from bsdflab.optics import FilmStack, Layer
 
     ext = real_scalar("--ext-ior", args.ext_ior, 0.0, lo_open=True)
     substrate = real_scalar("--substrate-ior", args.substrate_ior, 0.0, lo_open=True)
@@ -78,7 +78,7 @@ def thickness_range_from_args(args: argparse.Namespace) -> tuple[float, float]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..plots.thin_film import thin_film_figure
+    from bsdflab.plots.thin_film import thin_film_figure
 
     film, title, label = film_from_args(args)
     summary = thin_film_figure(film, args.out, thickness_range_from_args(args), title, label)

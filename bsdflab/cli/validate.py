@@ -35,7 +35,7 @@ def _plugin_checks(paths):
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..validation import REGISTRY, load_checks, validate
+    from bsdflab.validation import REGISTRY, load_checks, validate
 
     load_checks()
     checks = REGISTRY.select(args.only) + [c for c in _plugin_checks(args.plugin)

@@ -10,6 +10,6 @@ The results equal the in-process ones bit for bit: work units are pure functions
 request's plain dicts, a unit index and the seed, and the driver assembles them in a fixed
 order. See docs/distributed.md (starting a cluster, what crosses the wire, the cost model).
 """
-from .cluster import connect, local_cluster
+from bsdflab.distributed.cluster import connect, local_cluster
 
 __all__ = ["connect", "local_cluster"]

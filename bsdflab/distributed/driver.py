@@ -38,12 +38,12 @@ def run_units(client, fn: Callable[..., Any], shared: Sequence[Any], units: Sequ
     ``shared`` values are scattered once (broadcast) instead of being sent with every unit.
     Ctrl-C cancels every outstanding unit and re-raises KeyboardInterrupt; ``cancelled()``
     becoming true cancels them and raises JobCancelled.
-    Inside a service job (a bsdflab._jobs monitor), each finished unit is reported as the
+    Inside a service job (a bsdflab.util.progress monitor), each finished unit is reported as the
     stage's progress and a cancelled job cancels its units (JobCancelled).
     """
     from distributed import as_completed
 
-    from .._jobs import JobCancelled, cancel_requested, report_progress
+    from bsdflab.util.progress import JobCancelled, cancel_requested, report_progress
 
     # Wrapped in a list: scatter() would take a dict's items as separate pieces of data.
     # Fresh keys (hash=False): a content-hash key shared with an earlier, just-released

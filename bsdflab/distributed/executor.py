@@ -4,13 +4,13 @@
 A job's driver — the same job function the other executors run — runs on a thread of the
 service process with this executor's ``Client``; its work units go to the cluster
 (bsdflab.distributed). Progress and cancellation reach the units through the job monitor
-(bsdflab._jobs): the unit driver reports each finished unit and cancels the outstanding
+(bsdflab.util.progress): the unit driver reports each finished unit and cancels the outstanding
 ones when the job is cancelled.
 """
 from __future__ import annotations
 
-from ..jobs.threads import ThreadJobExecutor
-from .cluster import connect
+from bsdflab.jobs.threads import ThreadJobExecutor
+from bsdflab.distributed.cluster import connect
 
 
 class DaskJobExecutor(ThreadJobExecutor):

@@ -5,8 +5,8 @@ import time
 
 import numpy as np
 
-from .driver import run_units, token
-from .render_units import DEFAULT_UNIT_SAMPLES, job_settings, plan_units, render_unit, resolve_tables
+from bsdflab.distributed.driver import run_units, token
+from bsdflab.distributed.render_units import DEFAULT_UNIT_SAMPLES, job_settings, plan_units, render_unit, resolve_tables
 
 
 def render_on_cluster(client, scene, spp: int, seed: int, pass_spp: int, strategy: int,
@@ -15,8 +15,8 @@ def render_on_cluster(client, scene, spp: int, seed: int, pass_spp: int, strateg
                       progress_callback=None, cancelled=None):
     """Render ``scene`` (validated by the caller) on ``client``'s workers; returns the
     RenderResult the local renderer would, bit for bit (see render_units)."""
-    from .. import _core
-    from ..render.render import RenderResult
+    from bsdflab import _core
+    from bsdflab.render.render import RenderResult
 
     scene_dict, tables = resolve_tables(scene, progress, cache_dir, spectral=spectral)
     settings = job_settings(scene_dict, spp, pass_spp, seed, strategy, spectral)

@@ -66,7 +66,7 @@ def resolve_tables(scene, progress: bool, cache_dir, spectral: bool = False) -> 
     """The scene's dict with every tabulated material replaced by a reference to its table
     file's content hash, and those files' bytes (tabulating missing tables here, once;
     spectral tables for a spectral render, as in-process)."""
-    from ..render.build import TABULATED, resolve_bsdf
+    from bsdflab.render.build import TABULATED, resolve_bsdf
 
     d = scene.to_dict()
     files: dict[str, bytes] = {}
@@ -92,7 +92,7 @@ def _table_bytes(table) -> bytes:
     the table written to a temporary file here."""
     if table.path is not None:
         return Path(table.path).read_bytes()
-    from ..tables.file_format import write_table
+    from bsdflab.tables.file_format import write_table
 
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "table.exr"
@@ -112,7 +112,7 @@ def _table_dir() -> Path:
 
 
 def _local_table(digest: str, data: bytes) -> str:
-    from ..files import write_atomically
+    from bsdflab.util.files import write_atomically
 
     if hashlib.sha256(data).hexdigest() != digest:
         raise ValueError(f"table bytes do not match their hash {digest}")
@@ -123,9 +123,9 @@ def _local_table(digest: str, data: bytes) -> str:
 
 
 def _job_for(scene_dict: dict[str, Any], tables: dict[str, bytes], settings: dict[str, Any]):
-    from .. import _core
-    from ..render.build import build_render_scene
-    from ..render.scene import Scene
+    from bsdflab import _core
+    from bsdflab.render.build import build_render_scene
+    from bsdflab.render.scene import Scene
 
     key = hashlib.sha256(json.dumps([scene_dict, settings], sort_keys=True).encode()).hexdigest()
     with _lock:

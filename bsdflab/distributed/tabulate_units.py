@@ -41,7 +41,7 @@ _models: dict[str, Any] = {}
 
 
 def _model(model_dict: dict[str, Any]):
-    from ..bsdfs.base import from_dict
+    from bsdflab.bsdfs.base import from_dict
 
     key = json.dumps(model_dict, sort_keys=True)
     with _lock:
@@ -52,19 +52,19 @@ def _model(model_dict: dict[str, Any]):
 
 
 def _grid(grid_dict: dict[str, Any]):
-    from ..tables import TableGrid
+    from bsdflab.tables import TableGrid
 
     return TableGrid.from_dict(grid_dict)
 
 
 def pilot_unit(model_dict, grid_dict, kw: dict[str, Any], cells: np.ndarray):
-    from ..tables.tabulate import pilot_cells
+    from bsdflab.tables.tabulate import pilot_cells
 
     return pilot_cells(_model(model_dict), _grid(grid_dict), cells, **kw)
 
 
 def finish_unit(model_dict, grid_dict, kw: dict[str, Any], pilot, scale, cells: np.ndarray):
-    from ..tables.tabulate import finish_cells
+    from bsdflab.tables.tabulate import finish_cells
 
     return finish_cells(_model(model_dict), _grid(grid_dict), cells, pilot, scale, **kw)
 
@@ -75,8 +75,8 @@ def tabulate_on_cluster(client, model, grid, *, rel_error: float, wavelengths, m
                         unit_cells: int = DEFAULT_UNIT_CELLS):
     """``tabulate(model, grid, ...)`` with its cells on ``client``'s workers (validated by
     the caller); the same TableData, bit for bit, but for meta's timings."""
-    from ..tables.tabulate import assemble, cell_count, floor_scale, merge_pilots
-    from .driver import run_units, token
+    from bsdflab.tables.tabulate import assemble, cell_count, floor_scale, merge_pilots
+    from bsdflab.distributed.driver import run_units, token
 
     n = cell_count(model, grid)
     blocks = plan_blocks(n, grid.n_theta_o * grid.n_phi, unit_cells)

@@ -23,8 +23,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import parameters as P
-from .priors import Prior
+from bsdflab.fit import parameters as P
+from bsdflab.fit.priors import Prior
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -196,7 +196,7 @@ class SimulationConfig:
 
     @classmethod
     def parse(cls, d: dict) -> "SimulationConfig":
-        from .data import GEOMETRIES
+        from bsdflab.fit.data import GEOMETRIES
 
         _check_keys("top level", d, {"truth": 0, "noise": 0, "measurement": 0, "model": 0})
         truth = {p.name: p.default for p in P.ALL.values()}

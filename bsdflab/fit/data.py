@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..files import write_atomically
+from bsdflab.util.files import write_atomically
 
 GEOMETRIES = ("specular", "diffuse", "total")   # index = the core's Geometry code
 MODEL_RANGE_NM = (350.0, 1000.0)                # Cauchy film index and melanin power law

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .data import Dataset
-from .parameters import parameter
-from .posterior import LogPosterior
-from .sampling import RunResult
+from bsdflab.fit.data import Dataset
+from bsdflab.fit.parameters import parameter
+from bsdflab.fit.posterior import LogPosterior
+from bsdflab.fit.sampling import RunResult
 
 
 def arviz():

@@ -6,12 +6,12 @@ import math
 
 import numpy as np
 
-from ..plots.lobe import save_figure
-from ..render.image_io import tone_map
-from .appearance import AppearancePosterior
-from .data import Dataset
-from .parameters import parameter
-from .sampling import RunResult
+from bsdflab.plots.lobe import save_figure
+from bsdflab.render.image_io import tone_map
+from bsdflab.fit.appearance import AppearancePosterior
+from bsdflab.fit.data import Dataset
+from bsdflab.fit.parameters import parameter
+from bsdflab.fit.sampling import RunResult
 
 
 # short titles over the corner plot's diagonal (the axis labels carry the full names)

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _core
-from .data import GEOMETRIES, Dataset
-from .parameters import FORWARD_NAMES, PARAMETERS
+from bsdflab import _core
+from bsdflab.fit.data import GEOMETRIES, Dataset
+from bsdflab.fit.parameters import FORWARD_NAMES, PARAMETERS
 
 THICKNESS_NODES = 24   # Gauss-Hermite nodes over the thickness distribution
 ANGLE_NODES = 32       # Gauss-Legendre nodes of the hemispherical integrals

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .. import presets
+from bsdflab import presets
 
 
 @dataclass(frozen=True)

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .config import FitConfig
-from .data import Dataset
-from .forward import ForwardModel
-from .parameters import ALL_NAMES, FORWARD_NAMES
+from bsdflab.fit.config import FitConfig
+from bsdflab.fit.data import Dataset
+from bsdflab.fit.forward import ForwardModel
+from bsdflab.fit.parameters import ALL_NAMES, FORWARD_NAMES
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 

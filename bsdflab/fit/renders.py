@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..render import Material, Scene, Shape, render
-from ..scenes.snake import ground, ground_material, orbit_camera, sky, soft_box
-from .material import material_dict
+from bsdflab.render import Material, Scene, Shape, render
+from bsdflab.scenes.snake import ground, ground_material, orbit_camera, sky, soft_box
+from bsdflab.fit.material import material_dict
 
 SPHERE_RADIUS = 10.0
 PREVIEW_WALKS = 16   # PFMC walks per BSDF evaluation in the preview renders

@@ -15,8 +15,8 @@ import emcee
 import numpy as np
 from scipy import optimize
 
-from .config import SamplerSettings
-from .posterior import LogPosterior
+from bsdflab.fit.config import SamplerSettings
+from bsdflab.fit.posterior import LogPosterior
 
 TAU_CHANGE = 0.01
 FD_STEP = 1e-6   # finite-difference step of the MAP gradient, in prior sds

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .config import SimulationConfig
-from .data import GEOMETRIES, Dataset
-from .forward import ForwardModel
-from .parameters import FORWARD_NAMES
+from bsdflab.fit.config import SimulationConfig
+from bsdflab.fit.data import GEOMETRIES, Dataset
+from bsdflab.fit.forward import ForwardModel
+from bsdflab.fit.parameters import FORWARD_NAMES
 
 
 def design(config: SimulationConfig) -> Dataset:
@@ -28,7 +28,7 @@ def design(config: SimulationConfig) -> Dataset:
     zeros = np.zeros(len(arr))
     ds = Dataset(arr[:, 0].astype(int), arr[:, 1], arr[:, 2], arr[:, 3], zeros, zeros + 1.0)
     # the data file's own checks (range, duplicates, specular direction) apply to simulations too
-    from .data import parse_csv
+    from bsdflab.fit.data import parse_csv
 
     return parse_csv(ds.to_csv_text().splitlines(), "simulated design")
 

@@ -21,16 +21,16 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..bsdfs import from_dict
-from .appearance import appearance_posterior
-from .config import FitConfig
-from .data import Dataset, read_csv
-from .diagnostics import inference_data, summary_rows, table_markdown
-from .figures import appearance_plot, corner_plot, predictive_plot, trace_plot
-from .material import material_dict
-from .parameters import ALL_NAMES
-from .posterior import LogPosterior
-from .sampling import run_sampler
+from bsdflab.bsdfs import from_dict
+from bsdflab.fit.appearance import appearance_posterior
+from bsdflab.fit.config import FitConfig
+from bsdflab.fit.data import Dataset, read_csv
+from bsdflab.fit.diagnostics import inference_data, summary_rows, table_markdown
+from bsdflab.fit.figures import appearance_plot, corner_plot, predictive_plot, trace_plot
+from bsdflab.fit.material import material_dict
+from bsdflab.fit.parameters import ALL_NAMES
+from bsdflab.fit.posterior import LogPosterior
+from bsdflab.fit.sampling import run_sampler
 
 PREDICTIVE_DRAWS = 200
 
@@ -162,8 +162,8 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
 
 
 def _write_scene(values, folder: str) -> None:
-    from ..scenes.scene_file import save_scene
-    from .renders import sphere_scene
+    from bsdflab.scenes.scene_file import save_scene
+    from bsdflab.fit.renders import sphere_scene
 
     scene = sphere_scene(values, 320)
     mat = scene.materials["object"]
@@ -172,8 +172,8 @@ def _write_scene(values, folder: str) -> None:
 
 
 def _write_renders(draws_full, mean_full, ap, folder: str, seed: int) -> None:
-    from ..plots.contact_sheet import contact_sheet
-    from .renders import render_draws
+    from bsdflab.plots.contact_sheet import contact_sheet
+    from bsdflab.fit.renders import render_draws
 
     values = [mean_full, *draws_full]
     labels = ["posterior mean"] + [f"draw {i + 1}: d = {v[0]:.1f} nm" for i, v in enumerate(draws_full)]

@@ -33,19 +33,19 @@ Executors (``bsdflab.jobs.executor``)
     imported only then; a clear RuntimeError if it cannot be).
 
 Progress and cancel from inside the Python API
-    ``bsdflab._jobs.monitored(progress, cancelled)`` makes every C++ job started in its
+    ``bsdflab.util.progress.monitored(progress, cancelled)`` makes every C++ job started in its
     block report ``progress(stage, fraction)`` and stop on ``cancelled()``; kinds wrap
     their API call in it. Work done elsewhere (a cluster) reports with
-    ``bsdflab._jobs.report_progress`` and polls ``bsdflab._jobs.cancel_requested``.
+    ``bsdflab.util.progress.report_progress`` and polls ``bsdflab.util.progress.cancel_requested``.
 
 Dedup and caching
     ``key(request)`` is the content hash. For tables it is the table cache's own key
     (``bsdflab.tables.cache_key``), so a table asked for twice, or by a render, is one file.
 """
-from .._jobs import JobCancelled
-from .executor import (FINISHED, STATES, JobExecutor, JobFailed, JobHandle, default_workers, execute,
+from bsdflab.util.progress import JobCancelled
+from bsdflab.jobs.executor import (FINISHED, STATES, JobExecutor, JobFailed, JobHandle, default_workers, execute,
                        make_executor, outcome_error)
-from .kinds import JobKind, get_kind, kind_names, module_of, register_kind
+from bsdflab.jobs.kinds import JobKind, get_kind, kind_names, module_of, register_kind
 
 __all__ = ["FINISHED", "STATES", "JobCancelled", "JobExecutor", "JobFailed", "JobHandle", "JobKind",
            "default_workers", "execute", "get_kind", "kind_names", "make_executor", "module_of", "outcome_error",

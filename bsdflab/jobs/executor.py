@@ -16,8 +16,8 @@ import uuid
 from pathlib import Path
 from typing import Any
 
-from .._jobs import JobCancelled
-from .kinds import get_kind
+from bsdflab.util.progress import JobCancelled
+from bsdflab.jobs.kinds import get_kind
 
 STATES = ("queued", "running", "done", "failed", "cancelled")
 FINISHED = ("done", "failed", "cancelled")
@@ -201,16 +201,16 @@ def make_executor(spec: str = "processes", workers: int | None = None) -> JobExe
         raise ValueError(f"workers must be an integer in [1, 1024], got {workers!r}")
     spec = (spec or "processes").strip()
     if spec == "processes":
-        from .processes import ProcessJobExecutor
+        from bsdflab.jobs.processes import ProcessJobExecutor
 
         return ProcessJobExecutor(workers)
     if spec == "threads":
-        from .threads import ThreadJobExecutor
+        from bsdflab.jobs.threads import ThreadJobExecutor
 
         return ThreadJobExecutor(workers)
     if spec.startswith("dask:") and len(spec) > len("dask:"):
         try:
-            from ..distributed.executor import DaskJobExecutor
+            from bsdflab.distributed.executor import DaskJobExecutor
         except ImportError as e:
             raise RuntimeError(f"executor {spec!r} needs bsdflab.distributed and dask.distributed, "
                                f"which could not be imported: {e}") from None

@@ -17,9 +17,9 @@ import threading
 import time
 from typing import Any
 
-from .._jobs import JobCancelled
-from .executor import JobExecutor, JobFailed, JobHandle, execute, outcome_error
-from .kinds import module_of
+from bsdflab.util.progress import JobCancelled
+from bsdflab.jobs.executor import JobExecutor, JobFailed, JobHandle, execute, outcome_error
+from bsdflab.jobs.kinds import module_of
 
 PROGRESS_INTERVAL_S = 0.1   # at most ten progress messages a second per worker
 POLL_S = 0.5
@@ -238,7 +238,7 @@ def worker_main(conn, cancel, parent_pid: int) -> None:
     _die_with_parent()
     if os.getppid() != parent_pid:
         return
-    from .kinds import register_kind, warm_up
+    from bsdflab.jobs.kinds import register_kind, warm_up
 
     warm_up()
 

@@ -16,9 +16,9 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from .. import __version__
-from .. import _validate as check
-from .._jobs import monitored
+from bsdflab import __version__
+from bsdflab.util import args as check
+from bsdflab.util.progress import monitored
 
 FIELDS = {"scene", "options", "width", "height", "spp", "seed", "max_depth"}
 MAX_SIDE = 16384
@@ -32,15 +32,15 @@ def _int(name: str, value, lo: int, hi: int) -> int:
 
 def build_scene(request: dict[str, Any]):
     """The ``bsdflab.render.Scene`` a normalised request describes."""
-    from ..scenes import scene
+    from bsdflab.scenes import scene
 
     s = scene(request["scene"], width=request["width"], height=request["height"], **request["options"])
     return s if request["max_depth"] is None else replace(s, max_depth=request["max_depth"])
 
 
 def normalise(request: dict[str, Any]) -> dict[str, Any]:
-    from ..render.render import MAX_SPP
-    from ..scenes import SCENES
+    from bsdflab.render.render import MAX_SPP
+    from bsdflab.scenes import SCENES
 
     unknown = set(request) - FIELDS
     if unknown:
@@ -66,7 +66,7 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
 
 
 def _canonical(request: dict[str, Any]) -> str:
-    from ..tables.file_format import canonical_json
+    from bsdflab.tables.file_format import canonical_json
 
     try:
         return canonical_json(request)
@@ -97,7 +97,7 @@ def existing(request: dict[str, Any], out_dir: Path) -> dict[str, Any] | None:
 
 
 def run(request: dict[str, Any], out_dir: Path, progress, cancelled, client=None) -> dict[str, Any]:
-    from ..render import render, write_exr, write_png
+    from bsdflab.render import render, write_exr, write_png
 
     out_dir = Path(out_dir)
     found = existing(request, out_dir)

@@ -18,14 +18,14 @@ from typing import Any
 
 import numpy as np
 
-from .. import _validate as check
-from .._jobs import monitored
-from ..models import model_from_spec
-from ..tables import TableGrid, cache_key, cached_table, read_attributes, read_table, tabulate
-from ..tables.channels import table_channels
-from ..tables.file_format import HASH_ATTRIBUTE
-from ..tables.summary import relative_error_summary
-from ..tables.tabulate import _count   # the tabulator's own check of walk counts
+from bsdflab.util import args as check
+from bsdflab.util.progress import monitored
+from bsdflab.requests import model_from_spec
+from bsdflab.tables import TableGrid, cache_key, cached_table, read_attributes, read_table, tabulate
+from bsdflab.tables.channels import table_channels
+from bsdflab.tables.file_format import HASH_ATTRIBUTE
+from bsdflab.tables.summary import relative_error_summary
+from bsdflab.tables.tabulate import _count   # the tabulator's own check of walk counts
 
 DEFAULT_MIN_SAMPLES = 512
 FIELDS = {"model", "preset", "overrides", "grid", "rel_error", "wavelengths", "min_samples",
@@ -90,7 +90,7 @@ def existing(request: dict[str, Any], out_dir: Path) -> dict[str, Any] | None:
 
 
 def run(request: dict[str, Any], out_dir: Path, progress, cancelled, client=None) -> dict[str, Any]:
-    from ..bsdfs import from_dict
+    from bsdflab.bsdfs import from_dict
 
     model_dict, grid, rel_error, names, effort = _key_arguments(request)
     model = from_dict(model_dict)

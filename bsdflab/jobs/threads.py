@@ -5,8 +5,8 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-from .._jobs import JobCancelled
-from .executor import JobExecutor, JobHandle, execute, outcome_error
+from bsdflab.util.progress import JobCancelled
+from bsdflab.jobs.executor import JobExecutor, JobHandle, execute, outcome_error
 
 
 class ThreadJobExecutor(JobExecutor):

@@ -1,5 +1,5 @@
 """Layered BSDFs estimated by Position-Free Monte Carlo, and their building blocks."""
-from .slab import PhaseFunction, Slab
-from .stack import Estimate, Layered
+from bsdflab.layered.slab import PhaseFunction, Slab
+from bsdflab.layered.stack import Estimate, Layered
 
 __all__ = ["Estimate", "Layered", "PhaseFunction", "Slab"]

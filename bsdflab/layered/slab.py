@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from .._validate import real_scalar
-from ..spectra import Spectrum
+from bsdflab.util.args import real_scalar
+from bsdflab.spectra import Spectrum
 
 PHASE_KINDS = {"isotropic": 0, "hg": 1, "vmf": 2}
 

@@ -23,13 +23,13 @@ from typing import Any
 
 import numpy as np
 
-from .. import _core
-from .. import _validate as check
-from ..bsdfs.base import BSDF, from_dict
-from ..bsdfs.dielectric import Dielectric
-from ..bsdfs.rough import RoughDielectric
-from ..lobes import Lobe
-from .slab import Slab
+from bsdflab import _core
+from bsdflab.util import args as check
+from bsdflab.bsdfs.base import BSDF, from_dict
+from bsdflab.bsdfs.dielectric import Dielectric
+from bsdflab.bsdfs.rough import RoughDielectric
+from bsdflab.lobes import Lobe
+from bsdflab.layered.slab import Slab
 
 INTERFACE_TYPES = (Dielectric, RoughDielectric)
 MAX_SLABS = 16

@@ -1,8 +1,8 @@
 """Optics: Fresnel coefficients, named metals, thin films."""
-from .fresnel import fresnel_amplitudes, fresnel_reflectance, fresnel_transmittance
-from .dispersion import Cauchy, Constant, Dispersion, Tabulated, dispersion_from_dict
-from .metals import METALS, metal_ior
-from .thin_film import (FilmAmplitudes, FilmStack, Layer, film_amplitudes, film_reflectance,
+from bsdflab.optics.fresnel import fresnel_amplitudes, fresnel_reflectance, fresnel_transmittance
+from bsdflab.optics.dispersion import Cauchy, Constant, Dispersion, Tabulated, dispersion_from_dict
+from bsdflab.optics.metals import METALS, metal_ior
+from bsdflab.optics.thin_film import (FilmAmplitudes, FilmStack, Layer, film_amplitudes, film_reflectance,
                         film_transmittance)
 
 __all__ = ["METALS", "fresnel_amplitudes", "fresnel_reflectance", "fresnel_transmittance",

@@ -27,8 +27,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .. import _validate as check
-from .._validate import MAX_EXTINCTION, MAX_IOR, MIN_IOR, real_array, real_scalar
+from bsdflab.util import args as check
+from bsdflab.util.args import MAX_EXTINCTION, MAX_IOR, MIN_IOR, real_array, real_scalar
 
 
 def wavelengths_nm(value: Any, name: str = "wavelength_nm") -> np.ndarray:

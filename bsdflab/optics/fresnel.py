@@ -20,8 +20,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .. import _core
-from .._validate import MAX_EXTINCTION, MAX_IOR, MIN_IOR
+from bsdflab import _core
+from bsdflab.util.args import MAX_EXTINCTION, MAX_IOR, MIN_IOR
 
 
 class Amplitudes(NamedTuple):

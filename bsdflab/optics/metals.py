@@ -10,7 +10,7 @@ from importlib import resources
 
 import numpy as np
 
-from ..spectra import Spectrum
+from bsdflab.spectra import Spectrum
 
 METALS = ("Ag", "Al", "Au", "Cu")
 

@@ -52,10 +52,10 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .. import _core
-from .. import _validate as check
-from .._validate import real_array
-from .dispersion import Constant, Dispersion, as_dispersion, dispersion_from_dict, wavelengths_nm
+from bsdflab import _core
+from bsdflab.util import args as check
+from bsdflab.util.args import real_array
+from bsdflab.optics.dispersion import Constant, Dispersion, as_dispersion, dispersion_from_dict, wavelengths_nm
 
 POLARISATIONS = ("s", "p", "unpolarised")
 MIN_COSINE = 1e-60
@@ -405,7 +405,7 @@ def _with_bare_fallback(p: _Problem, out: list[np.ndarray]) -> list[np.ndarray]:
 
 def _bare_interface(p: _Problem) -> list[np.ndarray]:
     """(r_s, r_p, t_s, t_p, R_s, R_p, T_s, T_p) of the interface incident -> substrate."""
-    from .fresnel import fresnel_amplitudes
+    from bsdflab.optics.fresnel import fresnel_amplitudes
 
     n_in, n_out = (np.broadcast_to(n, p.shape) for n in (p.indices[0], p.indices[-1]))
     c = np.broadcast_to(p.cos0, p.shape)

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _ad_operators as op
+from bsdflab.oracles import _ad_operators as op
 
 
 def fresnel_reflectance(n1: float, n2: float, cos1) -> np.ndarray:

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _ad_operators as op
+from bsdflab.oracles import _ad_operators as op
 
 MIN_AZIMUTH_SAMPLES = 64
 

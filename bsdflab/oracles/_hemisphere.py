@@ -15,7 +15,7 @@ from typing import Callable
 
 import numpy as np
 
-from ._interface import InterfaceAtWavelength
+from bsdflab.oracles._interface import InterfaceAtWavelength
 
 TOLERANCE = 1e-14   # absolute change between successive node counts (integrals are <= 1)
 FIRST_NODES = 16

@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 import tmm
 
-from ._chebyshev import Chebyshev
+from bsdflab.oracles._chebyshev import Chebyshev
 
 POLARISATIONS = ("s", "p")
 

@@ -65,13 +65,13 @@ from typing import Any
 
 import numpy as np
 
-from .. import _validate as check
-from ..layered.slab import Slab
-from ..bsdfs.base import BSDF
-from ..spectra import Spectrum
-from . import _ad_boundaries as bd
-from . import _ad_operators as op
-from ._ad_slab import orders_needed, slab_layer
+from bsdflab.util import args as check
+from bsdflab.layered.slab import Slab
+from bsdflab.bsdfs.base import BSDF
+from bsdflab.spectra import Spectrum
+from bsdflab.oracles import _ad_boundaries as bd
+from bsdflab.oracles import _ad_operators as op
+from bsdflab.oracles._ad_slab import orders_needed, slab_layer
 
 NODES = 24
 THIN_DEPTH = 2.0 ** -28
@@ -135,8 +135,8 @@ class AddingDoublingOracle:
         """The oracle of a ``bsdflab.Layered`` made of a smooth film-free Dielectric top,
         index-matched smooth interior interfaces and a Diffuse (one-sided) or smooth
         film-free Dielectric base; ValueError for anything else."""
-        from ..bsdfs.dielectric import Dielectric
-        from ..bsdfs.diffuse import Diffuse
+        from bsdflab.bsdfs.dielectric import Dielectric
+        from bsdflab.bsdfs.diffuse import Diffuse
         top, inner = model.interfaces[0], model.interfaces[1:]
         n = getattr(top, "int_ior", None)
         for i, m in enumerate(model.interfaces):

@@ -60,11 +60,11 @@ from typing import Any
 
 import numpy as np
 
-from .. import _validate as check
-from ..bsdfs.interface_term import film_to_list, parse_film
-from ..spectra import DEFAULT_WAVELENGTHS, Spectrum, srgb_weights
-from ._hemisphere import attenuation, escape, internal_return
-from ._interface import InterfaceAtWavelength
+from bsdflab.util import args as check
+from bsdflab.bsdfs.interface_term import film_to_list, parse_film
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, srgb_weights
+from bsdflab.oracles._hemisphere import attenuation, escape, internal_return
+from bsdflab.oracles._interface import InterfaceAtWavelength
 
 _CACHE_LIMIT = 512  # wavelengths remembered per oracle
 

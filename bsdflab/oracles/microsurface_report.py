@@ -15,9 +15,9 @@ import argparse
 
 import numpy as np
 
-from ..bsdfs import RoughConductor, RoughDielectric
-from ..lobes import Lobe
-from .microsurface import random_walk
+from bsdflab.bsdfs import RoughConductor, RoughDielectric
+from bsdflab.lobes import Lobe
+from bsdflab.oracles.microsurface import random_walk
 
 
 def _model_energy(bsdf, wi: np.ndarray, n: int, wavelength: float, seed: int):

@@ -16,11 +16,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..optics import Constant, FilmStack, film_reflectance
-from ..optics.dispersion import as_dispersion
-from ..spectra import (DEFAULT_STEP_NM, THREE_WAVELENGTHS_NM, spectrum_to_rgb,
+from bsdflab.optics import Constant, FilmStack, film_reflectance
+from bsdflab.optics.dispersion import as_dispersion
+from bsdflab.spectra import (DEFAULT_STEP_NM, THREE_WAVELENGTHS_NM, spectrum_to_rgb,
                        three_wavelength_rgb, wavelength_grid)
-from ..spectra.grid import DEFAULT_RANGE_NM
+from bsdflab.spectra.grid import DEFAULT_RANGE_NM
 
 # Thicker films than this (optical thickness n d summed over layers, nm) need wavelength
 # grids so fine that the image no longer fits comfortably in memory; they look white.

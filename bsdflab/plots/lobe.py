@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..bsdfs import BSDF
-from ..files import write_atomically
-from ..lobes import Lobe
+from bsdflab.bsdfs import BSDF
+from bsdflab.util.files import write_atomically
+from bsdflab.lobes import Lobe
 
 
 def _in_plane(theta: np.ndarray) -> np.ndarray:

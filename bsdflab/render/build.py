@@ -7,12 +7,12 @@ from typing import Any
 
 import numpy as np
 
-from .. import _core
-from .. import _validate as check
-from ..bsdfs.base import BSDF, from_dict
-from ..spectra import DEFAULT_WAVELENGTHS, rgb_to_spectrum, srgb_weights
-from .environment import environment_image
-from .scene import Material, Scene
+from bsdflab import _core
+from bsdflab.util import args as check
+from bsdflab.bsdfs.base import BSDF, from_dict
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, rgb_to_spectrum, srgb_weights
+from bsdflab.render.environment import environment_image
+from bsdflab.render.scene import Material, Scene
 
 log = logging.getLogger(__name__)
 TABULATED = "tabulated"
@@ -27,9 +27,9 @@ def resolve_bsdf(d: dict[str, Any], progress: bool = False, cache_dir=None, spec
     ``spectral``: for a spectral render, a table of a spectral model stores the 81 bins of
     the default grid (its own cache entry), so iridescent spectra multiply bin by bin along
     a path; an RGB render keeps the RGB table (3 channels: 27x less work per lookup)."""
-    from ..tables import TableGrid, cached_table, tabulate
-    from ..tables.channels import table_channels
-    from ..tables.table_bsdf import TableBSDF  # also registers {"type": "table"} with from_dict
+    from bsdflab.tables import TableGrid, cached_table, tabulate
+    from bsdflab.tables.channels import table_channels
+    from bsdflab.tables.table_bsdf import TableBSDF  # also registers {"type": "table"} with from_dict
 
     if d.get("type") != TABULATED:
         return from_dict(d)
@@ -67,7 +67,7 @@ def _spectrally_flat(model: BSDF) -> bool:
 
 def film_thickness(bsdf: BSDF) -> float:
     """The film thickness (nm) a scale texture modulates, or -1 without a film."""
-    from ..tables.table_bsdf import TableBSDF, default_film_thickness
+    from bsdflab.tables.table_bsdf import TableBSDF, default_film_thickness
 
     if isinstance(bsdf, TableBSDF):
         return bsdf.film_thickness_nm
@@ -117,7 +117,7 @@ def _resolver(progress: bool, cache_dir, spectral: bool = False):
 
 
 def _add_material(core_scene, material: Material, resolve) -> int:
-    from .textures import ScaleTexture
+    from bsdflab.render.textures import ScaleTexture
 
     surface = resolve(material.bsdf)
     core, P = surface.render_core()
@@ -136,9 +136,9 @@ def build_render_scene(scene: Scene, base_dir: str | None = None, progress: bool
     """The committed ``_core.RenderScene`` for ``scene``; relative mesh and map paths are
     resolved against ``base_dir``. ``spectral``: built for a spectral render (tables of
     spectral models store the spectral bins, see ``resolve_bsdf``)."""
-    from ..scenes.geometry import build_mesh
+    from bsdflab.scenes.geometry import build_mesh
 
-    from .. import limits
+    from bsdflab.util import limits
 
     c = scene.camera  # the image buffers come after the meshes: count them in from the start
     limits.check_bytes(f"a {c.width} x {c.height} render", limits.render_bytes(c.width, c.height))

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .image_io import read_exr
-from .scene import Environment
+from bsdflab.render.image_io import read_exr
+from bsdflab.render.scene import Environment
 
 SKY_HEIGHT = 128
 

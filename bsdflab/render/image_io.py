@@ -5,7 +5,7 @@ import os
 
 import numpy as np
 
-from ..files import write_atomically, write_together
+from bsdflab.util.files import write_atomically, write_together
 
 EXR_SUFFIX, PNG_SUFFIX = ".tmp.exr", ".tmp.png"
 
@@ -19,7 +19,7 @@ def _rgb(image, name: str = "image") -> np.ndarray:
 
 def exr_writer(image, attributes: dict[str, str] | None = None):
     """A function writing linear RGB (H, W, 3) as a float32 OpenEXR to the path it is given
-    (for ``bsdflab.files.write_together``)."""
+    (for ``bsdflab.util.files.write_together``)."""
     import OpenEXR
 
     a = _rgb(image)
@@ -55,7 +55,7 @@ def read_exr(path: str | os.PathLike) -> np.ndarray:
     """The RGB pixels (H, W, 3) float32 of an OpenEXR file, or a clear ValueError."""
     import OpenEXR
 
-    from ..tables._quiet import quiet_native_output
+    from bsdflab.util.native_output import quiet_native_output
 
     path = os.fspath(path)
     if not os.path.isfile(path):

@@ -8,11 +8,12 @@ from typing import Any
 
 import numpy as np
 
-from .. import _core, limits
-from .. import _validate as check
-from .._jobs import run_with_progress
-from .build import build_render_scene
-from .scene import Scene
+from bsdflab import _core
+from bsdflab.util import limits
+from bsdflab.util import args as check
+from bsdflab.util.progress import run_with_progress
+from bsdflab.render.build import build_render_scene
+from bsdflab.render.scene import Scene
 
 MAX_SPP = limits.DEFAULTS["BSDFLAB_MAX_SPP"]  # the default; BSDFLAB_MAX_SPP overrides
 # Direct-light estimators: both with MIS (the default), or one alone (for validation).
@@ -95,7 +96,7 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, progress: bool = True, pa
             raise ValueError("base_dir is for scene files read here; give workers absolute paths")
         if aovs:
             raise ValueError("aovs are computed by the in-process renderer only (render without client)")
-        from ..distributed.render import render_on_cluster
+        from bsdflab.distributed.render import render_on_cluster
 
         return render_on_cluster(client, scene, spp, int(seed), pass_spp, STRATEGIES[strategy],
                                  spectral=bool(spectral), progress=progress, cache_dir=cache_dir)

@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import limits
-from .._validate import brief, nesting
+from bsdflab.util import limits
+from bsdflab.util.args import brief, nesting
 
 ENVIRONMENT_TYPES = ("none", "constant", "sky", "envmap")
 MAX_RESOLUTION = 16384

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import _core
+from bsdflab import _core
 
 MAX_SCALES_AROUND = 1 << 20
 MAX_SEED = (1 << 64) - 1

@@ -4,9 +4,9 @@
 shape's geometry spec into a triangle mesh; ``save_scene`` / ``load_scene`` read and write
 scene files (docs/scene_format.md).
 """
-from .geometry import GEOMETRY_TYPES, Mesh, build_mesh, mesh_area, validate_mesh
-from .registry import SCENE_SETS, SCENES, scene, scene_set
-from .scene_file import load_scene, save_scene
+from bsdflab.scenes.geometry import GEOMETRY_TYPES, Mesh, build_mesh, mesh_area, validate_mesh
+from bsdflab.scenes.registry import SCENE_SETS, SCENES, scene, scene_set
+from bsdflab.scenes.scene_file import load_scene, save_scene
 
 __all__ = ["GEOMETRY_TYPES", "Mesh", "SCENE_SETS", "SCENES", "scene_set", "build_mesh", "load_scene", "mesh_area", "save_scene", "scene",
            "validate_mesh"]

@@ -21,9 +21,9 @@ the pigment slab send back (dark, a few per cent), and refraction into a keratin
 """
 from __future__ import annotations
 
-from ..presets import GUANINE_IOR, ROUGHNESS
-from ..render import Material, Scene, Shape
-from .snake import ground, ground_material, orbit_camera, sky, soft_box
+from bsdflab.presets import GUANINE_IOR, ROUGHNESS
+from bsdflab.render import Material, Scene, Shape
+from bsdflab.scenes.snake import ground, ground_material, orbit_camera, sky, soft_box
 
 THICKNESSES_NM = (300.0, 600.0, 1200.0)
 INTERIOR_IORS = (1.0, 2.0)

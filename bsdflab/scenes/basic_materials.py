@@ -4,7 +4,7 @@ exact), dielectric and roughdielectric (index 1.5), GGX alpha 0.2 for the rough 
 rectangle area light above and, optionally, a dim constant environment."""
 from __future__ import annotations
 
-from ..render import Camera, Environment, Material, Scene, Shape
+from bsdflab.render import Camera, Environment, Material, Scene, Shape
 
 BASIC_BSDFS = {
     "diffuse": {"type": "diffuse", "reflectance": [0.7, 0.25, 0.15]},

@@ -4,7 +4,7 @@ Lambertian reflector of albedo 1 loses and absorbs nothing), so every pixel's ex
 value is exactly 1 once ``max_depth`` allows the few bounces a convex object needs."""
 from __future__ import annotations
 
-from ..render import Camera, Environment, Material, Scene, Shape
+from bsdflab.render import Camera, Environment, Material, Scene, Shape
 
 
 def furnace(width: int = 64, height: int = 48, reflectance: float = 1.0, max_depth: int = 64,

@@ -29,11 +29,11 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .._validate import brief
-from . import curves
-from .mesh import MAX_SEGMENTS, Mesh, grid_indices, normalise as _normalise, reserve
-from .mesh import Params as _Params
-from .mesh import plane_axes as _orthonormal
+from bsdflab.util.args import brief
+from bsdflab.scenes import curves
+from bsdflab.scenes.mesh import MAX_SEGMENTS, Mesh, grid_indices, normalise as _normalise, reserve
+from bsdflab.scenes.mesh import Params as _Params
+from bsdflab.scenes.mesh import plane_axes as _orthonormal
 
 __all__ = ["GEOMETRY_TYPES", "MAX_SEGMENTS", "Mesh", "build_mesh", "grid_indices", "mesh_area",
            "transform_mesh", "triangle_normals", "validate_mesh"]
@@ -130,7 +130,7 @@ def _mesh_file(p: _Params, base_dir: str | None) -> Mesh:
     full = path if base_dir is None or os.path.isabs(path) else os.path.join(base_dir, path)
     if not os.path.isfile(full):
         raise ValueError(f"mesh: cannot read {full}: {'not a file' if os.path.exists(full) else 'no such file'}")
-    from .. import limits
+    from bsdflab.util import limits
 
     limits.check_bytes(f"mesh: {full}", limits.MESH_FILE_EXPANSION * os.path.getsize(full))
     try:

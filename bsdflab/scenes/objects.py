@@ -13,9 +13,9 @@ uv periods: a whole number of rows over u in [0, 1].
 """
 from __future__ import annotations
 
-from ..presets import preset
-from ..render import Material, Scene, Shape
-from .snake import GAP_BSDF, THICKNESS_JITTER, ground, ground_material, orbit_camera, sky, soft_box, tabulated
+from bsdflab.presets import preset
+from bsdflab.render import Material, Scene, Shape
+from bsdflab.scenes.snake import GAP_BSDF, THICKNESS_JITTER, ground, ground_material, orbit_camera, sky, soft_box, tabulated
 
 VARIANTS = ("diffuse", "diffuse+bump", "thin-film+bump", "full")
 OBJECTS = ("sphere", "torus")

@@ -3,12 +3,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..render import Scene
-from .appearance_grid import appearance_grid, appearance_grid_cell
-from .basic_materials import basic_materials
-from .furnace import furnace
-from .objects import ablation_row, sphere, torus
-from .snake import snake
+from bsdflab.render import Scene
+from bsdflab.scenes.appearance_grid import appearance_grid, appearance_grid_cell
+from bsdflab.scenes.basic_materials import basic_materials
+from bsdflab.scenes.furnace import furnace
+from bsdflab.scenes.objects import ablation_row, sphere, torus
+from bsdflab.scenes.snake import snake
 
 SCENES: dict[str, Callable[..., Scene]] = {
     "snake": snake,

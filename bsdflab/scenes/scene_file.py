@@ -12,10 +12,10 @@ import json
 import os
 from dataclasses import replace
 
-from .. import _validate as check
-from ..files import write_atomically
-from ..render import Scene
-from .geometry import GEOMETRY_TYPES
+from bsdflab.util import args as check
+from bsdflab.util.files import write_atomically
+from bsdflab.render import Scene
+from bsdflab.scenes.geometry import GEOMETRY_TYPES
 
 FORMAT = "bsdflab-scene"
 VERSION = 1

@@ -19,7 +19,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .._validate import real_array
+from bsdflab.util.args import real_array
 
 
 @dataclass(frozen=True)

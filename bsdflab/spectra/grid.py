@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import real_scalar
+from bsdflab.util.args import real_scalar
 
 DEFAULT_STEP_NM = 5.0
 DEFAULT_RANGE_NM = (380.0, 780.0)

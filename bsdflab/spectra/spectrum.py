@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from .._validate import real_array, real_scalar
-from .colour_weights import rgb_to_spectrum
+from bsdflab.util.args import real_array, real_scalar
+from bsdflab.spectra.colour_weights import rgb_to_spectrum
 
 
 class Spectrum:

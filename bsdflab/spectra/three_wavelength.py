@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import real_array
+from bsdflab.util.args import real_array
 
 # (R, G, B) sample wavelengths in nm, as in the seed's public implementation.
 THREE_WAVELENGTHS_NM = (650.0, 510.0, 475.0)

@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import _validate as check
-from .. import limits
+from bsdflab.util import args as check
+from bsdflab.util import limits
 
 FORMAT_VERSION = 2  # 2: optional keyed signature (bsdflab.signature); 1 is still read
 LOBES = ("reflection", "transmission")
@@ -158,7 +158,7 @@ class TableData:
             if np.any(self.values < 0):
                 raise ValueError("spectral table values must be >= 0 (a BSDF is never negative)")
             return
-        from .channels import LUMINANCE_RGB
+        from bsdflab.tables.channels import LUMINANCE_RGB
 
         lum = self.values.astype(np.float64) @ LUMINANCE_RGB
         floor = -LUMINANCE_TOLERANCE * max(1.0, float(np.abs(lum).max(initial=0.0)))
@@ -181,8 +181,8 @@ class TableData:
         """The table's model rebuilt through ``from_dict`` (ValueError when it is not a
         valid model), checked against the table: layered models are split, and the
         transmission lobe is there exactly when the model transmits."""
-        from ..bsdfs.base import from_dict
-        from ..lobes import Lobe
+        from bsdflab.bsdfs.base import from_dict
+        from bsdflab.lobes import Lobe
 
         model = from_dict(self.model)
         layered = model.type_name == "layered"

@@ -55,12 +55,12 @@ from typing import Any
 
 import numpy as np
 
-from .. import __version__
-from .. import limits
-from ..files import write_atomically
-from . import signing
-from ._quiet import quiet_native_output
-from .data import FORMAT_VERSION, TableData, TableGrid
+from bsdflab import __version__
+from bsdflab.util import limits
+from bsdflab.util.files import write_atomically
+from bsdflab.tables import signing
+from bsdflab.util.native_output import quiet_native_output
+from bsdflab.tables.data import FORMAT_VERSION, TableData, TableGrid
 
 PREFIX = "bsdflab."
 HASH_ATTRIBUTE = PREFIX + "content_hash"
@@ -226,7 +226,7 @@ def read_table(path: str | os.PathLike, key: bytes | str | None = None) -> Table
         an unsupported format version, corrupt (unreadable, inconsistent, or changed
         after it was written), invalid (a field out of range, a model ``from_dict``
         refuses), unsigned or wrongly signed when a key is set, or too large for the
-        memory cap (``bsdflab.limits``).
+        memory cap (``bsdflab.util.limits``).
     """
     path = os.fspath(path)
     if not isinstance(path, str):

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .channels import LUMINANCE_RGB
-from .data import TableData
+from bsdflab.tables.channels import LUMINANCE_RGB
+from bsdflab.tables.data import TableData
 
 SIGNIFICANT = 0.01  # cells below 1 % of the table's maximum are left out of error statistics
 

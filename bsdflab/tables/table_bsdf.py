@@ -12,11 +12,11 @@ from typing import Any
 
 import numpy as np
 
-from .. import _core
-from ..bsdfs.base import BSDF, from_dict
-from ..spectra import DEFAULT_WAVELENGTHS, srgb_weights
-from .channels import LUMINANCE_RGB, channel_wavelengths
-from .data import TableData
+from bsdflab import _core
+from bsdflab.bsdfs.base import BSDF, from_dict
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
+from bsdflab.tables.channels import LUMINANCE_RGB, channel_wavelengths
+from bsdflab.tables.data import TableData
 
 
 class TableBSDF(BSDF):
@@ -41,7 +41,7 @@ class TableBSDF(BSDF):
         if table is None and path is None:
             raise ValueError("give a table (TableData) or the path of a table file")
         if not isinstance(table, TableData):
-            from .file_format import read_table
+            from bsdflab.tables.file_format import read_table
 
             source = table if table is not None else path
             if not isinstance(source, (str, os.PathLike)):
@@ -56,7 +56,7 @@ class TableBSDF(BSDF):
 
     @property
     def lobes(self):
-        from ..lobes import Lobe
+        from bsdflab.lobes import Lobe
 
         return Lobe(self._core(self._channels(None)[0]).lobes)
 
@@ -160,8 +160,8 @@ def lookup_interface(top: BSDF, thickness_range, default_thickness: float, spect
     error 8.6e-5 at 2000 random off-grid points of the snake film, within
     FILM_LOOKUP_MAX_ERROR; 20 MB for the snake's thickness range). ``thickness_range`` (nm)
     is the (lo, hi) film-thickness range to tabulate, None for the model's own film only."""
-    from ..bsdfs.interface_term import make_term
-    from ..bsdfs.rough import RoughDielectric
+    from bsdflab.bsdfs.interface_term import make_term
+    from bsdflab.bsdfs.rough import RoughDielectric
 
     wl = DEFAULT_WAVELENGTHS
     exact = make_term(wl, top.ext_ior, top.film, int_ior=top.int_ior)

@@ -38,13 +38,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import __version__, _core
-from .._jobs import run_with_progress
-from .. import _validate as check
-from ..bsdfs.base import BSDF
-from ..lobes import Lobe
-from .channels import table_channels
-from .data import LOBES, TableData, TableGrid, check_table_memory
+from bsdflab import __version__, _core
+from bsdflab.util.progress import run_with_progress
+from bsdflab.util import args as check
+from bsdflab.bsdfs.base import BSDF
+from bsdflab.lobes import Lobe
+from bsdflab.tables.channels import table_channels
+from bsdflab.tables.data import LOBES, TableData, TableGrid, check_table_memory
 
 ERROR_FLOOR = 0.05
 SIGNIFICANT = 0.01  # cells counted in the achieved-error statistics: f > 1 % of the max
@@ -125,7 +125,7 @@ def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = 0.01
     if client is not None:
         if not film_lookup:
             raise ValueError("film_lookup=False is not available with a client (the units use the lookup)")
-        from ..distributed.tabulate_units import tabulate_on_cluster
+        from bsdflab.distributed.tabulate_units import tabulate_on_cluster
 
         return tabulate_on_cluster(client, model, grid, rel_error=rel_error, wavelengths=wavelengths,
                                    min_samples=min_samples, max_samples=max_samples,

@@ -23,11 +23,11 @@ from typing import Callable
 
 import numpy as np
 
-from .. import _validate as check
-from ..lobes import Lobe
-from .directions import directions_from_cos_phi, positive_int, single_direction
-from .discrete import discrete_choice_chi2
-from .stats import check_significance, pearson_chi2, sidak_significance
+from bsdflab.util import args as check
+from bsdflab.lobes import Lobe
+from bsdflab.testing.directions import directions_from_cos_phi, positive_int, single_direction
+from bsdflab.testing.discrete import discrete_choice_chi2
+from bsdflab.testing.stats import check_significance, pearson_chi2, sidak_significance
 
 __all__ = ["ChiSquareTest", "bsdf_chi2", "discrete_choice_chi2"]
 
@@ -249,7 +249,7 @@ class ChiSquareTest:
     def plot(self, path):
         """Write a PNG of observed, expected and observed - expected counts over the
         (phi, cos theta) grid; tabulates first if needed. Returns the path written."""
-        from ._plot import plot_observed_expected
+        from bsdflab.testing._plot import plot_observed_expected
 
         if self.histogram is None:
             self.tabulate_histogram()

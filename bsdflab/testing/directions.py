@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _validate as check
+from bsdflab.util import args as check
 
 _HEMISPHERES = (None, "upper", "lower")
 

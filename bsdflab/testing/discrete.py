@@ -12,8 +12,8 @@ from typing import Any, Hashable
 import numpy as np
 from scipy import stats as sps
 
-from .directions import positive_int
-from .stats import check_significance, pearson_chi2, sidak_significance
+from bsdflab.testing.directions import positive_int
+from bsdflab.testing.stats import check_significance, pearson_chi2, sidak_significance
 
 # Probabilities given by the caller must sum to 1 up to rounding.
 PROBABILITY_SUM_TOLERANCE = 1e-6

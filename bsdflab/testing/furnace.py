@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _validate as check
-from ..lobes import Lobe
-from .directions import positive_int, random_unit_vectors, single_direction
+from bsdflab.util import args as check
+from bsdflab.lobes import Lobe
+from bsdflab.testing.directions import positive_int, random_unit_vectors, single_direction
 
 __all__ = ["AlbedoEstimate", "albedo_sampled", "albedo_uniform"]
 

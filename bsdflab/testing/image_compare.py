@@ -64,7 +64,7 @@ class ImageTestResult:
     def plot(self, path, title: str = "", labels: tuple[str, str] = ("image a", "image b")) -> Path:
         """A PNG with both images (same exposure, gamma 2.2) and the map of z (the channel
         with the largest |z| per pixel); rejected pixels are circled."""
-        from ._image_figure import z_test_figure
+        from bsdflab.testing._image_figure import z_test_figure
 
         return z_test_figure(self, path, title, labels)
 

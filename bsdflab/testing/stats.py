@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats as sps
 
-from .directions import positive_int
+from bsdflab.testing.directions import positive_int
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import html
 import json
 
-from .registry import FAMILIES
+from bsdflab.validation.registry import FAMILIES
 
 CSS = """
 body{font:14px/1.45 system-ui,-apple-system,Segoe UI,sans-serif;margin:0;color:#1c1c1c;background:#fafafa}
@@ -74,7 +74,7 @@ def _check_rows(rows, results_by_name) -> str:
 
 
 def _approximations(doc, results_by_name) -> str:
-    from ..reference.approximations.standards import SNAKE_FILM, STANDARDS, can_represent
+    from bsdflab.reference.approximations.standards import SNAKE_FILM, STANDARDS, can_represent
 
     studies = [c for c in doc["checks"] if c["kind"] == "study"]
     if not studies:

@@ -7,7 +7,7 @@ import subprocess
 import sys
 import time
 
-from .provenance import REPO
+from bsdflab.validation.provenance import REPO
 
 BENCHES = {"quick": (), "standard": ("bench_thin_film.py", "bench_layered.py"),
            "full": ("bench_thin_film.py", "bench_layered.py", "bench_tables.py", "bench_render.py")}

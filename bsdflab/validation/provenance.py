@@ -64,11 +64,11 @@ def machine() -> dict[str, object]:
 
 
 def provenance(level: str, argv: list[str] | None = None) -> dict[str, object]:
-    from .. import _core
+    from bsdflab import _core
 
     variant = None
     try:
-        from ..reference.mitsuba_env import variant as mitsuba_variant
+        from bsdflab.reference.mitsuba_env import variant as mitsuba_variant
 
         variant = mitsuba_variant()
     except Exception:  # Mitsuba absent or unusable: the report says so

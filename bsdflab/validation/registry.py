@@ -47,7 +47,7 @@ class Context:
 
     def figure(self, fig, caption: str) -> None:
         """Embed a matplotlib Figure (rendered now, to PNG)."""
-        from .figures import to_base64_png
+        from bsdflab.validation.figures import to_base64_png
 
         self.figures.append(Figure(caption, to_base64_png(fig)))
 

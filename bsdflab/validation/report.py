@@ -5,17 +5,17 @@ import json
 import time
 from pathlib import Path
 
-from ..files import write_atomically
-from .html import render_html
-from .registry import LEVELS, REGISTRY, Check
-from .runner import STATUSES, CheckResult, run_checks
+from bsdflab.util.files import write_atomically
+from bsdflab.validation.html import render_html
+from bsdflab.validation.registry import LEVELS, REGISTRY, Check
+from bsdflab.validation.runner import STATUSES, CheckResult, run_checks
 
 SCHEMA_PATH = Path(__file__).with_name("results.schema.json")
 
 
 def load_checks() -> None:
     """Import the check modules (they register themselves)."""
-    from . import checks  # noqa: F401
+    from bsdflab.validation import checks  # noqa: F401
 
 
 def results_document(results: list[CheckResult], level: str, only: str | None, provenance: dict,
@@ -34,8 +34,8 @@ def validate(out_dir, level: str = "quick", only: str | None = None, checks: lis
     write ``out_dir``/results.json and index.html, and return the results document;
     its ``exit_status`` is 1 when a check failed or errored. ``benchmarks`` defaults to
     True except at the quick level."""
-    from .performance import run_benchmarks
-    from .provenance import provenance
+    from bsdflab.validation.performance import run_benchmarks
+    from bsdflab.validation.provenance import provenance
 
     if level not in LEVELS:
         raise ValueError(f"level must be one of {', '.join(LEVELS)}, got {level!r}")

@@ -9,7 +9,7 @@ from typing import Any, Iterable
 
 import numpy as np
 
-from .registry import LEVELS, Check, Context, Figure
+from bsdflab.validation.registry import LEVELS, Check, Context, Figure
 
 STATUSES = ("pass", "fail", "error", "skipped", "study")
 

@@ -21,9 +21,9 @@ each is from the exact spectral Airy reflectance (`bsdflab.optics.thin_film`):
 Every function returns linear sRGB (D65) reflectance, shape (..., 3), for unpolarised light,
 so the colour-difference study (``study.py``) compares them all in the same space.
 """
-from .belcour_barla import belcour_barla_rgb, belcour_barla_xyz, xyz_sensitivity_exact, xyz_sensitivity_gaussian
-from .gltf import gltf_iridescence_rgb
-from .seed_film import seed_reflectance, seed_rgb
+from bsdflab.reference.approximations.belcour_barla import belcour_barla_rgb, belcour_barla_xyz, xyz_sensitivity_exact, xyz_sensitivity_gaussian
+from bsdflab.reference.approximations.gltf import gltf_iridescence_rgb
+from bsdflab.reference.approximations.seed_film import seed_reflectance, seed_rgb
 
 MODELS = {
     "Belcour-Barla (MaterialX, OpenPBR, Standard Surface, Cycles)": belcour_barla_rgb,

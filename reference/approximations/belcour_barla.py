@@ -35,7 +35,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ._optics import dielectric_amplitudes, refracted_cos
+from bsdflab.reference.approximations._optics import dielectric_amplitudes, refracted_cos
 
 # XYZ -> CIE 1931 RGB (equal-energy white), as MaterialX's mx_fresnel_airy uses.
 XYZ_TO_CIE_RGB = np.array([[2.3706743, -0.9000405, -0.4706338],

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._optics import XYZ_TO_SRGB
-from .belcour_barla import xyz_sensitivity_gaussian
+from bsdflab.reference.approximations._optics import XYZ_TO_SRGB
+from bsdflab.reference.approximations.belcour_barla import xyz_sensitivity_gaussian
 
 
 def _schlick(f0, cos):

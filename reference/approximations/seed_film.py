@@ -16,7 +16,7 @@ import numpy as np
 
 from bsdflab.spectra.three_wavelength import THREE_WAVELENGTHS_NM, three_wavelength_rgb
 
-from ._optics import dielectric_amplitudes, refracted_cos
+from bsdflab.reference.approximations._optics import dielectric_amplitudes, refracted_cos
 
 
 def seed_reflectance(n0, n1, n2, thickness_nm, wavelength_nm, cos_theta) -> np.ndarray:

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import MODELS
+from bsdflab.reference.approximations import MODELS
 
 JND = 2.0
 SPECTRAL_GRID_NM = np.arange(380.0, 781.0, 1.0)

@@ -13,14 +13,14 @@ import numpy as np
 from fastapi import APIRouter, Query
 from fastapi.responses import Response
 
-from bsdflab import lobe_views
-from bsdflab.models import ModelCache
+from bsdflab import slices as lobe_views
+from bsdflab.requests import ModelCache
 from bsdflab.plots.lobe import lobe_figure
 
-from ..deps import KEY, SettingsDep
-from ..errors import ERRORS, KEY_ERRORS, over_limit
-from ..models import EvalRequest, EvalResponse, HemisphereView, LobeRequest, LobeResponse, PlaneView
-from ..settings import Settings
+from bsdflab.service.deps import KEY, SettingsDep
+from bsdflab.service.errors import ERRORS, KEY_ERRORS, over_limit
+from bsdflab.service.schemas import (EvalRequest, EvalResponse, HemisphereView, LobeRequest, LobeResponse, PlaneView)
+from bsdflab.service.settings import Settings
 
 MODELS = ModelCache(32)   # recently asked-for models, their core objects built
 router = APIRouter(prefix="/v1/bsdf", tags=["bsdf"], dependencies=[KEY], responses={**ERRORS, **KEY_ERRORS})

@@ -5,11 +5,11 @@ import inspect
 
 from fastapi import APIRouter
 
-from bsdflab.models import keyword_defaults, preset_parameters
+from bsdflab.requests import keyword_defaults, preset_parameters
 from bsdflab.presets import PRESETS
 from bsdflab.scenes import SCENES
 
-from ..models import PresetInfo, SceneInfo
+from bsdflab.service.schemas import PresetInfo, SceneInfo
 
 router = APIRouter(prefix="/v1", tags=["catalogue"])
 

@@ -12,10 +12,10 @@ from fastapi.sse import EventSourceResponse, ServerSentEvent
 
 from bsdflab.jobs import FINISHED
 
-from ..deps import KEY, JobsDep, SettingsDep
-from ..errors import KEY_ERRORS, NOT_FOUND
-from ..models import JOB_ID_PATTERN, JobInfo, JobList
-from ..views import job_info
+from bsdflab.service.deps import KEY, JobsDep, SettingsDep
+from bsdflab.service.errors import KEY_ERRORS, NOT_FOUND
+from bsdflab.service.schemas import JOB_ID_PATTERN, JobInfo, JobList
+from bsdflab.service.views import job_info
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], responses=NOT_FOUND)
 JobId = Annotated[str, Path(pattern=JOB_ID_PATTERN, description="a job id (32 hex digits)")]

@@ -9,8 +9,8 @@ from fastapi import APIRouter
 import bsdflab
 from bsdflab import _core
 
-from ..deps import JobsDep, SettingsDep
-from ..models import Health, VersionInfo
+from bsdflab.service.deps import JobsDep, SettingsDep
+from bsdflab.service.schemas import Health, VersionInfo
 
 router = APIRouter(tags=["meta"])
 

@@ -6,12 +6,12 @@ from typing import Annotated, Any
 from fastapi import APIRouter, HTTPException, Path
 from fastapi.responses import FileResponse, JSONResponse
 
-from ..deps import KEY, JobsDep, SettingsDep
-from ..errors import ERRORS, KEY_ERRORS, NOT_FOUND, over_limit
-from ..jobs import JobService
-from ..models import HASH_PATTERN, RenderInfo, RenderRequest
-from ..views import job_info
-from .tables import QUEUED
+from bsdflab.service.deps import KEY, JobsDep, SettingsDep
+from bsdflab.service.errors import ERRORS, KEY_ERRORS, NOT_FOUND, over_limit
+from bsdflab.service.job_service import JobService
+from bsdflab.service.schemas import HASH_PATTERN, RenderInfo, RenderRequest
+from bsdflab.service.views import job_info
+from bsdflab.service.routers.tables import QUEUED
 
 router = APIRouter(prefix="/v1/renders", tags=["renders"])
 Hash = Annotated[str, Path(pattern=HASH_PATTERN, description="the render's content hash (64 hex digits)")]

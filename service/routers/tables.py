@@ -8,11 +8,11 @@ from fastapi.responses import FileResponse, JSONResponse
 
 from bsdflab.jobs import tabulate as tabulate_kind
 
-from ..deps import KEY, JobsDep, SettingsDep
-from ..errors import ERRORS, KEY_ERRORS, NOT_FOUND, over_limit
-from ..jobs import JobService
-from ..models import HASH_PATTERN, JobInfo, TableInfo, TableList, TableRequest
-from ..views import job_info
+from bsdflab.service.deps import KEY, JobsDep, SettingsDep
+from bsdflab.service.errors import ERRORS, KEY_ERRORS, NOT_FOUND, over_limit
+from bsdflab.service.job_service import JobService
+from bsdflab.service.schemas import HASH_PATTERN, JobInfo, TableInfo, TableList, TableRequest
+from bsdflab.service.views import job_info
 
 router = APIRouter(prefix="/v1/tables", tags=["tables"])
 Hash = Annotated[str, Path(pattern=HASH_PATTERN, description="the table's key (64 hex digits)")]

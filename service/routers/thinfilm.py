@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 from fastapi import APIRouter
 
-from bsdflab import _validate as check
+from bsdflab.util import args as check
 from bsdflab.optics import film_reflectance, film_transmittance
 from bsdflab.plots.film_colour import display_exposure, display_srgb, spectral_rgb
 
-from ..deps import KEY, SettingsDep
-from ..errors import ERRORS, KEY_ERRORS, over_limit
-from ..models import ThinFilmRequest, ThinFilmResponse
+from bsdflab.service.deps import KEY, SettingsDep
+from bsdflab.service.errors import ERRORS, KEY_ERRORS, over_limit
+from bsdflab.service.schemas import ThinFilmRequest, ThinFilmResponse
 
 router = APIRouter(prefix="/v1/thinfilm", tags=["thin film"], dependencies=[KEY],
                    responses={**ERRORS, **KEY_ERRORS})

@@ -1,2 +1,2 @@
 """The registered checks, one module per model family (importing registers them)."""
-from . import approximations, basic, films, layered, renderer, rough, tables  # noqa: F401
+from bsdflab.validation.checks import approximations, basic, films, layered, renderer, rough, tables  # noqa: F401

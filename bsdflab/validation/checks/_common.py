@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from ...lobes import Lobe
-from ...testing import albedo_sampled, albedo_uniform, bsdf_chi2, spherical_directions
-from ..figures import new_figure
-from ..registry import Context, Outcome
+from bsdflab.lobes import Lobe
+from bsdflab.testing import albedo_sampled, albedo_uniform, bsdf_chi2, spherical_directions
+from bsdflab.validation.figures import new_figure
+from bsdflab.validation.registry import Context, Outcome
 
 SIGNIFICANCE = 0.01  # family-wise false-alarm rate of every statistical check
 
@@ -115,7 +115,7 @@ def register_mitsuba_cases(family, cases, compare_name, reference, tolerance, ef
     ``compare_name`` is "module.function" inside bsdflab.reference (imported when run)."""
     import importlib
 
-    from ..registry import REGISTRY, Check
+    from bsdflab.validation.registry import REGISTRY, Check
 
     module, function = compare_name.rsplit(".", 1)
     for name, bsdf, wavelength in cases:
@@ -129,7 +129,7 @@ def register_mitsuba_cases(family, cases, compare_name, reference, tolerance, ef
 
 
 def reciprocity_outcome(ctx: Context, limit: float) -> Outcome:
-    from ...testing import random_unit_vectors, reciprocity_error
+    from bsdflab.testing import random_unit_vectors, reciprocity_error
 
     n = int(ctx.effort["pairs"])
     wi = random_unit_vectors(n, seed=ctx.seed, hemisphere="upper")

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..figures import new_figure
-from ..registry import REGISTRY, Outcome, effort
+from bsdflab.validation.figures import new_figure
+from bsdflab.validation.registry import REGISTRY, Outcome, effort
 
 SNAKE = (1.000277, 1.83, 1.5515)  # air | guanine | keratin at 550 nm (bsdflab.presets)
 GRID_THICKNESSES = (300.0, 600.0, 1200.0)
@@ -41,10 +41,10 @@ STUDY_EFFORT = effort({"angles": 19, "thicknesses": 61}, {"angles": 46, "thickne
                           "to ~3.5 at 700 nm for the snake's film, reported in the study)",
                 effort=effort({}, {}), seed=0)
 def _specifications(ctx):
-    from ...reference.approximations import MODELS, belcour_barla_rgb, xyz_sensitivity_gaussian
-    from ...reference.approximations._optics import XYZ_TO_SRGB
-    from ...reference.approximations import belcour_barla_xyz
-    from ...reference.approximations.study import delta_e00_xyz_e, exact_rgb, exact_xyz_illuminant_e
+    from bsdflab.reference.approximations import MODELS, belcour_barla_rgb, xyz_sensitivity_gaussian
+    from bsdflab.reference.approximations._optics import XYZ_TO_SRGB
+    from bsdflab.reference.approximations import belcour_barla_xyz
+    from bsdflab.reference.approximations.study import delta_e00_xyz_e, exact_rgb, exact_xyz_illuminant_e
 
     d = np.linspace(0.0, 1500.0, 31)
     cos = np.cos(np.radians(np.array([0.0, 30.0, 60.0])))[:, None]
@@ -110,8 +110,8 @@ def _swatch_figure(ctx, study, title):
 
 
 def _spectra_figure(ctx, n_outer, n_film, n_base, points, title):
-    from ...reference.approximations.study import SPECTRAL_GRID_NM, exact_spectrum
-    from ...reference.approximations import seed_reflectance
+    from bsdflab.reference.approximations.study import SPECTRAL_GRID_NM, exact_spectrum
+    from bsdflab.reference.approximations import seed_reflectance
 
     fig, axes = new_figure(4.0 * len(points), 3.0, cols=len(points))
     for ax, (d, angle) in zip(axes, points):
@@ -148,7 +148,7 @@ def _study_outcome(studies) -> Outcome:
                 tolerance="none: a study (dE00 = 2 marks a just-noticeable difference)",
                 effort=STUDY_EFFORT, seed=0)
 def _snake_study(ctx):
-    from ...reference.approximations.study import film_study
+    from bsdflab.reference.approximations.study import film_study
 
     angles = np.linspace(0.0, 85.0, int(ctx.effort["angles"]))
     d = np.linspace(0.0, 1500.0, int(ctx.effort["thicknesses"]))
@@ -167,7 +167,7 @@ def _snake_study(ctx):
                 statistic="largest fraction of the angle x thickness map with dE00 > 2",
                 tolerance="none: a study", effort=STUDY_EFFORT, seed=0)
 def _grid_study(ctx):
-    from ...reference.approximations.study import film_study
+    from bsdflab.reference.approximations.study import film_study
 
     angles = np.linspace(0.0, 85.0, int(ctx.effort["angles"]))
     d = np.linspace(0.0, 1500.0, int(ctx.effort["thicknesses"]))

@@ -2,9 +2,9 @@
 white furnace, eval/pdf consistency."""
 from __future__ import annotations
 
-from ...bsdfs import Diffuse
-from ..registry import REGISTRY, effort
-from ._common import (CHI2_TOLERANCE, FURNACE_TOLERANCE, chi2_outcome, furnace_outcome,
+from bsdflab.bsdfs import Diffuse
+from bsdflab.validation.registry import REGISTRY, effort
+from bsdflab.validation.checks._common import (CHI2_TOLERANCE, FURNACE_TOLERANCE, chi2_outcome, furnace_outcome,
                       register_mitsuba_cases)
 
 MITSUBA_TOLERANCE = ("relative error 1e-5 on pairs float32 can resolve (Mitsuba computes in float32, "
@@ -18,7 +18,7 @@ MITSUBA_EFFORT = effort({"pairs": 300}, {"pairs": 1000}, {"pairs": 4000})
 
 
 def _register():
-    from ...reference.mitsuba_bsdf import standard_cases
+    from bsdflab.reference.mitsuba_bsdf import standard_cases
 
     register_mitsuba_cases("basic", standard_cases(), "mitsuba_bsdf.compare_bsdf",
                            "Mitsuba 3 (diffuse / conductor / dielectric / twosided)", MITSUBA_TOLERANCE,
@@ -56,9 +56,9 @@ def _furnace_diffuse(ctx):
 def _furnace_glass(ctx):
     import numpy as np
 
-    from ...lobes import Lobe
-    from ...testing import spherical_directions
-    from ..registry import Outcome
+    from bsdflab.lobes import Lobe
+    from bsdflab.testing import spherical_directions
+    from bsdflab.validation.registry import Outcome
 
     n = int(ctx.effort["samples"])
     worst, rows = 0.0, {}
@@ -70,7 +70,7 @@ def _furnace_glass(ctx):
         m, se = energy.mean(), energy.std(ddof=1) / np.sqrt(n)
         worst = max(worst, abs(m - 1.0) / max(se, 1e-12))
         rows[f"{theta:g} deg"] = m
-    from ._common import z_limit
+    from bsdflab.validation.checks._common import z_limit
 
     z = z_limit(3)
     return Outcome(worst < z, worst, z, "<", f"largest |z| {worst:.2f}", {"energy": rows})

@@ -6,9 +6,9 @@ import warnings
 
 import numpy as np
 
-from ..figures import new_figure
-from ..registry import REGISTRY, Outcome, effort
-from ._common import log_error_histogram
+from bsdflab.validation.figures import new_figure
+from bsdflab.validation.registry import REGISTRY, Outcome, effort
+from bsdflab.validation.checks._common import log_error_histogram
 
 ROUND_OFF = 1e-10
 ROUND_OFF_TOLERANCE = ("1e-10 absolute on R and T: both sides are exact closed forms in double "
@@ -18,7 +18,7 @@ ROUND_OFF_TOLERANCE = ("1e-10 absolute on R and T: both sides are exact closed f
 
 def bsdflab_film(n0, n1, n2, d_nm, wavelength_nm, theta):
     """The model under test: unpolarised reflectance of one film (bsdflab.optics)."""
-    from ...optics import film_reflectance
+    from bsdflab.optics import film_reflectance
 
     return film_reflectance((n0, n1, float(d_nm), n2), wavelength_nm, theta)
 
@@ -58,7 +58,7 @@ def _single_film(ctx):
 
 
 def _random_stack(rng):
-    from ...optics import Constant, FilmStack, Layer
+    from bsdflab.optics import Constant, FilmStack, Layer
 
     layers = [Layer(Constant(rng.uniform(1.0, 3.0), rng.uniform(0.0, 1.5) if rng.random() < 0.3 else 0.0),
                     rng.uniform(0.0, 1000.0)) for _ in range(rng.integers(1, 7))]
@@ -74,7 +74,7 @@ def _random_stack(rng):
 def _stacks(ctx):
     import tmm
 
-    from ...optics import film_reflectance, film_transmittance
+    from bsdflab.optics import film_reflectance, film_transmittance
 
     rng = np.random.default_rng(ctx.seed)
     worst = 0.0
@@ -101,7 +101,7 @@ def _stacks(ctx):
 def _colour_sweep(ctx):
     from colour.phenomena import thin_film_tmm
 
-    from ...optics import film_reflectance
+    from bsdflab.optics import film_reflectance
 
     n0, n1, n2 = 1.0, 1.83, 1.5515   # the snake's film: guanine on keratin
     d = np.linspace(0.0, 1500.0, int(ctx.effort["thicknesses"]))
@@ -137,8 +137,8 @@ def _colour_sweep(ctx):
 def _seed_counter_example(ctx):
     import tmm
 
-    from ...optics import film_reflectance
-    from ...reference.approximations import seed_reflectance
+    from bsdflab.optics import film_reflectance
+    from bsdflab.reference.approximations import seed_reflectance
 
     n0, n1, n2, d, wl, theta = 1.0, 1.56, 1.83, 400.0, 475.0, 0.4
     exact = tmm.unpolarized_RT([n0, n1, n2], [np.inf, d, np.inf], theta, wl)["R"]

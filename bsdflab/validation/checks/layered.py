@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ... import Diffuse, Dielectric, Layered, Slab
-from ...testing import random_unit_vectors, spherical_directions
-from ..figures import new_figure
-from ..registry import REGISTRY, Outcome, effort
-from ._common import SIGNIFICANCE, furnace_outcome, z_outcome
+from bsdflab import Diffuse, Dielectric, Layered, Slab
+from bsdflab.testing import random_unit_vectors, spherical_directions
+from bsdflab.validation.figures import new_figure
+from bsdflab.validation.registry import REGISTRY, Outcome, effort
+from bsdflab.validation.checks._common import SIGNIFICANCE, furnace_outcome, z_outcome
 
 Z_TOLERANCE = ("z = (PFMC - reference) / se per pair and channel; max |z| below the two-sided "
                f"normal quantile Sidak-corrected at {SIGNIFICANCE} over all z, and per channel "
@@ -33,7 +33,7 @@ for _film in FILMS:
                                   {"pairs": 256, "samples": 20000}),
                     make_model=lambda _film=_film: _coated(_film, 0.15, 256), seed=31, requires=("tmm",))
     def _oracle(ctx, _film=_film):
-        from ...oracles import CoatedDiffuseOracle
+        from bsdflab.oracles import CoatedDiffuseOracle
 
         n = int(ctx.effort["pairs"])
         wi = random_unit_vectors(n, seed=ctx.seed, hemisphere="upper")
@@ -56,7 +56,7 @@ for _film in FILMS:
                 make_model=lambda: Layered([Dielectric(1.5, 1.0)], [Slab(0.0)], Diffuse(0.8), samples=256),
                 seed=32, requires=("mitsuba",))
 def _plastic(ctx):
-    from ...reference.mitsuba_calls import query
+    from bsdflab.reference.mitsuba_calls import query
 
     n = int(ctx.effort["pairs"])
     wi = random_unit_vectors(n, seed=ctx.seed, hemisphere="upper")

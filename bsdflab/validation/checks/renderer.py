@@ -6,13 +6,13 @@ import math
 
 import numpy as np
 
-from ..figures import new_figure
-from ..registry import REGISTRY, Outcome, effort
-from ._common import SIGNIFICANCE, z_limit
+from bsdflab.validation.figures import new_figure
+from bsdflab.validation.registry import REGISTRY, Outcome, effort
+from bsdflab.validation.checks._common import SIGNIFICANCE, z_limit
 
 
 def _scene_modules():
-    from ...render import Camera, Environment, Material, Scene, Shape, render
+    from bsdflab.render import Camera, Environment, Material, Scene, Shape, render
 
     return Camera, Environment, Material, Scene, Shape, render
 
@@ -180,8 +180,8 @@ def _sphere_vs_mitsuba_spectral(ctx):
 
 
 def _versus_mitsuba(ctx, scene, spectral: bool):
-    from ...reference.mitsuba_render import render_mitsuba
-    from ...testing import image_z_test
+    from bsdflab.reference.mitsuba_render import render_mitsuba
+    from bsdflab.testing import image_z_test
 
     render = _scene_modules()[-1]
     spp = int(ctx.effort["spp"])

@@ -2,17 +2,17 @@
 white furnace (<= 1, single scattering), reciprocity of reflection."""
 from __future__ import annotations
 
-from ...bsdfs import RoughConductor, RoughDielectric
-from ..registry import REGISTRY, effort
-from ._common import (CHI2_TOLERANCE, FURNACE_TOLERANCE, chi2_outcome, furnace_outcome, reciprocity_outcome,
+from bsdflab.bsdfs import RoughConductor, RoughDielectric
+from bsdflab.validation.registry import REGISTRY, effort
+from bsdflab.validation.checks._common import (CHI2_TOLERANCE, FURNACE_TOLERANCE, chi2_outcome, furnace_outcome, reciprocity_outcome,
                       register_mitsuba_cases)
-from .basic import MITSUBA_STATISTIC, MITSUBA_TOLERANCE
+from bsdflab.validation.checks.basic import MITSUBA_STATISTIC, MITSUBA_TOLERANCE
 
 ROUGH_MITSUBA_EFFORT = effort({"pairs": 200}, {"pairs": 1000}, {"pairs": 4000})
 
 
 def _register():
-    from ...reference.mitsuba_rough import rough_cases
+    from bsdflab.reference.mitsuba_rough import rough_cases
 
     register_mitsuba_cases("rough", rough_cases(), "mitsuba_rough.compare_rough",
                            "Mitsuba 3 roughconductor / roughdielectric (GGX, visible normals)",

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...testing import random_unit_vectors, spherical_directions
-from ..figures import new_figure
-from ..registry import REGISTRY, Outcome, effort
-from ._common import CHI2_TOLERANCE, chi2_outcome, z_outcome
-from .layered import Z_TOLERANCE
+from bsdflab.testing import random_unit_vectors, spherical_directions
+from bsdflab.validation.figures import new_figure
+from bsdflab.validation.registry import REGISTRY, Outcome, effort
+from bsdflab.validation.checks._common import CHI2_TOLERANCE, chi2_outcome, z_outcome
+from bsdflab.validation.checks.layered import Z_TOLERANCE
 
 WAVELENGTHS = [450.0, 550.0, 650.0]
 GRIDS = effort({"grid": [4, 6, 5], "check_samples": 4000}, {"grid": [6, 10, 9], "check_samples": 8000},
@@ -20,7 +20,7 @@ def _xenopeltis_table(ctx):
     4096 walks per cell at least (fewer leave PFMC's heavy tail under-sampled and the cell
     errors underestimated; see tests/test_tables.py's xeno fixture)."""
     import bsdflab as bl
-    from ...tables import TableBSDF, TableGrid, tabulate
+    from bsdflab.tables import TableBSDF, TableGrid, tabulate
 
     model = bl.presets.xenopeltis(samples=64)
     table = tabulate(model, TableGrid(*ctx.effort["grid"]), rel_error=0.03, wavelengths=WAVELENGTHS,
@@ -67,8 +67,8 @@ def _table_vs_pfmc(ctx):
                           "exact and only float32 storage (2^-24) plus double arithmetic remains",
                 effort=effort({"pairs": 2000}, {"pairs": 20000}), seed=42)
 def _diffuse_table(ctx):
-    from ... import Diffuse
-    from ...tables import TableBSDF, TableGrid, tabulate
+    from bsdflab import Diffuse
+    from bsdflab.tables import TableBSDF, TableGrid, tabulate
 
     model = Diffuse(0.6)
     tb = TableBSDF(tabulate(model, TableGrid(3, 4, 2), progress=False))

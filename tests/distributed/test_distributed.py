@@ -1,0 +1,249 @@
+"""Distributed tabulation and rendering on a real Dask LocalCluster of 2 worker processes.
+
+The results must equal the in-process ones bit for bit: units are pure functions of
+(request dict, unit, seed) and the driver adds them in the local renderer's order. Faults
+are real too: a worker process killed with SIGKILL mid-job.
+"""
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+
+
+from bsdflab.distributed import connect  # noqa: E402
+from bsdflab.distributed.render_units import plan_units  # noqa: E402
+from bsdflab.render import render  # noqa: E402
+from bsdflab.scenes import scene  # noqa: E402
+
+BSDFLAB = [sys.executable, "-m", "bsdflab.cli.main"]
+
+
+@pytest.fixture(scope="module")
+def client():
+    with connect(cluster="local:2") as c:
+        c.wait_for_workers(2, timeout=60)
+        yield c
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_units_cover_every_pixel_and_pass_once():
+    units = plan_units(width=37, height=23, spp=10, pass_spp=3, unit_samples=37 * 3 * 5)
+    seen = np.zeros((4, 23), int)
+    for u in units:
+        seen[u.pass_index, u.y0:u.y1] += 1
+    assert (seen == 1).all()
+    assert len({u.index for u in units}) == len(units)
+
+
+def test_render_equals_the_local_render_bit_for_bit(client):
+    s = scene("basic-materials", width=40, height=30)
+    local = render(s, spp=6, seed=3, pass_spp=2, progress=False)
+    # Small units: many bands x 3 passes arrive in any order on two workers.
+    from bsdflab.distributed.render import render_on_cluster
+
+    remote = render_on_cluster(client, s, spp=6, seed=3, pass_spp=2, strategy=0, progress=False,
+                               unit_samples=40 * 2 * 4)
+    assert remote.settings["units"] == 8 * 3
+    assert np.array_equal(local.mean, remote.mean)
+    assert np.array_equal(local.variance, remote.variance)
+    assert local.invalid_samples == remote.invalid_samples
+
+
+def test_render_api_takes_a_client(client):
+    s = scene("furnace", width=16, height=12)
+    a = render(s, spp=4, seed=1, progress=False)
+    b = render(s, spp=4, seed=1, progress=False, client=client)
+    assert np.array_equal(a.mean, b.mean) and np.array_equal(a.variance, b.variance)
+
+
+def test_spectral_render_of_a_table_equals_the_local_one(client, tmp_path):
+    """A spectral render on the cluster ships the spectral table (81 bins), as the
+    in-process render builds it: the images are bit-identical."""
+    from support.render_scenes import tabulated_film_mirror_scene
+
+    s = tabulated_film_mirror_scene(size=8)
+    local = render(s, spp=4, seed=2, progress=False, spectral=True, cache_dir=tmp_path)
+    remote = render(s, spp=4, seed=2, progress=False, spectral=True, cache_dir=tmp_path, client=client)
+    assert np.array_equal(local.mean, remote.mean) and np.array_equal(local.variance, remote.variance)
+    rgb = render(s, spp=4, seed=2, progress=False, cache_dir=tmp_path, client=client)
+    assert not np.allclose(rgb.mean, remote.mean, atol=1e-3)  # the RGB table gives another image
+
+
+def test_a_worker_killed_mid_render_changes_nothing(client):
+    from bsdflab.distributed.render import render_on_cluster
+
+    s = scene("basic-materials", width=48, height=36)
+    local = render(s, spp=8, seed=5, pass_spp=1, progress=False)
+    pids = list(client.run(os.getpid).values())
+    killed = threading.Event()
+
+    def progress(fraction):
+        if fraction > 0.2 and not killed.is_set():
+            killed.set()
+            os.kill(pids[0], signal.SIGKILL)  # the nanny restarts it; its units are redone
+
+    remote = render_on_cluster(client, s, spp=8, seed=5, pass_spp=1, strategy=0, progress=False,
+                               unit_samples=48 * 4, progress_callback=progress)
+    assert killed.is_set()
+    assert np.array_equal(local.mean, remote.mean)
+    assert np.array_equal(local.variance, remote.variance)
+    client.wait_for_workers(2, timeout=60)
+
+
+def test_unreachable_scheduler_is_a_clear_error_before_any_work():
+    address = f"tcp://127.0.0.1:{_free_port()}"
+    with pytest.raises(ConnectionError, match=r"no Dask scheduler answers at tcp://127.0.0.1:\d+ \(waited 2 s\)"):
+        with connect(scheduler=address, timeout=2):
+            pass
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"cluster": "local:0"}, "local:N"),
+    ({"cluster": "remote"}, "local:N"),
+    ({"scheduler": "localhost"}, "tcp://HOST"),
+    ({}, "exactly one"),
+])
+def test_bad_cluster_arguments(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        with connect(**kwargs):
+            pass
+
+
+def test_cli_unreachable_scheduler_exits_2_and_writes_nothing(tmp_path):
+    out = tmp_path / "r.exr"
+    p = subprocess.run([*BSDFLAB, "render", "furnace", "--width", "8", "--height", "6", "--spp", "2",
+                        "--scheduler", f"tcp://127.0.0.1:{_free_port()}", "--out", str(out), "--quiet"],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2, p.stderr
+    assert "no Dask scheduler answers" in p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1
+    assert not out.exists() and not list(tmp_path.iterdir())
+
+
+def _small_table_args():
+    import bsdflab as bl
+    from bsdflab.tables import TableGrid
+
+    return bl.presets.xenopeltis(), TableGrid(3, 4, 3, (360.0, 440.0))
+
+
+def test_table_equals_the_local_table_bit_for_bit(client):
+    from bsdflab.distributed.tabulate_units import tabulate_on_cluster
+    from bsdflab.tables import tabulate
+
+    model, grid = _small_table_args()
+    kw = dict(rel_error=0.05, wavelengths=None, min_samples=32, max_samples=256, seed=11)
+    local = tabulate(model, grid, progress=False, **kw)
+    # 2 x 3 x 4 x 3 = 72 cells in blocks of one slice (12 cells): 6 units per stage.
+    remote = tabulate_on_cluster(client, model, grid, progress=False, unit_cells=12, **kw)
+    assert remote.meta["units"] == 12
+    for name in ("values", "stderr", "samples"):
+        assert np.array_equal(getattr(local, name), getattr(remote, name)), name
+    for key in ("rel_error_rms", "rel_error_max", "nonfinite_walks", "pilot_walks"):
+        assert local.meta[key] == remote.meta[key], key
+
+
+def test_a_worker_killed_mid_tabulation_changes_nothing(client):
+    from bsdflab.util.progress import monitored
+    from bsdflab.distributed.tabulate_units import tabulate_on_cluster
+    from bsdflab.tables import tabulate
+
+    model, grid = _small_table_args()
+    kw = dict(rel_error=0.05, wavelengths=None, min_samples=32, max_samples=256, seed=12)
+    local = tabulate(model, grid, progress=False, **kw)
+    pids = list(client.run(os.getpid).values())
+    killed = []
+
+    def progress(stage, fraction):  # after the first finished unit: the others are in flight
+        if not killed:
+            killed.append(stage)
+            os.kill(pids[1], signal.SIGKILL)
+
+    with monitored(progress, lambda: False):
+        remote = tabulate_on_cluster(client, model, grid, progress=False, unit_cells=12, **kw)
+    assert killed
+    client.wait_for_workers(2, timeout=60)
+    assert pids[1] not in client.run(os.getpid).values()  # the worker really was replaced
+    for name in ("values", "stderr", "samples"):
+        assert np.array_equal(getattr(local, name), getattr(remote, name)), name
+
+
+def test_service_executor_runs_jobs_on_the_cluster(client, tmp_path):
+    """BSDFLAB_EXECUTOR=dask:<address>: the service's jobs, their units on the cluster."""
+    from bsdflab.jobs.executor import make_executor
+    from bsdflab.jobs.kinds import get_kind
+    from bsdflab.render import read_exr
+
+    request = get_kind("render").normalise({"scene": "furnace", "width": 12, "height": 9, "spp": 4, "seed": 2})
+    with make_executor(f"dask:{client.scheduler.address}", workers=1) as ex:
+        result = ex.submit("render", request, tmp_path).result(timeout=300)
+    image = read_exr(tmp_path / result["files"]["exr"])
+    local = render(scene("furnace", width=12, height=9), spp=4, seed=2, progress=False)
+    assert np.array_equal(image, local.mean.astype(image.dtype))
+    assert int(result["summary"]["units"]) >= 1  # rendered by units on the cluster
+
+
+def test_cancelling_a_cluster_job_cancels_its_units(client, tmp_path):
+    from bsdflab.util.progress import JobCancelled
+    from bsdflab.jobs.executor import make_executor
+    from bsdflab.jobs.kinds import get_kind
+
+    request = get_kind("render").normalise({"scene": "basic-materials", "width": 160, "height": 120,
+                                            "spp": 256, "seed": 4})
+    with make_executor(f"dask:{client.scheduler.address}", workers=1) as ex:
+        handle = ex.submit("render", request, tmp_path)
+        deadline = time.monotonic() + 120
+        while handle.progress()[0] == 0 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert handle.progress()[0] > 0
+        handle.cancel()
+        with pytest.raises(JobCancelled):
+            handle.result(timeout=60)
+    assert not list(tmp_path.glob("*.exr")) and not list(tmp_path.glob("*.png"))
+    # Nothing of the job is left computing on the cluster.
+    deadline = time.monotonic() + 30
+    while client.processing() and any(client.processing().values()) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not any(client.processing().values())
+
+
+def test_ctrl_c_on_the_driver_cancels_and_leaves_no_file(tmp_path):
+    out = tmp_path / "r.exr"
+    p = subprocess.Popen([*BSDFLAB, "render", "basic-materials", "--width", "160", "--height", "120",
+                          "--spp", "1024", "--cluster", "local:1", "--out", str(out)],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                         # a default SIGINT disposition even under a runner that ignores it
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    seen = threading.Event()
+
+    def watch():
+        buf = b""
+        while chunk := p.stderr.read1(4096):
+            buf += chunk
+            if b"rendering" in buf:  # the units' progress bar: work is on the cluster
+                seen.set()
+
+    threading.Thread(target=watch, daemon=True).start()
+    try:
+        assert seen.wait(180), "the render never started"
+        p.send_signal(signal.SIGINT)
+        rc = p.wait(timeout=120)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert rc != 0
+    assert not out.exists() and not list(tmp_path.iterdir())

@@ -1,0 +1,125 @@
+"""bsdflab.jobs: job kinds equal the Python API, executors report progress, cancel, and
+survive failing jobs and dying workers."""
+from __future__ import annotations
+
+import importlib.util
+import os
+import time
+
+import numpy as np
+import pytest
+
+from bsdflab import presets
+from bsdflab.jobs import JobCancelled, JobFailed, get_kind, make_executor, register_kind
+from bsdflab.jobs import tabulate as tabulate_kind
+from bsdflab.jobs.processes import ProcessJobExecutor
+from bsdflab.jobs.threads import ThreadJobExecutor
+from bsdflab.tables import TableGrid, cache_key, read_table, tabulate
+
+register_kind("test-steps", "support.job_kinds")
+SMALL = {"preset": "xenopeltis-thin-film", "grid": {"n_theta_i": 2, "n_theta_o": 3, "n_phi": 3},
+         "rel_error": 0.2, "min_samples": 64, "max_samples": 64, "seed": 7}
+
+
+def wait_for(predicate, timeout=60.0):
+    end = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > end:
+            raise AssertionError("timed out waiting")
+        time.sleep(0.02)
+
+
+def test_tabulate_kind_equals_the_python_api(tmp_path):
+    """Same request -> the same table as tabulate() (walks are seeded per cell), under the
+    table cache's own key."""
+    kind = get_kind("tabulate")
+    request = kind.normalise(SMALL)
+    seen = []
+    result = kind.run(request, tmp_path, seen.append, lambda: False)
+    model = presets.xenopeltis_thin_film()
+    grid = TableGrid(2, 3, 3)
+    # The key holds every setting that changes the table: effort and seed too.
+    assert result["hash"] == kind.key(request) == cache_key(model.to_dict(), grid, 0.2, ("R", "G", "B"), 64,
+                                                            max_samples=64, seed=7)
+    assert kind.key(request) != kind.key({**request, "seed": 8})
+    direct = tabulate(model, grid, rel_error=0.2, min_samples=64, max_samples=64, seed=7, progress=False)
+    stored = read_table(tmp_path / result["files"]["exr"])
+    np.testing.assert_array_equal(stored.values, direct.values)
+    np.testing.assert_array_equal(stored.samples, direct.samples)
+    assert kind.existing(request, tmp_path)["hash"] == result["hash"]
+
+
+def test_requests_are_normalised_and_bad_ones_named():
+    kind = get_kind("tabulate")
+    a = kind.normalise(SMALL)
+    b = kind.normalise({**SMALL, "preset": None, "model": presets.xenopeltis_thin_film().to_dict()})
+    assert a == b and kind.key(a) == kind.key(b)
+    with pytest.raises(ValueError, match="rel_error"):
+        kind.normalise({**SMALL, "rel_error": 0})
+    with pytest.raises(ValueError, match="unknown tabulate request fields: colour"):
+        kind.normalise({**SMALL, "colour": 1})
+    with pytest.raises(ValueError, match="unknown scene"):
+        get_kind("render").normalise({"scene": "nowhere"})
+    assert tabulate_kind.cells(a) == 2 * 2 * 3 * 3
+
+
+def test_thread_executor_progress_and_cancel(tmp_path):
+    with ThreadJobExecutor(1) as executor:
+        handle = executor.submit("tabulate", get_kind("tabulate").normalise(SMALL), tmp_path)
+        assert handle.result(timeout=120)["hash"]
+        assert handle.progress()[0] == 1.0 and handle.state == "done"
+        # a long tabulation (many cells) stops within moments of cancel: the core checks
+        # between cells
+        long = get_kind("tabulate").normalise({**SMALL, "grid": {"n_theta_i": 8, "n_theta_o": 16, "n_phi": 9},
+                                               "min_samples": 256, "max_samples": 256})
+        running = executor.submit("tabulate", long, tmp_path)
+        queued = executor.submit("test-steps", {"steps": 5}, tmp_path)
+        wait_for(lambda: running.state == "running")
+        assert queued.cancel() and queued.state == "cancelled"   # never started
+        running.cancel()
+        with pytest.raises(JobCancelled):
+            running.result(timeout=60)
+    assert not (tmp_path / f"{get_kind('tabulate').key(long)}.exr").exists()
+
+
+@pytest.fixture(scope="module")
+def processes():
+    executor = ProcessJobExecutor(1, cancel_grace_s=2.0)
+    yield executor
+    executor.shutdown()
+
+
+def test_process_executor_runs_jobs_in_a_worker(processes, tmp_path):
+    handle = processes.submit("test-steps", {"steps": 20, "step_s": 0.05}, tmp_path)
+    wait_for(lambda: handle.progress()[0] > 0.2)
+    fraction, elapsed, eta = handle.progress()
+    assert handle.state == "running" and elapsed > 0 and eta is not None and eta > 0
+    result = handle.result(timeout=60)
+    assert result["pid"] != os.getpid() and result["pid"] in processes.worker_pids()
+
+
+def test_process_executor_cancel_failure_and_crash(processes, tmp_path):
+    slow = processes.submit("test-steps", {"steps": 10_000, "step_s": 0.01}, tmp_path)
+    wait_for(lambda: slow.state == "running")
+    slow.cancel()
+    with pytest.raises(JobCancelled):
+        slow.result(timeout=30)
+    with pytest.raises(JobFailed, match="asked to fail") as failed:
+        processes.submit("test-steps", {"action": "fail"}, tmp_path).result(timeout=30)
+    assert failed.value.error_type == "ValueError"
+    with pytest.raises(JobFailed, match="worker process died") as died:
+        processes.submit("test-steps", {"action": "crash"}, tmp_path).result(timeout=30)
+    assert died.value.error_type == "WorkerDied"
+    # a new worker takes the next job
+    assert processes.submit("test-steps", {"steps": 1}, tmp_path).result(timeout=60)["pid"] != os.getpid()
+
+
+def test_make_executor_specs():
+    with pytest.raises(ValueError, match="unknown executor"):
+        make_executor("cluster", 1)
+    with pytest.raises(ValueError, match="workers"):
+        make_executor("threads", 0)
+    make_executor("threads", 2).shutdown()
+    if importlib.util.find_spec("bsdflab.distributed") is None:
+        with pytest.raises(RuntimeError, match="bsdflab.distributed"):
+            make_executor("dask:local:1", 1)

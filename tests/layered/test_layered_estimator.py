@@ -1,0 +1,266 @@
+"""Layered PFMC estimator (issue 10): every path counted, explicit walk state, golden values,
+reported etas and non-finite walks, thread-count independence, the scattered part.
+
+Statistics: two independent estimates a +- sa and b +- sb agree when
+|z| = |a - b| / hypot(sa, sb) stays below the two-sided Sidak-corrected normal quantile at
+family-wise significance ALPHA = 0.01 over the test's comparisons (`sidak_z_limit`). The
+standard errors are the estimators' own (sample standard deviation / sqrt(n)), which for
+means of >= 10^4 independent bounded-variance terms are normal to well within this level.
+"""
+import os
+
+import numpy as np
+import pytest
+
+import bsdflab as bl
+from bsdflab import Lobe, _core
+from bsdflab.spectra import DEFAULT_WAVELENGTHS
+from bsdflab.testing import albedo_sampled, albedo_uniform, random_unit_vectors, sidak_z_limit
+from support.directions import directions_at
+
+ALPHA = 0.01
+WL = [550.0]
+
+
+def silver(ext_ior):
+    return bl.Conductor(material="Ag", ext_ior=ext_ior)
+
+
+def rough_top(alpha=0.3):
+    return bl.RoughDielectric(alpha, 1.5, 1.0)
+
+
+def albedo_cosine(model, wi, n, seed, samples=4, wavelengths=WL):
+    """Albedo of eval over the upper hemisphere with cosine-distributed wo: mean of
+    pi eval / cos (each eval an independent `samples`-walk estimate), and its standard
+    error. Sees every non-delta reflection path, whatever the model's own sampler does."""
+    rng = np.random.default_rng(seed)
+    u1, u2 = rng.random(n), rng.random(n)
+    r, phi = np.sqrt(u1), 2 * np.pi * u2
+    wo = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.clip(1 - u1, 1e-12, None))], axis=1)
+    est = model.estimate(np.tile(wi, (n, 1)), wo, wavelengths=wavelengths, samples=samples, seed=seed)
+    x = np.pi * est.value[:, 0] / wo[:, 2]
+    return x.mean(), x.std(ddof=1) / np.sqrt(n), est.nonfinite
+
+
+def sampled_albedo(model, wi, n, seed, lobes=Lobe.ALL):
+    a = albedo_sampled(model, wi, n=n, seed=seed, wavelengths=WL, lobes=lobes)
+    return a.mean[0], a.stderr[0]
+
+
+# -- defect 1: rough entry -> delta events only -> rough exit ---------------------------------
+
+def test_01_index_matched_smooth_boundary_does_not_change_eval():
+    """Splitting a slab by an index-matched smooth boundary (T = 1, no deflection) leaves the
+    BSDF unchanged. Before the fix the split stack lost every path rough entry -> mirror
+    base -> rough exit: its eval was ~5 % of the whole (measured albedo 0.038 vs 0.80)."""
+    n = 48
+    wi = random_unit_vectors(n, seed=21, hemisphere="upper")
+    wo = random_unit_vectors(n, seed=22, hemisphere="upper")
+    wo[:16] = np.stack([-wi[:16, 0], -wi[:16, 1], wi[:16, 2]], axis=1) * 0.98 + 0.02 * wo[:16]
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    for slab in (dict(sigma_a=0.0), dict(sigma_a=0.1, sigma_s=0.3)):
+        one = bl.Layered([rough_top()], [bl.Slab(1.0, **slab)], silver(1.5))
+        split = bl.Layered([rough_top(), bl.Dielectric(1.5, 1.5)], [bl.Slab(0.4, **slab), bl.Slab(0.6, **slab)],
+                           silver(1.5))
+        a = one.estimate(wi, wo, wavelengths=WL, samples=4000, seed=1)
+        b = split.estimate(wi, wo, wavelengths=WL, samples=4000, seed=2)
+        z = (a.value - b.value)[:, 0] / np.hypot(a.stderr, b.stderr)[:, 0]
+        assert np.max(np.abs(z)) < sidak_z_limit(ALPHA, 2 * n), (slab, np.round(z, 1))
+        assert a.nonfinite == b.nonfinite == 0
+
+
+STACKS = {
+    # rough entry, smooth interior boundary (1.5 | 1.3), mirror base: the defect's class
+    "smooth-interior-mirror": lambda: bl.Layered(
+        [rough_top(), bl.Dielectric(1.3, 1.5)], [bl.Slab(0.5), bl.Slab(0.5, sigma_a=0.2)], silver(1.3),
+        samples=4),
+    # two smooth interior boundaries, a smooth gold base; scattering above and below them
+    # (a vertex in the bottom slab connects through two delta boundaries: strategy A alone)
+    "two-interior-conductor": lambda: bl.Layered(
+        [rough_top(0.2), bl.Dielectric(1.5, 1.5), bl.Dielectric(1.4, 1.5)],
+        [bl.Slab(0.3, sigma_s=0.5), bl.Slab(0.3), bl.Slab(0.3, sigma_a=0.1, sigma_s=0.5)],
+        bl.Conductor(material="Au", ext_ior=1.4), samples=4),
+    # rough interior boundary between a smooth top and a mirror (A through a delta top)
+    "rough-interior-mirror": lambda: bl.Layered(
+        [bl.Dielectric(1.5, 1.0), bl.RoughDielectric(0.3, 1.3, 1.5)], [bl.Slab(0.5), bl.Slab(0.5)],
+        silver(1.3), samples=4),
+    # rough conductor base under a smooth interior boundary
+    "smooth-interior-rough-conductor": lambda: bl.Layered(
+        [rough_top(), bl.Dielectric(1.3, 1.5)], [bl.Slab(0.5), bl.Slab(0.5)],
+        bl.RoughConductor(0.2, material="Au", ext_ior=1.3), samples=4),
+}
+
+
+@pytest.mark.parametrize("name", list(STACKS))
+@pytest.mark.parametrize("cos_theta", [0.9, 0.3])
+def test_02_eval_albedo_equals_sample_albedo(name, cos_theta):
+    """The albedo integrated from eval (cosine-sampled wo) equals the mean weight of the
+    sampler's plain random walk (which has no connections and so cannot miss a path
+    class), minus the delta reflection that eval leaves out. Family: 8 tests."""
+    m = STACKS[name]()
+    wi = directions_at(cos_theta)
+    e, se, bad = albedo_cosine(m, wi, n=30_000, seed=3)
+    s, ss = sampled_albedo(m, wi, n=200_000, seed=4, lobes=Lobe.ALL & ~Lobe.DELTA_REFLECTION)
+    z = (e - s) / np.hypot(se, ss)
+    assert abs(z) < sidak_z_limit(ALPHA, 8), (name, e, se, s, ss)
+    assert bad == 0
+
+
+def test_03_transmission_through_delta_boundaries():
+    """A transmissive stack (rough top, smooth interior, smooth exit to water) from both
+    sides: eval integrated over the sphere equals the sampler's albedo. From below, the
+    walk enters through a delta boundary and crosses a delta one before the rough exit,
+    the transmission form of the defect."""
+    m = bl.Layered([rough_top(), bl.Dielectric(1.3, 1.5)], [bl.Slab(0.5), bl.Slab(0.5, sigma_a=0.1)],
+                   bl.Dielectric(1.33, 1.3), samples=4)
+    for k, w in enumerate((directions_at(0.8), -directions_at(0.6))):
+        u = albedo_uniform(m, w, n=40_000, seed=5 + k, wavelengths=WL)
+        s, ss = sampled_albedo(m, w, n=200_000, seed=7 + k, lobes=Lobe.ALL & ~Lobe.DELTA)
+        z = (u.mean[0] - s) / np.hypot(u.stderr[0], ss)
+        assert abs(z) < sidak_z_limit(ALPHA, 2), (k, u, s, ss)
+
+
+def test_03b_reciprocity_across_smooth_interior_boundaries():
+    """f(wi, wo) = f(wo, wi) for the split, scattering stack (the review's check: the new
+    delta-chain strategy is applied from the walk's side only, so the estimator itself is
+    not symmetric and reciprocity tests it independently). Sidak over 40 pairs."""
+    m = bl.Layered([rough_top(), bl.Dielectric(1.3, 1.5)], [bl.Slab(0.5, sigma_s=0.5), bl.Slab(0.5)],
+                   silver(1.3))
+    n = 40
+    wi = random_unit_vectors(n, seed=31, hemisphere="upper")
+    wo = random_unit_vectors(n, seed=32, hemisphere="upper")
+    a = m.estimate(wi, wo, wavelengths=WL, samples=3000, seed=1)
+    b = m.estimate(wo, wi, wavelengths=WL, samples=3000, seed=2)
+    fa, fb = a.value[:, 0] / wo[:, 2], b.value[:, 0] / wi[:, 2]
+    z = (fa - fb) / np.hypot(a.stderr[:, 0] / wo[:, 2], b.stderr[:, 0] / wi[:, 2])
+    assert np.max(np.abs(z)) < sidak_z_limit(ALPHA, n), np.round(z, 1)
+
+
+# -- defect 3: reproducible streams -------------------------------------------------------------
+
+# Fixed seed -> fixed value. Recorded with GCC 12 (-O3) and checked once against a Clang 14
+# build (see README, validation): the random draws happen in program order, so compilers
+# agree. A change here must come with a bump of _core.estimator_version. Re-recorded for
+# version 3 after the rough-interface rework (Beckmann / energy compensation share one
+# microfacet sampler) changed the streams of walks through the rough top ("split"; the
+# smooth-top xenopeltis values are unchanged, and every statistical test still passes).
+GOLDEN = {
+    "xenopeltis-eval": [0.0005604921263125558, 0.0011472745673171644, 0.000979433523559332],
+    "split-eval": [0.03255253098623811],
+    "split-sample": [  # wo (6 x 3), weight (6 x 2), eta (6)
+        -0.6113887338167907, -0.29028005385743894, 0.7361666295713383, 0.4340122933622373,
+        0.0906573145366222, 0.8963339670744712, -0.46692140426801376, -0.2273826740744736,
+        0.8545651068041145, -0.8757141736148868, -0.24191593896198843, 0.41785328119584575,
+        -0.16477989109491742, 0.5583071944602789, 0.8131055676261473, -0.7932297033834053,
+        -0.06473482981939821, 0.6054717495296772, 0.9506835110648226, 0.9610962922448504,
+        0.9760472413774124, 0.9867478083227909, 0.9632619932868907, 0.9739048827068568,
+        0.883770197265396, 0.893487235885266, 0.9557066741079675, 0.9787226167247359,
+        0.8906047092154844, 0.8997922772613044, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0],
+}
+
+
+def golden_values():
+    wi, wo = directions_at(0.8), directions_at(0.6, 2.0)
+    x = bl.presets.xenopeltis(samples=64, seed=5)
+    split = bl.Layered([rough_top(), bl.Dielectric(1.3, 1.5)], [bl.Slab(0.5, sigma_s=0.4), bl.Slab(0.5)],
+                       silver(1.3), samples=64, seed=6)
+    s = split.sample(np.tile(directions_at(0.7), (6, 1)), seed=7, wavelengths=[450.0, 650.0])
+    return {"xenopeltis-eval": x.eval(wi, wo, wavelengths=[450.0, 550.0, 650.0])[0].tolist(),
+            "split-eval": split.eval(wi, wo, wavelengths=WL)[0].tolist(),
+            "split-sample": np.concatenate([s.wo.ravel(), s.weight.ravel(), s.eta]).tolist()}
+
+
+def test_04_golden_values():
+    got = golden_values()
+    for key, want in GOLDEN.items():
+        assert np.allclose(got[key], want, rtol=1e-9, atol=0), (key, got[key])
+
+
+def test_05_estimator_version():
+    # 4: the tabulator's walks read the film from a lookup (tables change by < 1e-7 in R, T);
+    # Layered.eval/sample are unchanged, so the golden values above still hold.
+    assert _core.estimator_version == 4
+
+
+# -- defect 4: eta, non-finite walks, explicit state ----------------------------------------------
+
+def test_06_transmitted_samples_report_the_product_of_etas():
+    """Air -> rough glass -> slab -> interior 1.5|1.3 -> water (1.33): a transmitted sample
+    crossed every boundary once, so eta = 1.33 / 1.0 downward and 1 / 1.33 upward (it was
+    1, which made the renderer's Russian roulette see the (n_i/n_t)^2 factor as a loss)."""
+    m = bl.Layered([rough_top(), bl.Dielectric(1.3, 1.5)], [bl.Slab(0.5), bl.Slab(0.5)],
+                   bl.Dielectric(1.33, 1.3), samples=4)
+    for wi, want in ((directions_at(0.8), 1.33), (-directions_at(0.8), 1 / 1.33)):
+        smp = m.sample(np.tile(wi, (4000, 1)), seed=1, wavelengths=WL)
+        lobe = np.asarray(smp.lobe)
+        through = (lobe & int(Lobe.TRANSMISSION)) != 0
+        assert through.sum() > 100
+        assert np.allclose(smp.eta[through], want, rtol=1e-12)
+        assert np.allclose(smp.eta[(lobe & int(Lobe.REFLECTION)) != 0], 1.0)
+
+
+def test_07_non_finite_walks_are_counted():
+    """A slab of infinite thickness without absorption makes 0 x inf = NaN throughputs (the
+    Python layer refuses it; the core is built directly): the walks are counted, not
+    hidden, and the estimate stays finite. A sound model reports none."""
+    wl = [550.0]
+    top = rough_top()._core(np.array(wl))
+    base = bl.Diffuse(0.5)._core(np.array(wl))
+    bad = _core.LayeredBSDF(wl, [top, base], [np.inf], [[0.0]], [0.0], [0], [0.0], 16, 0, 64, True)
+    wi = random_unit_vectors(20, seed=1, hemisphere="upper")
+    wo = random_unit_vectors(20, seed=2, hemisphere="upper")
+    value, err, nonfinite = bad.estimate(wi, wo, int(Lobe.ALL), None, 16, 0)
+    assert nonfinite > 0 and np.all(np.isfinite(value)) and np.all(np.isfinite(err))
+    good = bl.presets.xenopeltis(samples=16)
+    assert good.estimate(wi, wo, wavelengths=[450.0, 650.0]).nonfinite == 0
+
+
+def test_08_nested_stochastic_models_keep_their_own_state():
+    """A layered core used as the base of another behind an index-matched, zero-thickness
+    coat: every outer walk contributes the inner model's own 512-walk estimate at the
+    (refracted, equal up to rounding) directions, so the outer eval is an independent
+    estimate of the inner BSDF (z-test, Sidak over 32 values). The walk state is per
+    estimate: before, one function-level thread_local chain and walk buffer were shared,
+    and the inner walks overwrote the outer walk's throughput and chain."""
+    wl = np.array([500.0, 600.0])
+    inner_model = bl.presets.xenopeltis(samples=512, seed=3)
+    inner = inner_model._core(wl)
+    coat = bl.Dielectric(1.0, 1.0)._core(wl)
+    outer = _core.LayeredBSDF(list(wl), [coat, inner], [0.0], [[0.0, 0.0]], [0.0], [0], [0.0], 4, 0, 64, True)
+    wi = random_unit_vectors(16, seed=4, hemisphere="upper")
+    wo = random_unit_vectors(16, seed=5, hemisphere="upper")
+    a = outer.eval(wi, wo, int(Lobe.ALL), None)
+    ref = inner_model.estimate(wi, wo, wavelengths=wl, seed=11)
+    z = (a - ref.value) / (np.sqrt(2) * ref.stderr)
+    assert np.max(np.abs(z)) < sidak_z_limit(ALPHA, z.size), np.round(z, 1)
+
+
+def test_09_thread_count_does_not_change_any_bit(monkeypatch):
+    """eval, estimate errors and sample are bitwise the same on 1, 2 and 3 threads."""
+    m = bl.presets.xenopeltis(samples=32)
+    wi = random_unit_vectors(24, seed=8, hemisphere="upper")
+    wo = random_unit_vectors(24, seed=9, hemisphere="upper")
+    results = []
+    for threads in ("1", "2", "3"):
+        monkeypatch.setenv("BSDFLAB_THREADS", threads)
+        e = m.estimate(wi, wo, wavelengths=[450.0, 650.0])
+        s = m.sample(wi, seed=3, wavelengths=[450.0, 650.0])
+        results.append((e.value, e.stderr, s.wo, s.weight))
+    for other in results[1:]:
+        for x, y in zip(results[0], other):
+            assert np.array_equal(x, y)
+
+
+def test_10_scattered_part_is_the_model_without_the_top_reflection():
+    """estimate(scattered_only) + the top interface's own reflection = estimate: the same
+    walks (same seed) serve both, so they differ by exactly the closed-form term."""
+    m = bl.presets.xenopeltis(samples=64)
+    wi = random_unit_vectors(16, seed=10, hemisphere="upper")
+    wo = random_unit_vectors(16, seed=11, hemisphere="upper")
+    full = m.estimate(wi, wo, wavelengths=[550.0])
+    part = m.estimate(wi, wo, wavelengths=[550.0], scattered_only=True)
+    top = m.exact_part.eval(wi, wo, wavelengths=[550.0])
+    assert np.allclose(full.value, part.value + top, rtol=1e-12, atol=1e-15)
+    assert np.array_equal(full.stderr, part.stderr)
+    assert m.film_thickness_nm == bl.presets.FILM_THICKNESS_NM
