@@ -39,7 +39,7 @@ def luminance_rel_variance(value, err, wl):
 
 def run(core, wi, wo, samples, seed=1):
     t0 = time.perf_counter()
-    value, err, nonfinite = core.estimate(wi, wo, int(bl.Lobe.ALL), None, samples, seed)
+    value, err, nonfinite, _ = core.estimate(wi, wo, int(bl.Lobe.ALL), None, samples, seed)
     assert nonfinite == 0, f"{nonfinite} non-finite walks"
     return value, err, time.perf_counter() - t0
 

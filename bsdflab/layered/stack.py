@@ -13,11 +13,13 @@ eval() is a Monte Carlo estimate: `samples` random walks per direction pair, see
 standard error and the number of walks whose contribution was not finite (counted, never
 hidden: 0 for a sound model); `eval_with_error` returns the first two. The top interface's delta reflection (a smooth top) is not part of
 eval: `delta_reflectance` gives it exactly, and `sample` returns it as a delta lobe.
-`pdf` is a deterministic approximation for multiple importance sampling (the walk's exact
-density is not available); `sample`'s weight is the walk's unbiased throughput.
+`pdf` is the density with which `sample` returns wo (the top's own reflection exactly, the
+walk's exits by an unbiased estimate seeded from (seed, wi, wo)), for multiple importance
+sampling; `sample`'s weight is the walk's unbiased throughput.
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,6 +38,7 @@ MAX_SLABS = 16
 IOR_TOLERANCE = 1e-9
 MAX_WALKS = 1 << 24
 MAX_DEPTH = 1 << 16
+PDF_SAMPLES = 1
 
 
 @dataclass(frozen=True)
@@ -45,6 +48,7 @@ class Estimate:
     value: np.ndarray   # (N, C)
     stderr: np.ndarray  # (N, C) standard error (for colour output the bound sum_l |W_cl| sigma_l)
     nonfinite: int      # walks whose contribution was not finite (they count as 0)
+    capped: int = 0     # walks cut by max_depth (truncated, so biased low; 0 for a sound model)
 
 
 def _model(value, name: str) -> BSDF:
@@ -69,14 +73,24 @@ class Layered(BSDF):
     seed : int in [0, 2^64)
         Seed of the walks (combined with the directions). Default 0.
     max_depth : int in [1, 2^16]
-        Scattering events per walk before it is cut (Russian roulette ends most walks
-        much earlier). Default 256.
+        Events per walk before it is cut: a safety net. Russian roulette on the
+        throughput ends walks without bias; a walk the cap cuts is truncated (biased
+        low) and counted (``Estimate.capped``, ``capped_walks``). Default 2^16; the
+        former default 256 cut walks in thick, bright slabs (-8.9 % at optical depth 10,
+        single-scattering albedo 0.999, over a white base).
+    pdf_samples : int in [0, 2^16]
+        Walks of one ``pdf`` estimate (seeded from (seed, wi, wo), so ``pdf`` is a fixed
+        function of the pair). ``pdf`` is the density with which ``sample`` returns wo:
+        the top's own reflection exactly plus an unbiased estimate of the walk's exits
+        through a rough outer boundary (docs/estimators.md). 0: estimator version 4's
+        deterministic approximation (for comparisons). Default 1 (bench/bench_layered_pdf.py:
+        more walks cost more render time than their MIS weights save on the snake).
     """
 
     type_name = "layered"
 
     def __init__(self, interfaces, slabs, base, samples: int = 256, seed: int = 0,
-                 max_depth: int = 256):
+                 max_depth: int = MAX_DEPTH, pdf_samples: int = PDF_SAMPLES):
         super().__init__()
         if not isinstance(interfaces, (list, tuple)) or not interfaces:
             raise ValueError("interfaces must be a non-empty list (top first)")
@@ -97,6 +111,7 @@ class Layered(BSDF):
         self.samples = _positive_int("samples", samples)
         self.seed = check.seed(seed)
         self.max_depth = _positive_int("max_depth", max_depth)
+        self.pdf_samples = check.integer("pdf_samples", pdf_samples, 0, MAX_DEPTH)
         self._check_indices()
 
     def _check_indices(self) -> None:
@@ -116,7 +131,7 @@ class Layered(BSDF):
             list(wl), boundaries, [s.thickness_um for s in self.slabs],
             [list(s.sigma_a_at(wl)) for s in self.slabs], [s.sigma_s for s in self.slabs],
             [s.phase.core_kind for s in self.slabs], [s.phase.core_parameter for s in self.slabs],
-            self.samples, self.seed, self.max_depth, nee)
+            self.samples, self.seed, self.max_depth, nee, self.pdf_samples)
 
     def naive(self, wavelengths) -> Any:
         """The core estimator without next-event connections (for benchmarks only)."""
@@ -138,16 +153,25 @@ class Layered(BSDF):
         core = self._core(wl)
         if scattered_only:
             core = core.scattered_part()
-        value, err, bad = core.estimate(a, b, check.lobe_mask(lobes), t, n, s)
+        value, err, bad, capped = core.estimate(a, b, check.lobe_mask(lobes), t, n, s)
+        if capped:
+            warnings.warn(f"{capped} walks reached max_depth = {self.max_depth} and were cut "
+                          "(the estimate is biased low): raise max_depth", RuntimeWarning, stacklevel=2)
         if to_rgb is not None:
             value, err = value @ to_rgb.T, err @ np.abs(to_rgb).T
-        return Estimate(value, err, int(bad))
+        return Estimate(value, err, int(bad), int(capped))
 
     def eval_with_error(self, wi, wo, wavelengths=None, samples: int | None = None,
                         seed: int | None = None, lobes: Lobe | int = Lobe.ALL, thickness=None):
         """(value, standard error), each (N, C): `estimate` without the non-finite count."""
         e = self.estimate(wi, wo, wavelengths, samples, seed, lobes, thickness)
         return e.value, e.stderr
+
+    @property
+    def capped_walks(self) -> int:
+        """Walks of ``eval`` and ``sample`` (all wavelength sets so far) that max_depth cut:
+        truncated, so biased low; 0 for a sound model (``estimate`` reports its own)."""
+        return sum(int(core.capped_walks) for core in self._cores.values())
 
     @property
     def exact_part(self) -> BSDF:
@@ -174,7 +198,8 @@ class Layered(BSDF):
     def _params(self) -> dict[str, Any]:
         return {"interfaces": [m.to_dict() for m in self.interfaces],
                 "slabs": [s.to_dict() for s in self.slabs], "base": self.base.to_dict(),
-                "samples": self.samples, "seed": self.seed, "max_depth": self.max_depth}
+                "samples": self.samples, "seed": self.seed, "max_depth": self.max_depth,
+                **({} if self.pdf_samples == PDF_SAMPLES else {"pdf_samples": self.pdf_samples})}
 
 
 def _positive_int(name: str, value) -> int:

@@ -34,21 +34,23 @@ static py::tuple estimate_many(const BSDF &model, const Darr &wi, const Darr &wo
     py::array_t<double> out({n, C}), err({n, C});
     const double *pi = wi.data(), *po = wo.data();
     double *o = out.mutable_data(), *e = err.mutable_data();
-    std::atomic<std::uint64_t> nonfinite{0};
+    std::atomic<std::uint64_t> nonfinite{0}, capped{0};
     {
         py::gil_scoped_release nogil;
-        EstimateRequest req{samples, seed};
         // Each pair is a whole Monte Carlo estimate: parallelise from a single pair up.
         parallel_for(n, 1, [&](std::size_t s, std::size_t end) {
             ThreadWorkspace lease;
-            std::uint64_t bad = 0;
+            std::uint64_t bad = 0, cut = 0;
+            EstimateRequest req{samples, seed};
+            req.capped = &cut;
             for (std::size_t i = s; i < end; ++i)
                 bad += est->estimate(row(pi, i), row(po, i), lobes, query_of(t, i), req, lease.get(),
                                      o + i * C, e + i * C);
             nonfinite += bad;
+            capped += cut;
         });
     }
-    return py::make_tuple(out, err, static_cast<std::uint64_t>(nonfinite));
+    return py::make_tuple(out, err, static_cast<std::uint64_t>(nonfinite), static_cast<std::uint64_t>(capped));
 }
 
 static py::array_t<double> delta_reflectance_many(const LayeredBSDF &b, const Darr &wi,
@@ -69,7 +71,7 @@ void bind_layered(py::module_ &m) {
                          std::vector<double> thickness, std::vector<std::vector<double>> sigma_a,
                          std::vector<double> sigma_s, std::vector<int> phase_kind,
                          std::vector<double> phase_param, int samples, uint64_t seed, int max_depth,
-                         bool nee) {
+                         bool nee, int pdf_samples) {
                  std::size_t K = thickness.size();
                  if (sigma_a.size() != K || sigma_s.size() != K || phase_kind.size() != K ||
                      phase_param.size() != K)
@@ -81,15 +83,18 @@ void bind_layered(py::module_ &m) {
                                      PhaseFunction(PhaseFunction::Kind(phase_kind[j]), phase_param[j])};
                  }
                  std::vector<std::shared_ptr<const BSDF>> b(boundaries.begin(), boundaries.end());
-                 LayeredOptions opt{samples, seed, max_depth, nee};
+                 if (pdf_samples < 0) throw std::invalid_argument("pdf_samples must be >= 0");
+                 LayeredOptions opt{samples, seed, max_depth, nee, pdf_samples};
                  return std::make_shared<LayeredBSDF>(std::move(wavelengths), std::move(b), std::move(slabs), opt);
              }),
              py::arg("wavelengths"), py::arg("boundaries"), py::arg("thickness"), py::arg("sigma_a"),
              py::arg("sigma_s"), py::arg("phase_kind"), py::arg("phase_param"), py::arg("samples"),
-             py::arg("seed"), py::arg("max_depth"), py::arg("nee"))
+             py::arg("seed"), py::arg("max_depth"), py::arg("nee"), py::arg("pdf_samples") = 1)
         .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"),
              py::arg("thickness"), py::arg("samples"), py::arg("seed"),
-             "(value, stderr, non-finite walk count) with an explicit effort and seed")
+             "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed")
+        .def_property_readonly("capped_walks", &LayeredBSDF::capped_walks,
+                               "walks of eval() and sample() cut by max_depth since construction")
         .def("delta_reflectance", &delta_reflectance_many, py::arg("wi"), py::arg("thickness") = py::none())
         .def("scattered_part", [](const std::shared_ptr<LayeredBSDF> &self) {
             return std::make_shared<ScatteredPart>(self);
@@ -98,5 +103,5 @@ void bind_layered(py::module_ &m) {
     py::class_<ScatteredPart, BSDF, std::shared_ptr<ScatteredPart>>(m, "LayeredScatteredPart")
         .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"),
              py::arg("thickness"), py::arg("samples"), py::arg("seed"),
-             "(value, stderr, non-finite walk count) with an explicit effort and seed");
+             "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed");
 }

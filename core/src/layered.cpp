@@ -283,7 +283,7 @@ void LayeredBSDF::solve_delta_region(int exit, const Query &q, Walk &ch) const {
     }
 }
 
-void LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng,
+bool LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng,
                            Walk &wk) const {
     const int K = static_cast<int>(slabs_.size()), C = channels();
     double *beta = wk.beta, *tmp = wk.tmp, *tr = wk.tr, *wgt = wk.wgt, *contrib = wk.contrib;
@@ -298,7 +298,8 @@ void LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
     // (BSDF eval with its cosine, or the phase function), `depth` the distance to the exit
     // side, `p_vertex` the density with which the vertex would have sampled -u_j.
     auto connect = [&](int j, const double *value, double depth, double p_vertex) {
-        if (!nee || !wk.ok[j]) return;
+        // Without nee, A is kept only through a delta chain (B cannot count those paths).
+        if (!wk.ok[j] || (!nee && !wk.delta[j])) return;
         double wA = wk.delta[j] ? 1.0 : power_heuristic(wk.pdf[j], p_vertex);
         if (!(wA > 0)) return;
         transmittance(j, depth / std::abs(wk.u[j].z), tr);
@@ -312,7 +313,7 @@ void LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
     // Delta-chain connection away from the exit (a scattering vertex at `depth` below the
     // exit side of region slab j): along mirror(-u_j) to N_j, then delta events only.
     auto connect_away = [&](int j, const Vec3 &w_in, double depth) {
-        if (!nee || !wk.region[j]) return;
+        if (!wk.region[j]) return;
         const Vec3 &u = wk.u[j];
         const double p = slabs_[j].phase.eval(w_in, Vec3{-u.x, -u.y, u.z});
         if (!(p > 0)) return;
@@ -350,13 +351,13 @@ void LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
         connect(j, tmp, slabs_[j].thickness, E.pdf(wi, -wk.u[j], kTransmission, q));
     }
     BSDFSample s = sample_boundary(E, wi, kTransmission, q, rng, wgt);
-    if (!s.lobe) return;
+    if (!s.lobe) return false;
     for (int c = 0; c < C; ++c) beta[c] = wgt[c];
     // Roulette compares the throughput with its value after entering, so a small entry
     // factor (grazing Fresnel transmission) does not make every walk die early.
     double beta_entry = 0;
     for (int c = 0; c < C; ++c) beta_entry = std::max(beta_entry, beta[c]);
-    if (!(beta_entry > 0)) return;
+    if (!(beta_entry > 0)) return false;
     Vec3 w = s.wo;
     double zx = entry == exit ? 0.0 : slabs_[j].thickness; // depth below the exit side
     if (entry != exit) {
@@ -368,7 +369,7 @@ void LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
         const Slab &S = slabs_[j];
         const bool up = toward_exit(w);
         const double cz = std::abs(w.z);
-        if (!(cz > 1e-9)) return;
+        if (!(cz > 1e-9)) return false;
         const double room = up ? zx : S.thickness - zx;
 
         const double t = fly(S, room, cz, rng, beta, wk.fly_tr);
@@ -393,7 +394,7 @@ void LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
                 // by the connections); an interior one may also pass on toward the exit.
                 uint32_t mask = b == exit ? uint32_t(kReflection) : uint32_t(kAll);
                 s = sample_boundary(V, -w, mask, q, rng, wgt);
-                if (!s.lobe) return;
+                if (!s.lobe) return false;
                 for (int c = 0; c < C; ++c) beta[c] *= wgt[c];
                 w = s.wo;
                 if (s.lobe & kTransmission) {
@@ -416,7 +417,7 @@ void LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
                     if (any_positive(tmp, C)) connect(j, tmp, zx, V.pdf(-w, -wk.u[j], mask, q));
                 }
                 s = sample_boundary(V, -w, mask, q, rng, wgt);
-                if (!s.lobe) return;
+                if (!s.lobe) return false;
                 for (int c = 0; c < C; ++c) beta[c] *= wgt[c];
                 w = s.wo;
                 if (s.lobe & kReflection) {
@@ -432,14 +433,15 @@ void LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
         if (depth >= kRouletteDepth) {
             double m = 0;
             for (int c = 0; c < C; ++c) m = std::max(m, beta[c] / beta_entry);
-            if (!(m > 0)) return;
+            if (!(m > 0)) return false;
             if (m < 1) {
                 const double u_survive = rng.uniform();
-                if (u_survive >= m) return;
+                if (u_survive >= m) return false;
                 for (int c = 0; c < C; ++c) beta[c] /= m;
             }
         }
     }
+    return true; // cut by the depth cap
 }
 
 std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_t lobes,
@@ -455,7 +457,7 @@ std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_
     if (wi.z < 0 && !base_transmits) return 0;
     if (wo.z < 0 && !base_transmits) return 0;
     const bool reflect = wi.z * wo.z > 0;
-    if (!(lobes & (reflect ? kReflection : kTransmission) & ~kDelta)) return 0;
+    if (!(lobes & (reflect ? kGlossyReflection : kGlossyTransmission))) return 0; // lobes()
     const int entry = wi.z > 0 ? 0 : K, exit = wo.z > 0 ? 0 : K;
 
     // Workspace layout: the walk, then x, mean, m2 (R each) and direct (C).
@@ -466,12 +468,12 @@ std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_
     std::fill(mean, mean + 2 * R, 0.0);
 
     PCG32 rng(hash_directions(req.seed, wi, wo));
-    std::uint64_t nonfinite = 0;
+    std::uint64_t nonfinite = 0, capped = 0;
     const double cos_o = std::abs(wo.z);
     for (int n = 1; n <= samples; ++n) {
         std::fill(wk.contrib, wk.contrib + C, 0.0);
         build_chain(wo, exit, q, rng, wk);
-        one_walk(wi, entry, exit, q, rng, wk);
+        if (one_walk(wi, entry, exit, q, rng, wk)) ++capped;
         bool finite = true;
         for (int c = 0; c < C; ++c) finite = finite && std::isfinite(wk.contrib[c]);
         if (!finite) { // counted and reported by the caller; never part of the mean
@@ -493,6 +495,10 @@ std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_
     for (int r = 0; r < R; ++r) {
         out[r] = mean[r] + x[r];
         err[r] = samples > 1 ? std::sqrt(m2[r] / (double(samples) * (samples - 1))) : 0.0;
+    }
+    if (capped) {
+        if (req.capped) *req.capped += capped;
+        else capped_.fetch_add(capped, std::memory_order_relaxed);
     }
     return nonfinite;
 }
@@ -551,18 +557,64 @@ std::shared_ptr<const BSDF> ScatteredPart::with_film_lookup(double thickness_nm,
 void LayeredBSDF::delta_reflectance(const Vec3 &wi, const Query &q, double *out) const {
     zero(out);
     if (!usable_direction(wi) || wi.z <= 0) return;
-    boundaries_.front()->sample(wi, 0.5, 0.5, 0.5, kDeltaReflection, q, out);
+    // Only a delta reflection counts: a rough top has none (version 4 copied whatever the
+    // masked sample returned, a leaked glossy transmission included).
+    BSDFSample s = boundaries_.front()->sample(wi, 0.5, 0.5, 0.5, kDeltaReflection, q, out);
+    if (!(s.lobe & kDeltaReflection)) zero(out);
 }
 
+// The density with which sample() returns wo, per draw (it integrates to the share of
+// draws that return a direction; the rest end inside the stack). Two parts:
+//  - the entry boundary's own reflection, drawn by sample()'s first event: exact;
+//  - the walk's exits through the outer boundary X on wo's side, if X transmits through a
+//    non-delta lobe: a last-event estimate. The walk is sample()'s own (same events, same
+//    roulette); every time it arrives at X heading out it adds X's density of
+//    transmitting toward wo, then continues as sample() does (the arrival ends the walk if
+//    X transmits). The expected sum over arrivals is the exit density at wo, so the
+//    estimate is unbiased; it is seeded from (seed, wi, wo), so pdf() is a fixed function
+//    of the pair, which multiple importance sampling needs for its weights to sum to 1.
+//  - a delta X (smooth top): the exits' density is that of the last non-delta vertex's
+//    sample refracted through X; not estimated here: the share of draws that leave
+//    through X (estimated by the same walks) spread as a cosine lobe.
+// pbrt-v4's LayeredBxDF::PDF instead estimates the two-interface TRT density without the
+// medium, mixed with 10 % uniform; it does not integrate to the sampler's share.
 double LayeredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const {
-    // A deterministic approximation for MIS (sample() is a random walk whose exact density
-    // is not available): the top's own glossy lobe weighted by its reflectance, the rest
-    // spread as a cosine lobe over the exit hemisphere(s).
     if (!usable_direction(wi) || !usable_direction(wo)) return 0.0;
     const bool base_transmits = boundaries_.back()->lobes() & kTransmission;
     if ((wi.z < 0 || wo.z < 0) && !base_transmits) return 0.0;
     const bool reflect = wi.z * wo.z > 0;
-    if (!(lobes & (reflect ? kReflection : kTransmission) & ~kDelta)) return 0.0;
+    if (!(lobes & (reflect ? kGlossyReflection : kGlossyTransmission))) return 0.0;
+    const int K = static_cast<int>(slabs_.size()), C = channels();
+    const BSDF &E = *boundaries_[wi.z > 0 ? 0 : K];
+    const int n = options_.pdf_samples;
+    if (n < 1) return approximate_pdf(wi, wo, reflect, q);
+    double p = reflect ? E.pdf(wi, wo, kAll, q) : 0.0;
+    const int x = wo.z > 0 ? 0 : K;
+    ThreadWorkspace lease;
+    double *buf = lease.get().doubles(3 * C);
+    PCG32 rng(hash_directions(options_.seed ^ 0x9df5a1e3c4b2d187ull, wi, wo));
+    ExitDensity density{wo, x, (boundaries_[x]->lobes() & kNonDeltaTransmission) != 0, 0.0};
+    int left_through_x = 0;
+    for (int i = 0; i < n; ++i) {
+        const double u1 = rng.uniform();
+        const double u2x = rng.uniform();
+        const double u2y = rng.uniform();
+        BSDFSample s = boundaries_[wi.z > 0 ? 0 : K]->sample(wi, u1, u2x, u2y, kAll, q, buf + C);
+        if (!s.lobe || (s.lobe & kReflection)) continue;
+        BSDFSample out = walk(wi, s, q, rng, buf, &density);
+        if (out.lobe && !(out.lobe & kDelta) && (out.wo.z > 0) == (wo.z > 0)) ++left_through_x;
+    }
+    if (density.rough) return p + density.sum / n;
+    // delta X: the share of draws leaving through X as a cosine lobe
+    return p + double(left_through_x) / n * std::abs(wo.z) * kInvPi;
+}
+
+// Estimator version 4's pdf (pdf_samples = 0, kept for comparisons): the entry's glossy
+// lobe weighted by its reflectance, the rest spread as a cosine lobe over the exit
+// hemisphere(s). It integrates to 1, while the sampler returns a direction for only a
+// share of its draws, and its shape differs from the walk's exits at grazing angles.
+double LayeredBSDF::approximate_pdf(const Vec3 &wi, const Vec3 &wo, bool reflect, const Query &q) const {
+    const bool base_transmits = boundaries_.back()->lobes() & kTransmission;
     const BSDF &E = *boundaries_[wi.z > 0 ? 0 : boundaries_.size() - 1];
     const int C = channels();
     ThreadWorkspace lease;
@@ -586,7 +638,7 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
     PCG32 rng(hash_directions(options_.seed, wi, Vec3{u1, u2x, u2y}));
     ThreadWorkspace lease;
     double *buf = lease.get().doubles(3 * C);
-    double *beta = buf, *w = buf + C, *fly_tr = buf + 2 * C;
+    double *w = buf + C;
 
     BSDFSample s = boundaries_[entry]->sample(wi, u1, u2x, u2y, kAll, q, w);
     if (!s.lobe) return {};
@@ -598,6 +650,22 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
         if (!(s.lobe & kDelta)) s.pdf = pdf(wi, s.wo, kAll, q);
         return s;
     }
+    BSDFSample out = walk(wi, s, q, rng, buf, nullptr);
+    if (!out.lobe || !(out.lobe & lobes)) return {};
+    if (!(out.lobe & kDelta)) out.pdf = pdf(wi, out.wo, kAll, q);
+    std::copy(buf, buf + C, weight);
+    return out;
+}
+
+// sample()'s walk after the entry boundary transmitted (`s`: that sample, its weight in
+// buf[C..2C)). Returns the exit (weight in buf[0..C)) or nothing when the walk ends
+// inside. With `density`, every arrival at boundary density->boundary heading out adds
+// that boundary's density of transmitting toward density->wo (pdf()).
+BSDFSample LayeredBSDF::walk(const Vec3 &wi, BSDFSample s, const Query &q, PCG32 &rng, double *buf,
+                             ExitDensity *density) const {
+    const int C = channels(), K = static_cast<int>(slabs_.size());
+    double *beta = buf, *w = buf + C, *fly_tr = buf + 2 * C;
+    const int entry = wi.z > 0 ? 0 : K;
     std::copy(w, w + C, beta);
     double eta = s.eta; // product of the relative indices crossed so far
     // A path with no non-delta vertex is a delta lobe of the stack (eval has no density
@@ -632,6 +700,8 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
             continue;
         }
         const int b = down ? j + 1 : j;
+        if (density && density->rough && b == density->boundary)
+            density->sum += boundaries_[b]->pdf(-dir, density->wo, kAll, q);
         s = sample_boundary(*boundaries_[b], -dir, kAll, q, rng, w);
         if (!s.lobe) return {};
         for (int c = 0; c < C; ++c) beta[c] *= w[c];
@@ -648,10 +718,8 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
                     out.lobe = reflected ? kDeltaReflection : kDeltaTransmission;
                 else
                     out.lobe = reflected ? kGlossyReflection : kGlossyTransmission;
-                if (!(out.lobe & lobes)) return {};
-                out.pdf = all_delta ? delta_prob : pdf(wi, dir, kAll, q);
+                out.pdf = all_delta ? delta_prob : 0.0; // non-delta: the caller's pdf()
                 out.eta = reflected ? 1.0 : eta;
-                std::copy(beta, beta + C, weight);
                 return out;
             }
             j += down ? 1 : -1;
@@ -660,6 +728,7 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
             zd = down ? S.thickness : 0.0;
         }
     }
+    capped_.fetch_add(1, std::memory_order_relaxed); // cut by the depth cap
     return {};
 }
 

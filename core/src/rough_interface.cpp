@@ -65,12 +65,17 @@ bool RoughInterface::half_vector(const Vec3 &wi, const Vec3 &wo, Vec3 &m, bool &
     return m.z > 0;
 }
 
-double RoughInterface::reflect_probability(const double *R, const double *T, uint32_t lobes) const {
-    bool want_r = lobes & kGlossyReflection, want_t = lobes & kGlossyTransmission;
-    if (!want_t || !term_->transmissive()) return want_r ? 1.0 : 0.0;
-    if (!want_r) return 0.0;
+double RoughInterface::choice_probability(const double *R, const double *T, uint32_t lobes,
+                                          bool reflect) const {
+    const bool want_r = lobes & kGlossyReflection;
+    const bool want_t = term_->transmissive() && (lobes & kGlossyTransmission);
+    // A lobe outside the mask is never picked (version 4 gave transmission 1 - 0 when
+    // the mask held no glossy lobe at all: a leak).
+    if (!(reflect ? want_r : want_t)) return 0.0;
+    if (!want_r || !want_t) return 1.0;
     double Rm = channel_mean(R, channels()), Tm = channel_mean(T, channels());
-    return Rm + Tm > 0 ? Rm / (Rm + Tm) : 0.0;
+    double p_r = Rm + Tm > 0 ? Rm / (Rm + Tm) : 0.0;
+    return reflect ? p_r : 1.0 - p_r;
 }
 
 void RoughInterface::eval(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, const Query &q,
@@ -139,8 +144,7 @@ double RoughInterface::pdf_single(const Vec3 &wi, const Vec3 &wo, uint32_t lobes
     const int C = channels();
     double *R = scratch(0, C), *T = scratch(1, C);
     term_->eval(dim, q, R, T);
-    double p_r = reflect_probability(R, T, lobes);
-    double prob = reflect ? p_r : 1.0 - p_r;
+    double prob = choice_probability(R, T, lobes, reflect);
     if (!(prob > 0)) return 0.0;
     Vec3 wi_up = wi.z > 0 ? wi : -wi;
     // eta^2 |dom| / (dim + eta dom)^2, written so that no extreme index overflows.
@@ -209,10 +213,9 @@ BSDFSample RoughInterface::sample_single(const Vec3 &wi_, double u1, double u2x,
     double dim = dot(wi, m);
     double *R = scratch(0, C), *T = scratch(1, C);
     term_->eval(dim, q, R, T);
-    double p_r = reflect_probability(R, T, lobes);
-    bool pick_r = transmits && (lobes & kGlossyReflection) && (lobes & kGlossyTransmission) ? u1 < p_r
-                                                                                             : p_r > 0;
-    double prob = pick_r ? p_r : 1.0 - p_r;
+    const double p_r = choice_probability(R, T, lobes, true);
+    const bool pick_r = u1 < p_r; // p_r is 0 or 1 unless both glossy lobes are requested
+    double prob = pick_r ? p_r : choice_probability(R, T, lobes, false);
     if (!(prob > 0)) return {};
 
     BSDFSample s;

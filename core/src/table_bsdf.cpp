@@ -268,12 +268,14 @@ void TabulatedBSDF::mixture(const Vec3 &wi, const Query &q, double &p_delta, dou
 
 double TabulatedBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const {
     if (!usable_direction(wi) || !usable_direction(wo) || wi.z <= 0) return 0.0;
+    // sample() draws from the whole mixture and drops a direction outside the mask, so
+    // the density of what it returns is the mixture's inside the mask and 0 outside.
+    if (!(lobes & (wo.z > 0 ? kGlossyReflection : kGlossyTransmission))) return 0.0;
     double p_delta, p_direct;
     mixture(wi, q, p_delta, p_direct, nullptr);
     double p = (1.0 - p_delta - p_direct) * table_pdf(wi, wo, q);
     if (direct_ && p_direct > 0 && wo.z > 0)
         p += p_direct * direct_->pdf(wi, wo, kGlossyReflection | kDiffuseReflection, direct_query(q));
-    (void)lobes;
     return p;
 }
 
@@ -326,11 +328,12 @@ BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u
         double base = std::atan2(wi.y, wi.x) + phi;
         s.wo = {sz * std::cos(base), sz * std::sin(base), lobe == 0 ? cz : -cz};
     }
+    s.lobe = s.wo.z > 0 ? kGlossyReflection : kGlossyTransmission;
+    if (!(s.lobe & lobes)) return {};
     s.pdf = pdf(wi, s.wo, lobes, q);
     if (!(s.pdf > 0)) return {};
     eval(wi, s.wo, lobes & ~kDelta, q, weight);
     for (int c = 0; c < C; ++c) weight[c] /= s.pdf;
-    s.lobe = s.wo.z > 0 ? kGlossyReflection : kGlossyTransmission;
     // Transmitted weights carry (n_i / n_t)^2 of the whole stack: report its eta so a
     // path tracer's Russian roulette (throughput x eta^2) sees the radiance scaling.
     if (s.lobe == kGlossyTransmission) s.eta = transmission_eta_;

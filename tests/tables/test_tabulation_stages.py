@@ -51,7 +51,7 @@ def assert_production_table_unbiased(model, grid, ref_rel_error, ref_min_samples
     (a, sa), (b, sb) = table_mean(prod), table_mean(ref)
     z = (a - b) / np.hypot(sa, sb)
     assert abs(z) < sidak_z_limit(ALPHA, 1), (a, sa, b, sb, z)
-    assert prod.meta["nonfinite_walks"] == 0 and prod.meta["estimator_version"] == 4
+    assert prod.meta["nonfinite_walks"] == 0 and prod.meta["estimator_version"] == 5
     assert np.all(prod.samples >= 512)
 
 

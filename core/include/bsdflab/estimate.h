@@ -22,7 +22,9 @@ namespace bsdflab {
 // Bumped whenever the numbers an estimator produces for a given (model, directions, seed)
 // change (a fix, a different order of random draws). Cached tables key on it.
 // 4: the tabulator's walks read thin films from a per-thickness lookup (film_lookup.h).
-constexpr int kEstimatorVersion = 4;
+// 5: layered walks end by roulette alone (the depth cap, now 2^16 events by default, is a
+//    counted safety net); nee=false keeps the connections no other strategy replaces.
+constexpr int kEstimatorVersion = 5;
 
 // Growable scratch memory of one thread's estimates.
 class EstimateWorkspace {
@@ -68,6 +70,9 @@ struct EstimateRequest {
     uint64_t seed = 0;
     const double *P = nullptr;
     int rows = 0;
+    // Optional out: walks cut by the model's depth cap are added here (a cut walk is a
+    // truncated, biased sample; roulette ends walks long before the cap in sound models).
+    std::uint64_t *capped = nullptr;
     int out_rows(int channels) const { return P ? rows : channels; }
 };
 

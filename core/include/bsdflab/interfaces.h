@@ -67,8 +67,10 @@ private:
                              const Query &q, double *weight) const;
     // The half vector of a configuration (upper hemisphere) and whether it reflects.
     bool half_vector(const Vec3 &wi, const Vec3 &wo, Vec3 &m, bool &reflect, double &eta_rel) const;
-    // Probability of picking reflection at microfacet cosine cos_im, from mean R and T.
-    double reflect_probability(const double *R, const double *T, uint32_t lobes) const;
+    // Probability of picking reflection (reflect) or transmission (!reflect) at a
+    // microfacet with reflectance R and transmittance T, among the glossy lobes in
+    // `lobes` (channel means); 0 for a lobe the mask excludes.
+    double choice_probability(const double *R, const double *T, uint32_t lobes, bool reflect) const;
 
     std::shared_ptr<const FresnelTerm> term_;
     Microfacet mf_;

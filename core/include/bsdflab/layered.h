@@ -24,8 +24,9 @@
 // smooth exit over a smooth base or interior boundary), is counted by the exact
 // delta-region connection (solve_delta_region; neither A, which goes straight, nor B,
 // which needs a rough exit-side boundary, sees it). The walk itself never leaves through
-// the exit side, so no path is counted twice. Russian roulette after
-// a few bounces and a depth cap end every walk. The top boundary's own reflection is added
+// the exit side, so no path is counted twice. Russian roulette on the throughput after
+// a few events ends every walk without bias; the depth cap is only a safety net, and the
+// walks it cuts are counted (EstimateRequest::capped, capped_walks()). The top boundary's own reflection is added
 // exactly (non-delta part); its delta part is not estimated: see delta_reflectance / sample.
 //
 // Paths whose every vertex is a delta event (e.g. a smooth coat over a smooth mirror) form
@@ -34,6 +35,7 @@
 // Random numbers are drawn into named locals, in program order, so that the streams (and
 // every estimate) are the same whatever compiler evaluates function arguments in which order.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -54,8 +56,9 @@ struct Slab {
 struct LayeredOptions {
     int samples = 256;    // walks per eval()
     uint64_t seed = 0;
-    int max_depth = 256;  // scattering events per walk
-    bool nee = true;      // false: strategy B only (the naive walk, for benchmarks)
+    int max_depth = 1 << 16; // events per walk: a safety net, counted when hit (capped_walks)
+    bool nee = true;         // false: B alone wherever it can count a path (same BSDF, no MIS)
+    int pdf_samples = 1;     // walks of one pdf() estimate (0: version 4's approximation)
 };
 
 class LayeredBSDF final : public BSDF, public StochasticEstimator {
@@ -88,9 +91,21 @@ public:
     // The top boundary: its reflection is the part of the model known exactly.
     const std::shared_ptr<const BSDF> &top() const { return boundaries_.front(); }
     const LayeredOptions &options() const { return options_; }
+    // Walks of eval() and sample() cut by max_depth since construction (estimate() reports
+    // its own through EstimateRequest::capped). A cut walk is biased: 0 for a sound model.
+    std::uint64_t capped_walks() const { return capped_.load(std::memory_order_relaxed); }
 
 private:
     struct Walk;
+    struct ExitDensity {   // pdf(): the walk's arrivals at `boundary` heading out
+        Vec3 wo;
+        int boundary;
+        bool rough;        // the boundary transmits through a non-delta lobe
+        double sum;        // of its densities of transmitting toward wo
+    };
+    double approximate_pdf(const Vec3 &wi, const Vec3 &wo, bool reflect, const Query &q) const;
+    BSDFSample walk(const Vec3 &wi, BSDFSample entry, const Query &q, PCG32 &rng, double *buf,
+                    ExitDensity *density) const;
     std::uint64_t estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
                                 const EstimateRequest &request, bool include_direct,
                                 EstimateWorkspace &workspace, double *mean, double *err) const;
@@ -99,7 +114,8 @@ private:
     void build_chain(const Vec3 &wo, int exit, const Query &q, PCG32 &rng, Walk &wk) const;
     // The exact all-delta continuations of the chain (bounces inside the delta region).
     void solve_delta_region(int exit, const Query &q, Walk &wk) const;
-    void one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng, Walk &wk) const;
+    // One walk; true if the depth cap cut it.
+    bool one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng, Walk &wk) const;
     void transmittance(int slab, double distance, double *tr) const;
     // Advances a flight of at most `room` depth in slab j along a direction of |z| = cz,
     // sampled by spectral MIS over the channels' extinctions (so absorbing slabs scatter
@@ -112,6 +128,7 @@ private:
     std::vector<std::shared_ptr<const BSDF>> boundaries_;
     std::vector<Slab> slabs_;
     LayeredOptions options_;
+    mutable std::atomic<std::uint64_t> capped_{0};
 };
 
 // "The model without its top interface's own reflection": the light that entered the
