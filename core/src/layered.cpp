@@ -599,7 +599,7 @@ double LayeredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Qu
         const double u1 = rng.uniform();
         const double u2x = rng.uniform();
         const double u2y = rng.uniform();
-        BSDFSample s = boundaries_[wi.z > 0 ? 0 : K]->sample(wi, u1, u2x, u2y, kAll, q, buf + C);
+        BSDFSample s = E.sample(wi, u1, u2x, u2y, kAll, q, buf + C);
         if (!s.lobe || (s.lobe & kReflection)) continue;
         BSDFSample out = walk(wi, s, q, rng, buf, &density);
         if (out.lobe && !(out.lobe & kDelta) && (out.wo.z > 0) == (wo.z > 0)) ++left_through_x;
