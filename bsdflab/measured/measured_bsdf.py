@@ -67,6 +67,9 @@ class Measured(BSDF):
         return super()._channels(wavelengths)
 
     def _build(self, wavelengths: np.ndarray):
+        if not self.spectral and tuple(float(w) for w in wavelengths) != RGB_NODES:
+            raise ValueError("this RGL file stores RGB, not spectra: it answers in RGB only (a "
+                             "spectral caller, e.g. tabulate with wavelengths, needs a spectral file)")
         return core_of(self.data, wavelengths)
 
     def render_core(self):

@@ -68,3 +68,13 @@ def test_dict_form(files):
 
     m = Measured(files[0])
     assert from_dict(m.to_dict()) == m and m.to_dict() == {"type": "measured", "path": str(files[0])}
+
+
+def test_render_cores(files):
+    rgb, spectral = Measured(files[0]), Measured(files[1])
+    core, P = rgb.render_core()
+    assert core.channels == 3 and P is None
+    core, P = spectral.render_core()
+    assert core.channels == 81 and P.shape == (3, 81)
+    with pytest.raises(ValueError, match="RGB"):
+        rgb._core(np.array([550.0]))
