@@ -8,7 +8,8 @@ float64 values, all red, then green, then blue, phi_d fastest. Values times the 
 Rusinkiewicz's (1998); theta_h is stored on a square-root grid (index = sqrt(theta_h /
 90 deg) * 90), phi_d over [0, 180) deg by reciprocity. Lookup is nearest-cell, as the
 dataset's reader. The dataset marks unmeasured cells with negative values: they read as 0.
-Sampling is cosine-weighted.
+Sampling is cosine-weighted. Evaluated by the C++ core (``MerlBSDF``, usable by the
+renderer); ``reference`` is the same lookup in numpy, for cross-checks.
 """
 from __future__ import annotations
 
@@ -17,9 +18,9 @@ from typing import Any
 
 import numpy as np
 
+from bsdflab import _core
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.lobes import Lobe
-from bsdflab.measured.numpy_core import NumpyCore
 
 DIMS = (90, 90, 180)
 SCALES = np.array([1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0])
@@ -73,6 +74,8 @@ def half_diff(wi: np.ndarray, wo: np.ndarray):
 
 
 class _MerlModel:
+    """The nearest-cell lookup in numpy (f cos theta_o), the C++ core's cross-check."""
+
     def __init__(self, values):
         self.values = values
 
@@ -85,17 +88,6 @@ class _MerlModel:
         f = self.values[:, ih, idd, ip].T
         active = (wi[:, 2] > 0) & (wo[:, 2] > 0)
         return np.where(active[:, None], f * np.maximum(wo[:, 2], 0)[:, None], 0.0)
-
-    def pdf(self, wi, wo):
-        return np.where((wi[:, 2] > 0) & (wo[:, 2] > 0), np.maximum(wo[:, 2], 0) / np.pi, 0.0)
-
-    def sample(self, wi, u2):
-        r, phi = np.sqrt(u2[:, 0]), 2 * np.pi * u2[:, 1]
-        wo = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.maximum(1 - u2[:, 0], 0))], axis=1)
-        pdf = self.pdf(wi, wo)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            weight = self.eval(wi, wo) / pdf[:, None]
-        return wo, np.where(pdf[:, None] > 0, weight, 0.0), pdf
 
 
 class Merl(BSDF):
@@ -114,7 +106,8 @@ class Merl(BSDF):
         if not isinstance(path, (str, os.PathLike)):
             raise ValueError(f"path must be the path of a MERL .binary file, got {type(path).__name__}")
         self.path = os.fspath(path)
-        self.model = _MerlModel(read_merl(self.path))
+        self.values = read_merl(self.path)
+        self.reference = _MerlModel(self.values)
 
     @property
     def lobes(self) -> Lobe:
@@ -126,10 +119,10 @@ class Merl(BSDF):
         return np.arange(3, dtype=float), None
 
     def _build(self, wavelengths):
-        return NumpyCore(self.model, 3, Lobe.GLOSSY_REFLECTION)
+        return _core.MerlBSDF(np.ascontiguousarray(self.values, dtype=np.float32).ravel())
 
     def render_core(self):
-        raise ValueError("the renderer needs a C++ BSDF; Merl is evaluated in numpy in this version")
+        return self._core(np.arange(3, dtype=float)), None
 
     def _params(self) -> dict[str, Any]:
         return {"path": self.path}

@@ -37,4 +37,8 @@ void bind_measured(py::module_ &m) {
              py::arg("channel_nodes"), py::arg("ndf"), py::arg("ndf_h"), py::arg("ndf_w"), py::arg("sigma"),
              py::arg("sigma_h"), py::arg("sigma_w"), py::arg("vndf"), py::arg("vndf_h"), py::arg("vndf_w"),
              py::arg("luminance"), py::arg("values"), py::arg("n"));
+
+    py::class_<MerlBSDF, BSDF, std::shared_ptr<MerlBSDF>>(m, "MerlBSDF")
+        .def(py::init<std::vector<float>>(), py::arg("values"),
+             "values: 3 x 90 x 90 x 180 f values (1/sr), scales applied");
 }

@@ -275,3 +275,61 @@ BSDFSample MeasuredBSDF::sample(const Vec3 &wi, double, double u2x, double u2y, 
 }
 
 } // namespace bsdflab
+
+namespace bsdflab {
+
+namespace {
+constexpr int kThetaH = 90, kThetaD = 90, kPhiD = 180;
+// Rusinkiewicz's (theta_h, theta_d, phi_d) -> the MERL cell index
+std::size_t merl_index(const Vec3 &wi, const Vec3 &wo) {
+    Vec3 h = wi + wo;
+    h = h * (1.0 / length(h));
+    double theta_h = std::acos(std::clamp(h.z, -1.0, 1.0)), phi_h = std::atan2(h.y, h.x);
+    double c = std::cos(-phi_h), s = std::sin(-phi_h);
+    double x = c * wi.x - s * wi.y, y = s * wi.x + c * wi.y, z = wi.z;
+    double ct = std::cos(-theta_h), st = std::sin(-theta_h);
+    double dx = ct * x + st * z, dz = -st * x + ct * z;
+    double theta_d = std::acos(std::clamp(dz, -1.0, 1.0)), phi_d = std::atan2(y, dx);
+    if (phi_d < 0) phi_d += kPi;
+    int ih = std::clamp(int(std::sqrt(std::clamp(theta_h / (kPi / 2), 0.0, 1.0)) * kThetaH), 0, kThetaH - 1);
+    int id = std::clamp(int(theta_d / (kPi / 2) * kThetaD), 0, kThetaD - 1);
+    int ip = std::clamp(int(phi_d / kPi * kPhiD), 0, kPhiD - 1);
+    return (std::size_t(ih) * kThetaD + id) * kPhiD + ip;
+}
+} // namespace
+
+MerlBSDF::MerlBSDF(std::vector<float> values) : BSDF({0.0, 1.0, 2.0}), values_(std::move(values)) {
+    if (values_.size() != std::size_t(3) * kThetaH * kThetaD * kPhiD)
+        throw std::invalid_argument("MerlBSDF: values must hold 3 x 90 x 90 x 180 entries");
+}
+
+void MerlBSDF::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &, double *out) const {
+    zero(out);
+    if (!(lobes & kGlossyReflection) || !(wi.z > 0) || !(wo.z > 0) || !all_finite(wi) || !all_finite(wo)) return;
+    const std::size_t i = merl_index(wi, wo), n = std::size_t(kThetaH) * kThetaD * kPhiD;
+    for (int c = 0; c < 3; ++c) out[c] = double(values_[c * n + i]) * wo.z;
+}
+
+double MerlBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &) const {
+    if (!(lobes & kGlossyReflection) || !(wi.z > 0) || !(wo.z > 0)) return 0.0;
+    return wo.z / kPi;
+}
+
+BSDFSample MerlBSDF::sample(const Vec3 &wi, double, double u2x, double u2y, uint32_t lobes, const Query &q,
+                            double *weight) const {
+    BSDFSample s;
+    zero(weight);
+    if (!(lobes & kGlossyReflection) || !(wi.z > 0) || !all_finite(wi)) return s;
+    double r = std::sqrt(u2x), phi = 2.0 * kPi * u2y;
+    Vec3 wo(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(1.0 - u2x, 0.0)));
+    double p = pdf(wi, wo, lobes, q);
+    if (!(p > 0)) return s;
+    eval(wi, wo, lobes, q, weight);
+    for (int c = 0; c < 3; ++c) weight[c] /= p;
+    s.wo = wo;
+    s.pdf = p;
+    s.lobe = kGlossyReflection;
+    return s;
+}
+
+} // namespace bsdflab

@@ -75,4 +75,21 @@ private:
     Warp2D ndf_, sigma_, vndf_, luminance_, values_;
 };
 
+// A MERL database BRDF (Matusik et al. 2003): f in 1/sr, RGB, on 90 theta_h (square-root
+// spacing) x 90 theta_d x 180 phi_d cells of Rusinkiewicz's half/difference angles,
+// nearest-cell lookup as the dataset's reader; cosine-weighted sampling.
+class MerlBSDF final : public BSDF {
+public:
+    // values: 3 x 90 x 90 x 180, scales applied, negatives already zeroed
+    explicit MerlBSDF(std::vector<float> values);
+    uint32_t lobes() const override { return kGlossyReflection; }
+    void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const override;
+    double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const override;
+    BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes, const Query &q,
+                      double *weight) const override;
+
+private:
+    std::vector<float> values_;
+};
+
 } // namespace bsdflab
