@@ -35,6 +35,9 @@ class Measured(BSDF):
     """
 
     type_name = "measured"
+    # Its dict names a file on this machine: an HTTP request must never carry it (the service
+    # resolves measured files by artefact hash; see docs/measured.md).
+    reads_path = True
 
     def __init__(self, path):
         super().__init__()

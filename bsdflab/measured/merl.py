@@ -100,6 +100,9 @@ class Merl(BSDF):
     """
 
     type_name = "merl"
+    # Its dict names a file on this machine: an HTTP request must never carry it (the service
+    # resolves measured files by artefact hash; see docs/measured.md).
+    reads_path = True
 
     def __init__(self, path):
         super().__init__()
