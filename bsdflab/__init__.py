@@ -16,5 +16,7 @@ from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, spectrum_to_rgb
 
 __version__ = "0.1.0"
 
+from bsdflab.measured import Measured, Merl  # noqa: E402  (its table export reads __version__)
+
 __all__ = ["BSDF", "BSDFSample", "Conductor", "DEFAULT_WAVELENGTHS", "Dielectric", "Diffuse",
-           "Layered", "Lobe", "PhaseFunction", "RoughConductor", "Slab", "RoughDielectric", "Spectrum", "from_dict", "optics", "spectra", "spectrum_to_rgb", "__version__"]
+           "Layered", "Lobe", "Measured", "Merl", "PhaseFunction", "RoughConductor", "Slab", "RoughDielectric", "Spectrum", "from_dict", "optics", "spectra", "spectrum_to_rgb", "__version__"]

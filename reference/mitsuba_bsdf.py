@@ -109,6 +109,8 @@ def to_mitsuba(bsdf, wavelength: float | None = None) -> dict[str, Any]:
     d = _bsdf_dict(bsdf)
     wl = _check_wavelength(wavelength)
     kind = d["type"]
+    if kind == "measured":  # an RGL .bsdf file: Mitsuba's own reader of the same file
+        return {"type": "measured", "filename": str(d["path"])}
     if d.get("film"):
         raise ValueError(f"a thin-film coated {kind} has no Mitsuba counterpart")
     if d.get("multiscatter"):

@@ -30,11 +30,32 @@ def register(sub) -> None:
     plot.add_argument("--out", default="table.png", help="output PNG path (default table.png)")
     plot.add_argument("--thickness-index", type=int, default=0,
                       help="which film-thickness node to plot, for tables with several (default 0)")
+    export = actions.add_parser("export", help="write a table as a measured-BSDF file (RGL .bsdf)",
+                                description="Resample an isotropic table's reflection into an RGL "
+                                            ".bsdf file (Dupuy & Jakob 2018), which Mitsuba 3's "
+                                            "'measured' plugin and pbrt-v4's 'measured' material read "
+                                            "natively (docs/measured.md). Prints the measured "
+                                            "resampling error and the bound the file is tested against.")
+    export.add_argument("file", metavar="FILE", help="table file (.exr)")
+    export.add_argument("--format", choices=["rgl"], default="rgl", help="output format (rgl)")
+    export.add_argument("--out", required=True, help="output path (.bsdf)")
+    export.add_argument("--theta-i", type=int, default=16, help="incident elevations, 2-90 (default 16)")
+    export.add_argument("--resolution", type=int, default=32,
+                        help="nodes per side of the value grids, 4-256 (default 32)")
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    return {"info": run_info, "plot": run_plot}[args.action](args)
+    return {"info": run_info, "plot": run_plot, "export": run_export}[args.action](args)
+
+
+def run_export(args: argparse.Namespace) -> int:
+    from bsdflab.measured.rgl import export_table
+
+    report = export_table(args.file, args.out, n_theta_i=args.theta_i, resolution=args.resolution)
+    print(f"wrote         {args.out} ({report.bytes} bytes, {report.seconds:.1f} s)")
+    print(f"error         {report.summary()}")
+    return 0
 
 
 def run_plot(args: argparse.Namespace) -> int:

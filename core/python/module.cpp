@@ -8,6 +8,7 @@ void bind_fit(py::module_ &m);
 void bind_fresnel(py::module_ &m);
 void bind_interfaces(py::module_ &m);
 void bind_layered(py::module_ &m);
+void bind_measured(py::module_ &m);
 void bind_render(py::module_ &m);
 void bind_scales(py::module_ &m);
 void bind_tables(py::module_ &m);
@@ -21,6 +22,7 @@ PYBIND11_MODULE(_core, m) {
     bind_fresnel(m);
     bind_interfaces(m);
     bind_layered(m);
+    bind_measured(m);
     bind_render(m);
     bind_scales(m);
     bind_tables(m);
