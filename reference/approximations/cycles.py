@@ -19,9 +19,11 @@ three ways that change colours visibly:
    1 nm blend the film index towards the outside's (smoothstep over 0-1 nm).
 
 Fresnel amplitudes and phases are exact (s and p, 0 or pi for real indices), as in the paper.
-``jacobian`` chooses how the CMFs are resampled in frequency: False integrates cmf(1/nu) d nu
-(values resampled, no change of variable), True integrates cmf(lambda) d lambda; which one
-Cycles' precomputed table holds is decided by the renders (tests/export, docs/export.md).
+``jacobian`` chooses how the CMFs are resampled in frequency: True (default) integrates
+cmf(lambda) d lambda = cmf(1 / nu) d nu / nu^2, False the values resampled without the change
+of variable. Cycles' precomputed table holds the former: against bpy 5.0.1 renders
+(tests/export/test_cycles_thin_film.py) the default is within 0.0032 (RMS 0.0005) of Cycles'
+pixels for theta <= 58 deg, the other resampling up to 0.012 off, MaterialX's model 0.01.
 """
 from __future__ import annotations
 
@@ -37,7 +39,7 @@ TERMS = 3
 
 
 @lru_cache(maxsize=2)
-def sensitivity_table(jacobian: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def sensitivity_table(jacobian: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """(OPD grid in nm (512,), real part of the RGB sensitivity (512, 3)), each channel
     normalised to 1 at OPD 0: S_c(D) = int cmf_c cos(2 pi D nu) d nu / int cmf_c d nu."""
     import colour
@@ -61,7 +63,7 @@ def _lookup(opd_nm, jacobian: bool) -> np.ndarray:
     return np.stack([np.interp(d, grid, table[:, c]) for c in range(3)], axis=-1)
 
 
-def cycles_thin_film_rgb(n_outer, n_film, n_base, thickness_nm, cos_theta, *, jacobian: bool = False,
+def cycles_thin_film_rgb(n_outer, n_film, n_base, thickness_nm, cos_theta, *, jacobian: bool = True,
                          terms: int = TERMS) -> np.ndarray:
     """Linear Rec.709 reflectance (..., 3) of Cycles' thin-film Fresnel for a dielectric base;
     arguments as ``belcour_barla_rgb`` (they broadcast). Total internal reflection gives 1."""
