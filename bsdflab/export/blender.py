@@ -87,6 +87,7 @@ scene.render.image_settings.file_format = "OPEN_EXR"
 scene.render.image_settings.color_depth = "32"
 
 if SAVE_AS:
+    bpy.context.preferences.filepaths.save_version = 0  # no "<file>.blend1" backup beside it
     bpy.ops.wm.save_as_mainfile(filepath=SAVE_AS, compress=False)
 '''
 

@@ -69,6 +69,6 @@ def write_report_png(report: dict, f: FitResult, path: str) -> None:
     ax[1].imshow((np.clip(strip / scale, 0, 1)) ** (1 / 2.2), aspect="auto",
                  extent=[f.angles_deg[0], f.angles_deg[-1], 1.5, -0.5])
     ax[1].set_yticks([0, 1], ["exact", report["format"]])
-    ax[1].set(xlabel="incidence angle (deg)", title="specular colour at the nominal thickness (exposure-scaled)")
+    ax[1].set(xlabel="incidence angle (deg)", title="specular colour, nominal thickness (scaled)")
     fig.savefig(path, dpi=90, format="png")
     plt.close(fig)
