@@ -31,7 +31,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from bsdflab.reference.approximations._optics import XYZ_TO_SRGB, dielectric_amplitudes, refracted_cos
+from bsdflab.reference.approximations._optics import XYZ_TO_SRGB, refracted_cos
+from bsdflab.reference.approximations.belcour_barla import _series
 
 TABLE_SIZE = 512
 TABLE_MAX_OPD_NM = 60000.0 / (2.0 * np.pi)
@@ -66,28 +67,17 @@ def _lookup(opd_nm, jacobian: bool) -> np.ndarray:
 def cycles_thin_film_rgb(n_outer, n_film, n_base, thickness_nm, cos_theta, *, jacobian: bool = True,
                          terms: int = TERMS) -> np.ndarray:
     """Linear Rec.709 reflectance (..., 3) of Cycles' thin-film Fresnel for a dielectric base;
-    arguments as ``belcour_barla_rgb`` (they broadcast). Total internal reflection gives 1."""
+    arguments as ``belcour_barla_rgb`` (they broadcast). Total internal reflection gives 1.
+
+    The series is Belcour-Barla's (``belcour_barla._series``); the phases are 0 or pi, so
+    Cycles' complex table enters only through its real part: S(D, phi) = cos(phi) Re S(D)."""
     n1, n2, n3, d, c1 = np.broadcast_arrays(*(np.asarray(a, float) for a in
                                               (n_outer, n_film, n_base, thickness_nm, cos_theta)))
     t = np.clip(d, 0.0, 1.0)
-    n2 = np.where(d < 1.0, n1 + (n2 - n1) * t * t * (3.0 - 2.0 * t), n2)
-    c2 = refracted_cos(n1, n2, c1)
-    c3 = refracted_cos(n1, n3, c1)
-    tir = np.isnan(c2) | np.isnan(c3)
-    c2, c3 = np.nan_to_num(c2, nan=1.0), np.nan_to_num(c3, nan=1.0)
-    opd = 2.0 * n2 * d * c2
-    out = np.zeros(n1.shape + (3,))
-    for r12, r23 in zip(dielectric_amplitudes(n1, n2, c1, c2), dielectric_amplitudes(n2, n3, c2, c3)):
-        R12, R23 = r12**2, r23**2
-        T121 = 1.0 - R12
-        # exp(i (phi21 + phi23)) for real indices: -sign(r12) * sign(r23)
-        phasor = -np.where(r12 < 0, -1.0, 1.0) * np.where(r23 < 0, -1.0, 1.0)
-        R123 = R12 * R23
-        Rs = T121**2 * R23 / (1.0 - R123)
-        R = (R12 + Rs)[..., None] * np.ones(3)
-        Cm = Rs - T121
-        for m in range(1, int(terms) + 1):
-            Cm = Cm * np.sqrt(R123)
-            R = R + (Cm * phasor**m)[..., None] * 2.0 * _lookup(m * opd, jacobian)
-        out += 0.5 * R
-    return np.where(tir[..., None], 1.0, np.clip(out, 0.0, 1.0))
+    n2 = np.where(d < 1.0, n1 + (n2 - n1) * t * t * (3.0 - 2.0 * t), n2)   # films under 1 nm fade out
+
+    def sensitivity(opd, shift):
+        return np.cos(shift)[..., None] * _lookup(opd, jacobian)
+
+    rgb = np.clip(_series(n1, n2, n3, d, c1, terms, sensitivity), 0.0, 1.0)
+    return np.where(np.isnan(refracted_cos(n1, n3, c1))[..., None], 1.0, rgb)

@@ -9,9 +9,10 @@ explains the scene and why larger angles are left out):
 1. the mapping: Cycles' pixels equal the fitted Cycles model at the fitted parameters
    (tolerance 0.003 + 4 sigma of the seed-to-seed scatter, as test_cycles_thin_film.py);
 2. the error: Delta E00 between Cycles' pixels and bsdflab's exact film at each block's
-   angle agrees with the report's map at the nominal thickness (interpolated in angle)
-   within 0.3 Delta E00 (what 0.003 of reflectance moves Delta E00 by at these colours;
-   measured slack: see docs/export.md).
+   angle agrees with the report's map at the nominal thickness (interpolated linearly
+   between its 5-degree rows) within 0.4 Delta E00: 0.003 of reflectance moves Delta E00 by
+   up to ~0.3 at these dark colours, plus the interpolation; measured 0.28 per pixel
+   (docs/export.md). Deterministic for a given bpy (the scene has almost no noise).
 """
 from __future__ import annotations
 
@@ -69,5 +70,5 @@ def test_cycles_error_against_the_exact_film_is_the_reported_one(crosscheck):
     e = report["delta_e00"]
     mid = len(e["thickness_scales"]) // 2
     predicted = np.interp(np.degrees(np.arccos(block_cos)), e["angles_deg"], np.array(e["map"])[:, mid])
-    assert np.all(np.abs(measured - predicted) <= 0.3), np.abs(measured - predicted).max()
+    assert np.all(np.abs(measured - predicted) <= 0.4), np.abs(measured - predicted).max()
     assert json.dumps(report)   # the report is plain JSON
