@@ -52,3 +52,19 @@ def test_unwritable_out_is_refused(tmp_path):
         assert os.listdir(folder) == []
     assert missing.returncode == 2 and len(missing.stderr.strip().splitlines()) == 1, missing.stderr
     assert not (tmp_path / "no").exists()
+
+
+def test_export_from_a_table_uses_the_model_its_header_records(tmp_path):
+    from bsdflab.bsdfs import RoughDielectric
+    from bsdflab.tables import TableGrid, tabulate
+    from bsdflab.tables.file_format import write_table
+
+    model = RoughDielectric(0.1, 1.5515, 1.0, film=[{"material": 1.8, "thickness_nm": 350.0}])
+    table = tmp_path / "t.exr"
+    write_table(table, tabulate(model, TableGrid(3, 4, 2), progress=False))
+    out = tmp_path / "m.mtlx"
+    proc = _run("--table", str(table), "--format", "openpbr", "--out", str(out))
+    assert proc.returncode == 0, proc.stderr
+    report = json.load(open(str(out) + ".report.json"))
+    assert report["material"]["film_thickness_nm"] == 350.0 and report["material"]["film_ior"] == 1.8
+    assert report["material"]["alpha"] == 0.1
