@@ -22,6 +22,9 @@ def register(sub) -> None:
     p.add_argument("--format", required=True, metavar="F",
                    help="one of openpbr (.mtlx), gltf (.gltf + .bin or .glb), usd (.usda), blender (.blend + .blend.py)")
     p.add_argument("--out", required=True, metavar="PATH", help="output file")
+    p.add_argument("--substitute", action="store_true",
+                   help="export a multilayer film stack as the single film that looks most like it "
+                        "(fitted against the stack's exact reflectance; the report says so)")
     p.set_defaults(run=run)
 
 
@@ -65,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
     check_writable(args.out, "--out")
     model = model_from_args(args)
     try:
-        report = export(model, args.format, args.out, name=args.preset or "bsdflab")
+        report = export(model, args.format, args.out, name=args.preset or "bsdflab", substitute=args.substitute)
     except RuntimeError as e:  # the real tool refused the file (MaterialX validate, bpy)
         raise ValueError(str(e)) from None
     p, e = report["parameters"], report["delta_e00"]

@@ -59,12 +59,13 @@ def _target_files(fmt: str, params: dict, out: str, name: str) -> list[tuple[str
     return [(out, lambda tmp: write_blend(params, tmp, name), ".blend"), (out + ".py", write_script, ".py")]
 
 
-def export(model, fmt: str, out: str, name: str = "bsdflab") -> dict:
+def export(model, fmt: str, out: str, name: str = "bsdflab", substitute: bool = False) -> dict:
     """Export a BSDF (object or dict) to ``fmt`` (``bsdflab.export.FORMATS``) at ``out``;
-    returns the report dict (also written to ``<out>.report.json``)."""
+    returns the report dict (also written to ``<out>.report.json``). ``substitute``: export
+    a multilayer film as the single film that looks most like it (else ValueError)."""
     t = target(fmt)
     out = check_out(out, t.suffixes)
-    m = export_material(model)
+    m = export_material(model, substitute)
     f = fit(m, t)
     params = export_params(m, f)
     files = _target_files(fmt, params, out, name)

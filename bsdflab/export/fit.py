@@ -50,10 +50,21 @@ def _grid(angles_deg, scales):
 
 
 def exact_film_rgb(m: ExportMaterial, angles_deg=ANGLES_DEG, scales=SCALES) -> np.ndarray:
-    """bsdflab's exact film colour (A, S, 3), linear sRGB, over angle x thickness scale."""
-    from bsdflab.reference.approximations.study import exact_rgb
+    """bsdflab's exact film colour (A, S, 3), linear sRGB, over angle x thickness scale (a
+    multilayer stack's layers all scaled together)."""
+    from bsdflab.reference.approximations.study import SPECTRAL_GRID_NM, exact_rgb
 
     cos, s = _grid(angles_deg, scales)
+    if m.stack:
+        from bsdflab.optics import FilmStack, Layer, film_reflectance
+        from bsdflab.spectra import spectrum_to_rgb
+
+        cols = []
+        for k in scales:
+            stack = FilmStack(m.ext_ior, [Layer(n, d * k) for n, d in m.stack], m.int_ior)
+            R = film_reflectance(stack, SPECTRAL_GRID_NM, cos_theta=np.cos(np.radians(angles_deg))[:, None])
+            cols.append(spectrum_to_rgb(np.asarray(R), SPECTRAL_GRID_NM))
+        return np.stack(cols, axis=1)
     n_film = m.film_ior if m.has_film else m.ext_ior
     return exact_rgb(m.ext_ior, n_film, m.int_ior, m.film_thickness_nm * s, cos)
 
@@ -91,8 +102,8 @@ def fit(m: ExportMaterial, target: Target, reference=None, angles_deg=ANGLES_DEG
         best = target.clip(np.array([0.0, TARGET_OUTER_IOR, res.x[0]]))
     else:
         d0, n0, b0 = m.film_thickness_nm, m.film_ior, m.int_ior
-        starts = [target.clip(np.array([d0 * f, n0 + dn, b0])) for f in np.linspace(0.85, 1.15, 13)
-                  for dn in (-0.15, 0.0, 0.15)]
+        factors = np.linspace(0.85, 1.15, 13) if not m.stack else np.linspace(0.1, 1.5, 57)
+        starts = [target.clip(np.array([d0 * f, n0 + dn, b0])) for f in factors for dn in (-0.15, 0.0, 0.15)]
         x0 = min(starts, key=cost)
         # a simplex a few per cent wide: the cost has many local minima in thickness
         simplex = np.vstack([x0, x0 + [0.02 * d0, 0, 0], x0 + [0, 0.03, 0], x0 + [0, 0, 0.03]])

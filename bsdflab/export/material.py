@@ -34,6 +34,7 @@ class ExportMaterial:
     alpha: float                     # GGX alpha; 0 for a smooth interface
     body_rgb: tuple[float, float, float]
     dropped: list[str] = field(default_factory=list)
+    stack: tuple[tuple[float, float], ...] = ()   # (index, thickness nm) of a multilayer film, when substituted
 
     @property
     def has_film(self) -> bool:
@@ -42,7 +43,8 @@ class ExportMaterial:
     def to_dict(self) -> dict:
         return {"ext_ior": self.ext_ior, "int_ior": self.int_ior, "film_ior": self.film_ior,
                 "film_thickness_nm": self.film_thickness_nm, "alpha": self.alpha,
-                "body_rgb": list(self.body_rgb), "dropped": list(self.dropped)}
+                "body_rgb": list(self.body_rgb), "dropped": list(self.dropped),
+                "stack": [list(layer) for layer in self.stack]}
 
 
 def _scalar_ior(value, name: str) -> float:
@@ -53,7 +55,7 @@ def _scalar_ior(value, name: str) -> float:
     raise ValueError(f"{name}: a spectral or named index cannot be exported (the targets take one real index)")
 
 
-def _top(d: dict, dropped: list[str]):
+def _top(d: dict, dropped: list[str], substitute: bool = False):
     kind = d.get("type")
     if kind not in ("dielectric", "roughdielectric"):
         raise ValueError(f"nothing exportable: the top interface is a {kind!r}; the targets take a "
@@ -62,13 +64,22 @@ def _top(d: dict, dropped: list[str]):
     if kind == "roughdielectric" and d.get("alpha_v") not in (None, d.get("alpha")):
         dropped.append("anisotropic roughness (alpha_v): the export is isotropic")
     film = d.get("film") or []
+    stack = ()
     if len(film) > 1:
-        raise ValueError(f"a film stack of {len(film)} layers is beyond the targets, which take one "
-                         "thin film (export one film, e.g. the preset xenopeltis)")
-    n_film, t = (None, 0.0) if not film else (_scalar_ior(film[0]["material"], "film material"),
-                                              float(film[0]["thickness_nm"]))
+        if not substitute:
+            raise ValueError(f"a film stack of {len(film)} layers is beyond the targets, which take one "
+                             "thin film (export one film, or ask for the best single-film substitute)")
+        stack = tuple((_scalar_ior(f["material"], "film material"), float(f["thickness_nm"])) for f in film)
+        dropped.append(f"the {len(film)}-layer film stack: replaced by the single film that looks most like "
+                       "it (fitted against the stack's exact reflectance)")
+        # the fit's start: the densest layer's index at the stack's optical thickness
+        n_film = max(n for n, _ in stack)
+        t = sum(n * t for n, t in stack) / n_film
+    else:
+        n_film, t = (None, 0.0) if not film else (_scalar_ior(film[0]["material"], "film material"),
+                                                  float(film[0]["thickness_nm"]))
     return (_scalar_ior(d.get("ext_ior", 1.000277), "ext_ior"), _scalar_ior(d.get("int_ior", 1.5046), "int_ior"),
-            n_film, t, alpha)
+            n_film, t, alpha, stack)
 
 
 def _slab_transmittance(slabs: list[dict], wl: np.ndarray, dropped: list[str]) -> np.ndarray:
@@ -87,9 +98,10 @@ def _slab_transmittance(slabs: list[dict], wl: np.ndarray, dropped: list[str]) -
     return T
 
 
-def export_material(model) -> ExportMaterial:
+def export_material(model, substitute: bool = False) -> ExportMaterial:
     """The exportable part of a BSDF (object or dict); ValueError when nothing is exportable
-    or the film is a stack beyond the targets."""
+    or the film is a stack beyond the targets (unless ``substitute``: then the stack is kept
+    for the fit, which finds the best single film)."""
     from bsdflab.spectra import Spectrum, spectrum_to_rgb
 
     d = model if isinstance(model, dict) else model.to_dict()
@@ -99,7 +111,7 @@ def export_material(model) -> ExportMaterial:
         interfaces = d.get("interfaces") or []
         if len(interfaces) > 1:
             dropped.append(f"{len(interfaces) - 1} interface(s) below the top: not represented")
-        ext, intr, n_film, t, alpha = _top(interfaces[0], dropped)
+        ext, intr, n_film, t, alpha, stack = _top(interfaces[0], dropped, substitute)
         base = d.get("base") or {}
         if base.get("type") != "diffuse":
             raise ValueError(f"nothing exportable below the top: the base is a {base.get('type')!r}; "
@@ -109,7 +121,7 @@ def export_material(model) -> ExportMaterial:
         spectrum = albedo * _slab_transmittance(d.get("slabs") or [], wl, dropped)
         body = np.clip(spectrum_to_rgb(spectrum, wl), 0.0, 1.0)
     elif kind in ("dielectric", "roughdielectric"):
-        ext, intr, n_film, t, alpha = _top(d, dropped)
+        ext, intr, n_film, t, alpha, stack = _top(d, dropped, substitute)
         body = np.zeros(3)
         dropped.append("transmission: the export is an opaque surface (black body colour)")
     else:
@@ -118,4 +130,4 @@ def export_material(model) -> ExportMaterial:
     if n_film is None:
         dropped.append("no thin film: the export's film weight is 0")
     check.real_scalar("film thickness", t, 0.0, 1e5)
-    return ExportMaterial(ext, intr, n_film, t, alpha, tuple(float(x) for x in body), dropped)
+    return ExportMaterial(ext, intr, n_film, t, alpha, tuple(float(x) for x in body), dropped, stack)

@@ -26,7 +26,7 @@ def test_export_preset_with_set_writes_file_and_report(tmp_path):
 
 @pytest.mark.parametrize("argv, needle", [
     (["--json", '{"type": "diffuse", "reflectance": 0.5}', "--format", "openpbr"], "nothing exportable"),
-    (["--preset", "xenopeltis-stack", "--format", "openpbr"], "film stack of 9 layers"),
+    (["--preset", "xenopeltis-stack", "--format", "openpbr"], "film stack of 9 layers"),  # without --substitute
     (["--preset", "xenopeltis", "--format", "fbx"], "unknown format"),
     (["--preset", "xenopeltis", "--format", "gltf"], "must end in .gltf or .glb"),
 ])
@@ -68,3 +68,14 @@ def test_export_from_a_table_uses_the_model_its_header_records(tmp_path):
     report = json.load(open(str(out) + ".report.json"))
     assert report["material"]["film_thickness_nm"] == 350.0 and report["material"]["film_ior"] == 1.8
     assert report["material"]["alpha"] == 0.1
+
+
+def test_a_stack_is_exported_only_as_a_substitute_that_states_its_error(tmp_path):
+    out = tmp_path / "stack.mtlx"
+    proc = _run("--preset", "xenopeltis-stack", "--substitute", "--format", "openpbr", "--out", str(out))
+    assert proc.returncode == 0, proc.stderr
+    report = json.load(open(str(out) + ".report.json"))
+    assert any("9-layer film stack" in d for d in report["dropped"])
+    assert len(report["material"]["stack"]) == 9
+    # a 5-platelet reflector is far brighter than any single film: the report must say so
+    assert report["delta_e00"]["share_above_2"] > 0.5
