@@ -28,26 +28,15 @@ def register(sub) -> None:
     p.set_defaults(run=run)
 
 
-def _overrides(items: list[str]) -> dict:
-    out = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep or not key:
-            raise ValueError(f"--set {item!r}: expected K=V")
-        try:
-            out[key] = json.loads(value)
-        except json.JSONDecodeError:
-            out[key] = value
-    return out
-
-
 def model_from_args(args: argparse.Namespace):
     if args.set and args.preset is None:
         raise ValueError("--set applies to --preset only")
     if args.preset is not None:
         from bsdflab.requests import model_from_spec
 
-        return model_from_spec({"preset": args.preset, "overrides": _overrides(args.set)}).to_dict()
+        from bsdflab.cli.key_values import key_values
+
+        return model_from_spec({"preset": args.preset, "overrides": key_values(args.set, "--set")}).to_dict()
     if args.json is not None:
         try:
             d = json.loads(args.json)
