@@ -8,7 +8,9 @@ MaterialX document, bpy failing) leaves no file behind.
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 
+from bsdflab.export.body import fit_material_body
 from bsdflab.export.fit import fit
 from bsdflab.export.material import export_material
 from bsdflab.export.report import export_params, report_dict, write_report_json, write_report_png
@@ -67,9 +69,12 @@ def export(model, fmt: str, out: str, name: str = "bsdflab", substitute: bool = 
     out = check_out(out, t.suffixes)
     m = export_material(model, substitute)
     f = fit(m, t)
+    body = fit_material_body(model, t, f)
+    if body is not None:
+        m = replace(m, body_rgb=tuple(float(x) for x in body.rgb))
     params = export_params(m, f)
     files = _target_files(fmt, params, out, name)
-    report = report_dict(fmt, t, m, f, params, [os.path.basename(p) for p, _, _ in files])
+    report = report_dict(fmt, t, m, f, params, [os.path.basename(p) for p, _, _ in files], body)
     files += [(out + ".report.json", lambda tmp: write_report_json(report, tmp), ".json"),
               (out + ".report.png", lambda tmp: write_report_png(report, f, tmp), ".png")]
     write_together(files)

@@ -10,8 +10,7 @@ texture carries the same factor). The fitted parameters are (film thickness, fil
 base index) within the target's ranges, minimising the mean Delta E00 over the grid:
 a coarse grid over thickness and film index, then Nelder-Mead from its best point.
 
-The diffuse body colour is not fitted: it is the base albedo seen through the pigment
-slabs (``bsdflab.export.material``), copied into the target's base colour.
+The diffuse body colour is fitted after this, at these parameters (``bsdflab.export.body``).
 """
 from __future__ import annotations
 

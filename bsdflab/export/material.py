@@ -5,8 +5,9 @@ surface: a dielectric specular layer with at most one thin film, GGX roughness, 
 diffuse body colour. From a bsdflab model this module takes
 
 * the top interface: outside and inside indices, GGX alpha, its film (one layer);
-* the body colour: the diffuse base's albedo seen through the pigment slabs, each crossed
-  twice at normal incidence (exp(-2 sigma_a t)), averaged spectrally into linear sRGB;
+* a first body colour: the diffuse base's albedo seen through the pigment slabs, each crossed
+  twice at normal incidence (exp(-2 sigma_a t)), averaged spectrally into linear sRGB (the
+  export replaces it with the fit of ``bsdflab.export.body``);
 
 and lists what is dropped (spectral absorption of the slabs, their scattering, deeper
 interfaces). Units: indices are real; thicknesses in nm; alpha is GGX alpha (the targets'
@@ -92,9 +93,9 @@ def _slab_transmittance(slabs: list[dict], wl: np.ndarray, dropped: list[str]) -
             continue
         sigma_a = Spectrum.coerce(s.get("sigma_a", 0.0), "sigma_a").at(wl)
         T = T * np.exp(-2.0 * sigma_a * t_um)
-        dropped.append(f"slab {i}: spectral absorption ({t_um:g} um) folded into the base colour at normal "
-                       "incidence; its angular darkening and its scattering (sigma_s "
-                       f"{s.get('sigma_s', 0)}) are not represented")
+        dropped.append(f"slab {i}: spectral absorption ({t_um:g} um) and scattering (sigma_s "
+                       f"{s.get('sigma_s', 0)}) folded into the fitted base colour; their angular "
+                       "dependence beyond (1 - F) is not represented")
     return T
 
 

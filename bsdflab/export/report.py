@@ -9,13 +9,15 @@ import json
 
 import numpy as np
 
+from bsdflab.export.body import BodyFit
 from bsdflab.export.fit import FitResult
 from bsdflab.export.material import SPREAD, ExportMaterial
 from bsdflab.export.targets import Target
 
 MATCHED = ["specular colour vs incidence angle (thin-film Fresnel, 0-80 deg) over the film-thickness spread: fitted "
-           "by CIEDE2000", "diffuse body colour: the base albedo seen through the pigment slabs at normal "
-           "incidence, copied (not fitted)", "roughness: sqrt(GGX alpha), copied"]
+           "by CIEDE2000", "diffuse body colour: fitted by CIEDE2000 so that base_color (1 - F(theta)) matches the layered "
+           "model's scattered hemispherical albedo (everything but the top interface's reflection) at 0, 30, 50, "
+           "70 deg, per channel", "roughness: sqrt(GGX alpha), copied"]
 NOT_REPRESENTED = ["the pigment slab's spectral absorption and its angular darkening (folded into one RGB base colour)",
                    "the scale texture (per-scale thickness variation): one thickness; the map shows the spread",
                    "multilayer film stacks (one film only)", "the PFMC layered interreflections between film and body"]
@@ -26,7 +28,8 @@ def export_params(m: ExportMaterial, f: FitResult) -> dict:
             "base_ior": f.base_ior, "film_ior": f.film_ior, "film_thickness_nm": f.thickness_nm}
 
 
-def report_dict(fmt: str, target: Target, m: ExportMaterial, f: FitResult, params: dict, files: list[str]) -> dict:
+def report_dict(fmt: str, target: Target, m: ExportMaterial, f: FitResult, params: dict, files: list[str],
+                body: BodyFit | None = None) -> dict:
     ranges = {"base_ior": (target.base_ior, "", "specular index of the base (relative to n = 1 outside)"),
               "film_ior": (target.film_ior, "", "thin-film index"),
               "film_thickness_nm": (target.thickness_nm, "nm", "thin-film thickness"),
@@ -39,6 +42,7 @@ def report_dict(fmt: str, target: Target, m: ExportMaterial, f: FitResult, param
         "material": m.to_dict(),
         "delta_e00": {**f.summary(), "angles_deg": f.angles_deg.tolist(), "thickness_scales": f.scales.tolist(),
                       "thickness_spread": SPREAD, "map": np.round(f.delta_e, 4).tolist()},
+        "body_delta_e00": body.summary() if body is not None else None,
         "matched": MATCHED, "not_represented": NOT_REPRESENTED, "dropped": list(m.dropped),
     }
 
