@@ -13,6 +13,10 @@ cd "$(dirname "$0")"
 # chromium: the service page's real-browser test (driven by pip playwright, no browser download).
 SYSTEM_PACKAGES=(build-essential python3-dev python3-venv libembree-dev libllvm19 chromium)
 VENV=.venv
+# Blender as a Python module for `bsdflab export --format blender` and its Cycles checks: its
+# own venv, because bpy 5.0.1 pins numpy < 2 (bsdflab runs it in a child process).
+BLENDER_VENV=.venv-blender
+BPY_VERSION=5.0.1
 
 install_system_packages() {
     command -v dpkg-query >/dev/null 2>&1 || { echo "dev.sh: not a Debian system; install ${SYSTEM_PACKAGES[*]} yourself" >&2; return 0; }
@@ -40,6 +44,10 @@ setup() {
     # Editable install: builds bsdflab._core (C++) and installs every dependency from
     # pyproject.toml, the test extras included.
     "$VENV/bin/python" -m pip install -q -e ".[test]"
+    if [ ! -x "$BLENDER_VENV/bin/python" ]; then
+        python3 -m venv "$BLENDER_VENV"
+    fi
+    "$BLENDER_VENV/bin/python" -m pip install -q "bpy==$BPY_VERSION"
 }
 
 cmd=${1:-demo}

@@ -6,10 +6,10 @@ import sys
 
 from bsdflab import __version__
 from bsdflab.cli import fit, info, lobe, render, serve, table, tabulate, thinfilm
-from bsdflab.cli import validate
+from bsdflab.cli import export, validate
 
 COMMANDS = (render, lobe, thinfilm, tabulate, table, info, fit, serve)
-COMMANDS += (validate,)
+COMMANDS += (validate, export)
 
 
 def build_parser() -> argparse.ArgumentParser:

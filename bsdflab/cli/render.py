@@ -40,16 +40,9 @@ def register(sub) -> None:
 
 
 def _options(pairs: list[str]) -> dict:
-    out = {}
-    for pair in pairs:
-        key, sep, value = pair.partition("=")
-        if not sep or not key:
-            raise ValueError(f"--option must be KEY=VALUE, got {pair!r}")
-        try:
-            out[key] = json.loads(value)
-        except json.JSONDecodeError:
-            out[key] = value  # a bare string
-    return out
+    from bsdflab.cli.key_values import key_values
+
+    return key_values(pairs, "--option")
 
 
 def _scenes(args):

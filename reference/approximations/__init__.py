@@ -8,9 +8,13 @@ each is from the exact spectral Airy reflectance (`bsdflab.optics.thin_film`):
                     modeling of varying iridescence" (ACM TOG 36(4)): the Airy sum reordered
                     as a Fourier series in the optical path difference, integrated in closed
                     form against Gaussian fits of the CIE XYZ sensitivities, returned in
-                    linear sRGB. This is the formulation of MaterialX's ``thin_film_bsdf``,
-                    OpenPBR Surface's and Autodesk Standard Surface's thin film, and Blender
-                    Cycles >= 4.2 (exact s/p Fresnel, a few series terms).
+                    linear sRGB. This is the formulation of MaterialX's ``thin_film_bsdf``
+                    (``mx_fresnel_airy``), hence OpenPBR Surface's and Autodesk Standard
+                    Surface's thin film in MaterialX (exact s/p Fresnel, two series terms).
+``cycles``          Blender Cycles >= 4.2 (Principled BSDF "Thin Film"), from Cycles' source:
+                    the same series with three terms and tabulated Fourier transforms of the
+                    CIE 1931 colour-matching functions instead of the Gaussian fit; held to
+                    real bpy renders (tests/export/test_cycles_thin_film.py).
 ``gltf``            glTF ``KHR_materials_iridescence`` (Khronos, 2022, appendix "Implementation"):
                     the same series with Schlick's Fresnel approximation, phases 0 or pi, two
                     terms, the base index recovered from F0, negative colours clamped.
@@ -22,16 +26,20 @@ Every function returns linear sRGB (D65) reflectance, shape (..., 3), for unpola
 so the colour-difference study (``study.py``) compares them all in the same space.
 """
 from bsdflab.reference.approximations.belcour_barla import belcour_barla_rgb, belcour_barla_xyz, xyz_sensitivity_exact, xyz_sensitivity_gaussian
+from bsdflab.reference.approximations.cycles import cycles_thin_film_rgb
 from bsdflab.reference.approximations.gltf import gltf_iridescence_rgb
 from bsdflab.reference.approximations.seed_film import seed_reflectance, seed_rgb
 
+MATERIALX = "Belcour-Barla as MaterialX computes it (MaterialX, OpenPBR, Standard Surface)"
+CYCLES = "Cycles thin film (Blender >= 4.2: CIE tables, 3 terms)"
 MODELS = {
-    "Belcour-Barla (MaterialX, OpenPBR, Standard Surface, Cycles)": belcour_barla_rgb,
+    MATERIALX: belcour_barla_rgb,
+    CYCLES: cycles_thin_film_rgb,
     "Belcour-Barla fit alone (XYZ to sRGB with E to D65)":
         lambda *a: belcour_barla_rgb(*a, sensitivity="gaussian-srgb"),
     "glTF KHR_materials_iridescence": gltf_iridescence_rgb,
     "seed code (double phase, 3 wavelengths)": seed_rgb,
 }
 
-__all__ = ["MODELS", "belcour_barla_rgb", "belcour_barla_xyz", "gltf_iridescence_rgb", "seed_reflectance", "seed_rgb",
+__all__ = ["CYCLES", "MATERIALX", "MODELS", "belcour_barla_rgb", "cycles_thin_film_rgb", "belcour_barla_xyz", "gltf_iridescence_rgb", "seed_reflectance", "seed_rgb",
            "xyz_sensitivity_exact", "xyz_sensitivity_gaussian"]

@@ -3,8 +3,9 @@
 Comparison model (not a bsdflab material). Specification: L. Belcour, P. Barla, "A practical
 extension to microfacet theory for the modeling of varying iridescence", ACM TOG 36(4) 65,
 2017, section 4 and its supplemental shader; the same formulation is the thin film of
-MaterialX (``thin_film_bsdf`` / ``mx_fresnel_airy``), OpenPBR Surface, Autodesk Standard
-Surface and Blender Cycles >= 4.2 (Principled BSDF "Thin Film").
+MaterialX (``thin_film_bsdf`` / ``mx_fresnel_airy``), through which OpenPBR Surface and
+Autodesk Standard Surface are rendered. Blender Cycles >= 4.2 computes a different variant
+(tabulated CIE sensitivities, three terms): see cycles.py.
 
 The model. Media 1 (outside), 2 (film, thickness d) and 3 (base), real indices here. Per
 polarisation, with R12 = |r12|^2, T121 = 1 - R12, R23 = |r23|^2, phases phi21 = pi - phi12

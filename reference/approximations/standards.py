@@ -21,19 +21,19 @@ STANDARDS = {
     "OpenPBR Surface 1.x": {
         "thickness_nm": (0.0, math.inf), "thickness_note": "thin_film_thickness in micrometres (soft 0-1 um)",
         "film_ior": (1.0, math.inf), "film_note": "thin_film_ior (soft 1-3)",
-        "base": "specular_ior", "model": "Belcour-Barla (MaterialX, OpenPBR, Standard Surface, Cycles)"},
+        "base": "specular_ior", "model": "Belcour-Barla as MaterialX computes it (MaterialX, OpenPBR, Standard Surface)"},
     "Autodesk Standard Surface 1.0": {
         "thickness_nm": (0.0, math.inf), "thickness_note": "thin_film_thickness in nm (soft 0-2000 nm)",
         "film_ior": (1.0, math.inf), "film_note": "thin_film_IOR (soft 1-3)",
-        "base": "specular_IOR", "model": "Belcour-Barla (MaterialX, OpenPBR, Standard Surface, Cycles)"},
+        "base": "specular_IOR", "model": "Belcour-Barla as MaterialX computes it (MaterialX, OpenPBR, Standard Surface)"},
     "MaterialX thin_film_bsdf": {
         "thickness_nm": (0.0, math.inf), "thickness_note": "thickness in nm", "film_ior": (1.0, math.inf),
         "film_note": "ior", "base": "the layered dielectric/conductor BSDF's ior",
-        "model": "Belcour-Barla (MaterialX, OpenPBR, Standard Surface, Cycles)"},
+        "model": "Belcour-Barla as MaterialX computes it (MaterialX, OpenPBR, Standard Surface)"},
     "Blender Principled BSDF (>= 4.2)": {
         "thickness_nm": (0.0, 100000.0), "thickness_note": "Thin Film Thickness in nm",
         "film_ior": (1.0, math.inf), "film_note": "Thin Film IOR", "base": "IOR input",
-        "model": "Belcour-Barla (MaterialX, OpenPBR, Standard Surface, Cycles)"},
+        "model": "Cycles thin film (Blender >= 4.2: CIE tables, 3 terms)"},
 }
 
 

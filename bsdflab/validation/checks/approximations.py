@@ -22,7 +22,7 @@ STUDY_EFFORT = effort({"angles": 19, "thicknesses": 61}, {"angles": 46, "thickne
 
 @REGISTRY.check(name="films/approximations/specifications", family="films",
                 title="The comparison models reproduce their specifications' stated behaviour",
-                model="reference.approximations: Belcour-Barla, glTF iridescence, seed code",
+                model="reference.approximations: Belcour-Barla (MaterialX), Cycles, glTF iridescence, seed code",
                 reference="the specifications: no film effect when film index = outer index; "
                           "Belcour-Barla's series is the exact Airy sum (exact sensitivities); "
                           "the paper's Gaussian fit reproduces exact colour at normal incidence",
@@ -140,7 +140,8 @@ def _study_outcome(studies) -> Outcome:
 
 @REGISTRY.check(name="films/approximations/snake", family="films", kind="study",
                 title="Thin-film approximations on the snake's film",
-                model="Belcour-Barla (MaterialX / OpenPBR / Standard Surface / Cycles), glTF "
+                model="Belcour-Barla as MaterialX computes it (MaterialX / OpenPBR / Standard Surface), "
+                      "Cycles' thin film (Blender >= 4.2, from its source, held to bpy renders), glTF "
                       "KHR_materials_iridescence, the seed code",
                 reference="bsdflab's exact spectral film (guanine 1.83 on keratin 1.5515, air outside), "
                           "D65, CIE 1931 2 deg, linear sRGB, CIEDE2000 (colour-science)",

@@ -1,0 +1,53 @@
+"""Render smooth thin-film spheres with the real Blender Cycles (bpy, CPU) and predict them.
+
+The scene is the Blender export's (``bsdflab.export.blender``): a unit sphere seen by an
+orthographic camera (ortho scale 2) in a constant white world. With a black base and no
+transmission, a pixel whose centre sees the sphere at normal n holds the specular
+reflectance F(cos theta = n . view) times the world's radiance 1: the reflected ray
+leaves the convex sphere and meets the world. The pixel filter is a box of 0.01 px, so a
+pixel is its centre's value; what varies between seeds (the test's noise) is what is left.
+"""
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+
+from bsdflab.export.blender import blender_script, run_bpy
+
+LOOP = '''
+import os, json
+cfg = json.loads(os.environ["BSDFLAB_SPHERES"])
+scene.render.resolution_x = scene.render.resolution_y = cfg["size"]
+scene.cycles.samples = cfg["spp"]
+scene.cycles.seed = cfg["seed"]
+scene.cycles.use_adaptive_sampling = False
+scene.cycles.pixel_filter_type = "BOX"
+scene.cycles.filter_width = 0.01
+scene.render.threads_mode = "FIXED"
+scene.render.threads = 2
+for i, d in enumerate(cfg["thicknesses"]):
+    bsdf.inputs["Thin Film Thickness"].default_value = d
+    scene.render.filepath = os.path.join(cfg["folder"], f"sphere_{i}.exr")
+    bpy.ops.render.render(write_still=True)
+'''
+
+
+def render_spheres(params: dict, thicknesses, folder: str, size: int = 48, spp: int = 4, seed: int = 0) -> np.ndarray:
+    """Cycles images (T, size, size, 3) of the sphere for each film thickness (nm)."""
+    from bsdflab.render.image_io import read_exr
+
+    env = dict(os.environ, BSDFLAB_SPHERES=json.dumps({"size": size, "spp": spp, "seed": seed, "folder": folder,
+                                                        "thicknesses": [float(d) for d in thicknesses]}))
+    run_bpy(blender_script(params, "cycles-check") + LOOP, env=env)
+    return np.stack([read_exr(os.path.join(folder, f"sphere_{i}.exr"))[..., :3] for i in range(len(thicknesses))])
+
+
+def pixel_cosines(size: int) -> np.ndarray:
+    """cos theta between the view direction and the sphere's normal at each pixel centre
+    (size, size); NaN off the sphere."""
+    c = (np.arange(size) + 0.5) / size * 2.0 - 1.0
+    r2 = c[None, :] ** 2 + c[:, None] ** 2
+    with np.errstate(invalid="ignore"):
+        return np.where(r2 < 1.0, np.sqrt(1.0 - r2), np.nan)
