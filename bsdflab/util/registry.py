@@ -49,6 +49,10 @@ class Registry(Generic[T]):
         """The entries registered so far (lazy ones only once imported)."""
         return dict(self._items)
 
+    def lazy(self) -> dict[str, str]:
+        """The lazy entries: name -> the module that registers it."""
+        return dict(self._lazy)
+
     def names(self) -> list[str]:
         """Every known name, lazy ones included, sorted."""
         return sorted(set(self._items) | set(self._lazy))
