@@ -2,8 +2,10 @@
 # One entry point for a fresh Debian machine (run as root, or with the system packages
 # below already present):
 #   ./dev.sh demo   set everything up, then run the main job
-#   ./dev.sh test   set everything up, then run the test suite (what CI runs)
+#   ./dev.sh test   set everything up, check the import layers (lint-imports), then run
+#                   the test suite (what CI runs)
 #   ./dev.sh setup  only set up (system packages, .venv, build of the C++ core)
+#   ./dev.sh lint   only check the import layers (after setup)
 # Extra arguments after `test` go to pytest (e.g. ./dev.sh test -m slow).
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -50,10 +52,33 @@ setup() {
     "$BLENDER_VENV/bin/python" -m pip install -q "bpy==$BPY_VERSION"
 }
 
+# The layer contracts of pyproject.toml ([tool.importlinter]), checked by import-linter on
+# the tree as the wheel lays it out: service/ and reference/ inside bsdflab/, where they
+# ship as bsdflab.service and bsdflab.reference (wheel.packages). `python -S` keeps the
+# editable install's import hook from pointing `bsdflab` back at the repository folder.
+lint_imports() {
+    local stage repo=$PWD site rc=0
+    site=$("$VENV/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
+    stage=$(mktemp -d)
+    mkdir "$stage/bsdflab"
+    cp -r bsdflab/. "$stage/bsdflab/"
+    cp -r service "$stage/bsdflab/service"
+    cp -r reference "$stage/bsdflab/reference"
+    (cd "$stage" && "$repo/$VENV/bin/python" -S -c '
+import sys
+sys.path[:0] = [".", sys.argv[2]]
+from importlinter.cli import lint_imports_command
+lint_imports_command.main([sys.argv[1], "--no-cache"], prog_name="lint-imports")
+' "$repo/pyproject.toml" "$site") || rc=$?
+    rm -rf "$stage"
+    return $rc
+}
+
 cmd=${1:-demo}
 shift || true
 case "$cmd" in
     setup) setup ;;
+    lint) lint_imports ;;
     demo)
         setup
         mkdir -p out
@@ -62,7 +87,8 @@ case "$cmd" in
         ;;
     test)
         setup
+        lint_imports
         "$VENV/bin/python" -m pytest -m "not slow" "$@"
         ;;
-    *) echo "usage: ./dev.sh [demo|test|setup] [args...]" >&2; exit 2 ;;
+    *) echo "usage: ./dev.sh [demo|test|setup|lint] [args...]" >&2; exit 2 ;;
 esac

@@ -52,24 +52,24 @@ def cluster_run(n_workers: int, threads: int, fn):
 
 
 def unit_overhead(client, n: int = 400) -> float:
-    """Seconds per unit of run_units for units that do nothing."""
-    from bsdflab.distributed.driver import run_units
+    """Seconds per unit of the Dask runner for units that do nothing."""
+    from bsdflab.distributed.runner import DaskRunner
     from bsdflab.distributed.probe import noop_unit
 
     t = time.perf_counter()
-    run_units(client, noop_unit, [], list(range(n)), lambda u, r: None, name=f"noop-{time.time_ns()}",
-              progress=False)
+    DaskRunner(client).run(noop_unit, [], list(range(n)), lambda u, r: None, key=f"noop-{time.time_ns()}",
+                           progress=False)
     return (time.perf_counter() - t) / n * len(client.scheduler_info()["workers"])
 
 
 def transfer_rate(client, nbytes: int = 32 << 20) -> float:
     """Bytes/s of unit results coming back to the driver (loopback here)."""
-    from bsdflab.distributed.driver import run_units
+    from bsdflab.distributed.runner import DaskRunner
     from bsdflab.distributed.probe import payload_unit
 
     t = time.perf_counter()
-    run_units(client, payload_unit, [nbytes // 8], list(range(8)), lambda u, r: None,
-              name=f"payload-{time.time_ns()}", progress=False)
+    DaskRunner(client).run(payload_unit, [nbytes // 8], list(range(8)), lambda u, r: None,
+                           key=f"payload-{time.time_ns()}", progress=False)
     return 8 * (nbytes // 8) / (time.perf_counter() - t)
 
 
@@ -98,7 +98,8 @@ def main() -> int:
     args = parser.parse_args()
     from bsdflab import _core
     from bsdflab.distributed import cost_model as cm
-    from bsdflab.distributed.tabulate_units import tabulate_on_cluster
+    from bsdflab.distributed.runner import DaskRunner
+    from bsdflab.tables.units import tabulate_units
     from bsdflab.tables import tabulate
 
     model, grid, kw = table_setup(args.quick)
@@ -109,8 +110,8 @@ def main() -> int:
     print(f"in-process pool ({_core.worker_count()} threads): {t_pool:.2f} s for {cells} cells", flush=True)
 
     def on_cluster(client):
-        table, t = timed(lambda: tabulate_on_cluster(client, model, grid, progress=False,
-                                                     unit_cells=unit_cells, **kw))
+        table, t = timed(lambda: tabulate_units(DaskRunner(client), model, grid, progress=False,
+                                                unit_cells=unit_cells, **kw))
         same = all(np.array_equal(getattr(local, f), getattr(table, f)) for f in ("values", "stderr", "samples"))
         return t, same, table.meta["units"], table.meta["seconds"]
 

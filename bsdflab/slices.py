@@ -90,6 +90,4 @@ def luminance(rgb: np.ndarray) -> np.ndarray:
 
 
 def check_count(name: str, value, lo: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= 1 << 16:
-        raise ValueError(f"{name} must be an integer in [{lo}, {1 << 16}], got {value!r}")
-    return int(value)
+    return check.integer(name, value, lo, 1 << 16)

@@ -16,6 +16,8 @@ import os
 import sys
 from pathlib import Path
 
+from bsdflab.util.extras import require
+
 LLVM_VARIANT = "llvm_ad_rgb"
 SCALAR_VARIANT = "scalar_rgb"
 VARIANTS = (LLVM_VARIANT, SCALAR_VARIANT)
@@ -81,7 +83,7 @@ def mitsuba():
     re-activated if other code switched variants since)."""
     global _chosen
     _point_drjit_at_llvm19()
-    import mitsuba as mi
+    mi = require("mitsuba", "mitsuba")
 
     if _chosen is None:
         _chosen = _choose()

@@ -33,6 +33,7 @@ import contextlib
 import numpy as np
 
 from bsdflab.render.scene import Scene
+from bsdflab.util import args as check
 
 from bsdflab.reference import mitsuba_env
 from bsdflab.reference.mitsuba_scene import path_integrator, to_mitsuba_scene
@@ -127,8 +128,7 @@ def _check(scene, spp, seed) -> None:
         raise ValueError(f"scene must be a bsdflab.render.Scene, got {type(scene).__name__}")
     if isinstance(spp, bool) or not isinstance(spp, (int, np.integer)) or not 2 <= spp <= 1 << 24:
         raise ValueError(f"spp must be an integer in [2, 2^24] (a variance needs 2 samples), got {spp!r}")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
+    check.integer("seed", seed, 0)
 
 
 def _passes(spp: int, pixels: int) -> list[int]:
@@ -152,8 +152,7 @@ def render_mitsuba(scene: Scene, spp: int, seed: int = 0, variant: str | None = 
     'llvm_ad_spectral' / 'scalar_spectral'), scored by our sensor (module doc).
     """
     _check(scene, spp, seed)
-    if not isinstance(spectral, (bool, np.bool_)):
-        raise ValueError(f"spectral must be True or False, got {spectral!r}")
+    spectral = check.flag("spectral", spectral)
     if spectral:
         variant = mitsuba_env.spectral_variant() if variant is None else variant
         if variant not in mitsuba_env.SPECTRAL_VARIANTS:

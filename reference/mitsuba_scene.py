@@ -4,7 +4,7 @@
 
 What goes over, and how it matches our renderer (bsdflab/render/build.py):
   * shapes: the very triangles, vertex normals and uvs our renderer gets from
-    ``bsdflab.scenes.geometry.build_mesh``, as ``mi.Mesh`` objects filled in memory (float32
+    ``bsdflab.render.geometry.build_mesh``, as ``mi.Mesh`` objects filled in memory (float32
     like ours). Without vertex normals both codes shade with the face normal (Mitsuba
     computes no normals for a mesh built this way). A shape without a material is black:
     Mitsuba's default BSDF (grey diffuse) is replaced by a zero-albedo diffuse.
@@ -128,7 +128,7 @@ def _spectral_material(name: str, material: Material, fallback: bool, cache_dir)
 
 
 def _mesh(mi, shape: Shape, index: int, bsdf: dict[str, Any], base_dir, spectral: bool = False):
-    from bsdflab.scenes.geometry import build_mesh
+    from bsdflab.render.geometry import build_mesh
 
     try:
         mesh = build_mesh(shape.geometry, base_dir)

@@ -18,8 +18,15 @@ import numpy as np
 from bsdflab.util import args as check
 from bsdflab.lobes import Lobe
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
+from bsdflab.util.registry import Registry
 
-_REGISTRY: dict[str, type["BSDF"]] = {}
+# Types defined in this package register as their classes are created; types defined in
+# the layers above (layered models, tables) are lazy entries, so ``from_dict`` finds them
+# whatever was imported first, without this layer importing upward.
+TYPES: Registry[type["BSDF"]] = Registry("BSDF type", lazy={
+    "layered": "bsdflab.layered.stack",
+    "table": "bsdflab.tables.table_bsdf",
+})
 
 
 @dataclass(frozen=True)
@@ -41,7 +48,7 @@ class BSDF(abc.ABC):
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
         if cls.type_name:
-            _REGISTRY[cls.type_name] = cls
+            TYPES.add(cls.type_name, cls)
 
     def __init__(self) -> None:
         self._cores: dict[tuple[float, ...], Any] = {}
@@ -176,12 +183,12 @@ def _spectrally_flat(core) -> bool:
 def from_dict(d: dict[str, Any]) -> BSDF:
     """Rebuild a BSDF from ``to_dict`` output (also the HTTP and table-file form)."""
     if not isinstance(d, dict) or "type" not in d:
-        raise ValueError("a BSDF dict needs a 'type' key; known types: " + ", ".join(sorted(_REGISTRY)))
+        raise ValueError("a BSDF dict needs a 'type' key; known types: " + ", ".join(TYPES.names()))
     check.nesting("the BSDF dict", d)
     kind = d["type"]
-    cls = _REGISTRY.get(kind) if isinstance(kind, str) else None
+    cls = TYPES.get(kind)
     if cls is None:
-        raise ValueError(f"unknown BSDF type {check.brief(kind)}; known types: {', '.join(sorted(_REGISTRY))}")
+        raise ValueError(f"unknown BSDF type {check.brief(kind)}; known types: {', '.join(TYPES.names())}")
     params = {k: v for k, v in d.items() if k != "type"}
     if not all(isinstance(k, str) for k in params):
         raise ValueError(f"bad parameters for BSDF type {kind!r}: parameter names must be strings")

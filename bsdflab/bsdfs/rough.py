@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from bsdflab import _core
-from bsdflab.util.args import real_scalar
+from bsdflab.util.args import flag, real_scalar
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.bsdfs.interface_term import (DEFAULT_EXT_IOR, DEFAULT_INT_IOR, ConductorParams, ext_ior_param,
                              film_to_list, int_ior_param, make_term, parse_film)
@@ -38,12 +38,6 @@ def _distribution(value) -> str:
     return value.lower()
 
 
-def _multiscatter(value) -> bool:
-    if not isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"multiscatter must be True or False, got {value!r}")
-    return bool(value)
-
-
 class _Microfacets:
     """The microfacet parameters both rough interfaces share, and their dict form (the
     defaults, GGX and single scattering, are left out so that older dicts keep meaning)."""
@@ -55,7 +49,7 @@ class _Microfacets:
     def _init_microfacets(self, alpha, distribution, multiscatter) -> None:
         self.alpha = _alpha(alpha)
         self.distribution = _distribution(distribution)
-        self.multiscatter = _multiscatter(multiscatter)
+        self.multiscatter = flag("multiscatter", multiscatter)
 
     def _interface(self, wavelengths, term, two_sided: bool):
         return _core.RoughInterface(wavelengths, term, self.alpha, two_sided,

@@ -33,6 +33,8 @@ def run_command(args) -> int:
         return INTERRUPTED
     except ValueError as e:  # bad input: a clear message, not a traceback
         message = one_line(e, 2000)
+    except ImportError as e:  # an optional dependency (bsdflab.util.extras names its extra)
+        message = one_line(e, 2000)
     except OSError as e:  # a file we could not read or write
         message = describe_os_error(e)
     except RecursionError:

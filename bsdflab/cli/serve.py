@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import argparse
 
+from bsdflab.util.extras import require
+
 
 def register(sub) -> None:
     p = sub.add_parser("serve", help="serve the HTTP API and the lobe explorer page",
@@ -21,7 +23,7 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import uvicorn
+    uvicorn = require("uvicorn", "service")
     from pydantic import ValidationError
 
     from bsdflab.service import Settings, create_app

@@ -12,6 +12,8 @@ import os
 import re
 from collections.abc import Iterator
 
+from distributed import Client, LocalCluster
+
 # Seconds to wait for a scheduler before giving up: an unreachable address must fail
 # before any work starts, with a message that names it.
 CONNECT_TIMEOUT_S = 10.0
@@ -39,8 +41,6 @@ def local_cluster(n_workers: int, threads_per_worker: int | None = None):
     worker is restarted and its units rescheduled). Each worker's C++ core uses
     ``threads_per_worker`` threads (default: the machine's cores shared out), so N workers
     do not oversubscribe the machine."""
-    from distributed import LocalCluster
-
     cores = os.cpu_count() or 1
     threads = threads_per_worker or max(1, cores // n_workers)
     # One Dask thread per worker (one unit at a time); the unit itself uses `threads` C++
@@ -61,8 +61,6 @@ def connect(scheduler: str | None = None, cluster: str | None = None,
     """
     if (scheduler is None) == (cluster is None):
         raise ValueError("give exactly one of scheduler (an address) or cluster ('local:N')")
-    from distributed import Client
-
     if cluster is not None:
         with local_cluster(parse_cluster(cluster)) as lc, Client(lc) as client:
             yield client

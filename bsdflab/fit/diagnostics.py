@@ -15,6 +15,7 @@ from bsdflab.fit.data import Dataset
 from bsdflab.fit.parameters import parameter
 from bsdflab.fit.posterior import LogPosterior
 from bsdflab.fit.sampling import RunResult
+from bsdflab.util.extras import require
 
 
 def arviz():
@@ -23,7 +24,7 @@ def arviz():
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", FutureWarning)
-        import arviz as az
+        az = require("arviz", "fit")
     return az
 
 

@@ -12,6 +12,7 @@ from bsdflab.fit.appearance import AppearancePosterior
 from bsdflab.fit.data import Dataset
 from bsdflab.fit.parameters import parameter
 from bsdflab.fit.sampling import RunResult
+from bsdflab.util.extras import require
 
 
 # short titles over the corner plot's diagonal (the axis labels carry the full names)
@@ -35,8 +36,7 @@ def _label(name: str) -> str:
 
 
 def corner_plot(draws: np.ndarray, names, path: str, truths=None) -> None:
-    import corner
-
+    corner = require("corner", "fit")
     plt = _plt()
     k = draws.shape[1]
     fig = corner.corner(draws, fig=plt.figure(figsize=(2.6 * k, 2.6 * k)), labels=[_label(n) for n in names],

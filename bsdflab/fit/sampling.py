@@ -11,12 +11,14 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
-import emcee
 import numpy as np
 from scipy import optimize
 
 from bsdflab.fit.config import SamplerSettings
 from bsdflab.fit.posterior import LogPosterior
+from bsdflab.util.extras import require
+
+emcee = require("emcee", "fit")
 
 TAU_CHANGE = 0.01
 FD_STEP = 1e-6   # finite-difference step of the MAP gradient, in prior sds

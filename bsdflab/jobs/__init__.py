@@ -9,14 +9,15 @@ Job kinds
     The work itself is::
 
         run(request: dict, out_dir: Path, progress: Callable[[float], None],
-            cancelled: Callable[[], bool], client=None) -> dict
+            cancelled: Callable[[], bool], runner=None) -> dict
 
     ``request`` is the kind's normalised request dict (``normalise``), ``out_dir`` the
     content-addressed folder its artefacts go to, written atomically and named by
     ``key(request)``; ``progress`` takes the fraction done in [0, 1]; the job raises
-    ``JobCancelled`` soon after ``cancelled()`` turns True; ``client`` is an optional
-    ``dask.distributed.Client`` handed on to the Python API (``tabulate(..., client=)``,
-    ``render(..., client=)``) only when it is not None. The result is plain JSON.
+    ``JobCancelled`` soon after ``cancelled()`` turns True; ``runner`` (a
+    ``bsdflab.util.runners.Runner``) is handed on to the Python API (``tabulate(..., runner=)``,
+    ``render(..., runner=)``), and given only when the executor has one. The result is plain
+    JSON.
 
 Executors (``bsdflab.jobs.executor``)
     ``JobExecutor`` (abstract): ``submit(kind, request, out_dir) -> JobHandle`` and
@@ -24,13 +25,14 @@ Executors (``bsdflab.jobs.executor``)
     ``cancel()``, ``done()``, ``result(timeout=None)`` (raises ``JobFailed`` or
     ``JobCancelled``), ``state`` (queued, running, done, failed, cancelled). Executors
     drive a handle through ``_started()``, ``_progress(f)`` and ``_finish(result, error)``;
-    ``execute(kind, request, out_dir, progress, cancelled, client)`` runs one job and turns
+    ``execute(kind, request, out_dir, progress, cancelled, runner)`` runs one job and turns
     its outcome into a tuple that crosses process boundaries (``outcome_error``).
-    ``make_executor(spec, workers)``, spec from the ``BSDFLAB_EXECUTOR`` setting:
-    ``"processes"`` (default; `ProcessJobExecutor`), ``"threads"`` (`ThreadJobExecutor`),
-    ``"dask:<scheduler address>"`` / ``"dask:local:N"``
-    (``bsdflab.distributed.executor.DaskJobExecutor(address_or_local_spec, workers)``,
-    imported only then; a clear RuntimeError if it cannot be).
+    ``make_executor(spec, workers)`` (``bsdflab.jobs.factory``), spec from the
+    ``BSDFLAB_EXECUTOR`` setting: ``"processes"`` (default; `ProcessJobExecutor`),
+    ``"threads"`` (`ThreadJobExecutor`), or ``"<runner>:<target>"`` (`RunnerJobExecutor`:
+    drivers on threads here, units on a runner registered by name in
+    ``bsdflab.util.runners``, e.g. ``"dask:<scheduler address>"`` / ``"dask:local:N"``,
+    which ``bsdflab.distributed`` registers; a clear RuntimeError if it cannot be imported).
 
 Progress and cancel from inside the Python API
     ``bsdflab.util.progress.monitored(progress, cancelled)`` makes every C++ job started in its
@@ -43,8 +45,8 @@ Dedup and caching
     (``bsdflab.tables.cache_key``), so a table asked for twice, or by a render, is one file.
 """
 from bsdflab.util.progress import JobCancelled
-from bsdflab.jobs.executor import (FINISHED, STATES, JobExecutor, JobFailed, JobHandle, default_workers, execute,
-                       make_executor, outcome_error)
+from bsdflab.jobs.executor import FINISHED, STATES, JobExecutor, JobFailed, JobHandle, execute, outcome_error
+from bsdflab.jobs.factory import default_workers, make_executor
 from bsdflab.jobs.kinds import JobKind, get_kind, kind_names, module_of, register_kind
 
 __all__ = ["FINISHED", "STATES", "JobCancelled", "JobExecutor", "JobFailed", "JobHandle", "JobKind",

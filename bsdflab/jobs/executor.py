@@ -1,9 +1,12 @@
-"""Where jobs run: the executor interface, the job handle, and ``make_executor``.
+"""Where jobs run: the executor interface and the job handle (``make_executor`` in
+bsdflab.jobs.factory picks an implementation by name).
 
 ``JobExecutor.submit(kind, request, out_dir)`` starts a job of a registered kind
 (bsdflab.jobs.kinds) on a normalised request and returns a ``JobHandle`` at once. Three
 implementations: ``ThreadJobExecutor`` (in this process), ``ProcessJobExecutor`` (worker
-processes: what the service uses) and, in ``bsdflab.distributed.executor``, a Dask cluster.
+processes: what the service uses) and ``RunnerJobExecutor`` (drivers on threads here, their
+work units on a runner registered by name in bsdflab.util.runners, e.g. ``dask``, which
+bsdflab.distributed registers).
 """
 from __future__ import annotations
 
@@ -139,14 +142,14 @@ class JobHandle:
         return True
 
 
-def execute(kind: str, request: dict[str, Any], out_dir, progress, cancelled, client=None):
+def execute(kind: str, request: dict[str, Any], out_dir, progress, cancelled, runner=None):
     """Run one job here: ("done", result), ("cancelled", message) or
     ("failed", error type, message, traceback text). Never raises (executors turn this into
     the handle's outcome, possibly in another process)."""
     try:
         if cancelled():
             return ("cancelled", "cancelled before it started")
-        result = get_kind(kind).run(request, Path(out_dir), progress, cancelled, client=client)
+        result = get_kind(kind).run(request, Path(out_dir), progress, cancelled, runner=runner)
         return ("done", result)
     except JobCancelled as e:
         return ("cancelled", str(e) or "cancelled")
@@ -182,38 +185,3 @@ class JobExecutor(abc.ABC):
 
     def __exit__(self, *exc) -> None:
         self.shutdown()
-
-
-def default_workers() -> int:
-    """One worker per core but one, at most four: each job already uses every core (the C++
-    core's threads), so more workers add concurrency, not throughput."""
-    return max(1, min(4, (os.cpu_count() or 1) - 1))
-
-
-def make_executor(spec: str = "processes", workers: int | None = None) -> JobExecutor:
-    """The executor named by ``spec`` (the ``BSDFLAB_EXECUTOR`` setting).
-
-    ``"processes"`` (worker processes), ``"threads"`` (threads of this process),
-    ``"dask:<scheduler address>"`` or ``"dask:local:N"`` (``bsdflab.distributed``).
-    ``workers``: pool size (default `default_workers`)."""
-    workers = default_workers() if workers is None else workers
-    if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= 1024:
-        raise ValueError(f"workers must be an integer in [1, 1024], got {workers!r}")
-    spec = (spec or "processes").strip()
-    if spec == "processes":
-        from bsdflab.jobs.processes import ProcessJobExecutor
-
-        return ProcessJobExecutor(workers)
-    if spec == "threads":
-        from bsdflab.jobs.threads import ThreadJobExecutor
-
-        return ThreadJobExecutor(workers)
-    if spec.startswith("dask:") and len(spec) > len("dask:"):
-        try:
-            from bsdflab.distributed.executor import DaskJobExecutor
-        except ImportError as e:
-            raise RuntimeError(f"executor {spec!r} needs bsdflab.distributed and dask.distributed, "
-                               f"which could not be imported: {e}") from None
-        return DaskJobExecutor(spec[len("dask:"):], workers)
-    raise ValueError(f"unknown executor {spec!r}; use 'processes', 'threads', "
-                     "'dask:<scheduler address>' or 'dask:local:N'")

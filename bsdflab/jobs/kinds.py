@@ -11,12 +11,13 @@ A kind's module defines three module-level functions:
 ``existing(request: dict, out_dir: Path) -> dict | None``
     The result ``run`` would return when its artefacts are already in ``out_dir`` (made by
     an earlier job, or by another kind: a render's tables), else None.
-``run(request, out_dir, progress, cancelled, client=None) -> dict``
+``run(request, out_dir, progress, cancelled, runner=None) -> dict``
     Do the work: a pure function of the normalised request (its seed included). Calls
     ``progress(fraction)`` now and then, stops with ``JobCancelled`` once ``cancelled()``
     is True, writes its artefacts atomically into ``out_dir`` (named by ``key``) and returns
-    a JSON-compatible result. ``client`` is an optional ``dask.distributed.Client`` passed
-    on to the Python API.
+    a JSON-compatible result. ``runner`` (bsdflab.util.runners) is passed on to the Python
+    API; it is given only when the executor has one, so a kind that never splits its work
+    may leave it out.
 
 Modules are imported when first used, so that a worker process (or a Dask worker) looks a
 kind up by its name alone.
@@ -50,8 +51,9 @@ class JobKind:
     def existing(self, request: dict, out_dir) -> dict | None:
         return self.module.existing(request, Path(out_dir))
 
-    def run(self, request, out_dir, progress, cancelled, client=None) -> dict:
-        return self.module.run(request, out_dir, progress, cancelled, client=client)
+    def run(self, request, out_dir, progress, cancelled, runner=None) -> dict:
+        extra = {} if runner is None else {"runner": runner}
+        return self.module.run(request, out_dir, progress, cancelled, **extra)
 
 
 def register_kind(name: str, module: str) -> None:

@@ -19,29 +19,22 @@ from typing import Any
 from bsdflab import __version__
 from bsdflab.util import args as check
 from bsdflab.util.progress import monitored
+from bsdflab.render import render, write_exr, write_png
+from bsdflab.render.render import MAX_SPP
+from bsdflab.scenes import SCENES, scene
+from bsdflab.tables.file_format import canonical_json
 
 FIELDS = {"scene", "options", "width", "height", "spp", "seed", "max_depth"}
 MAX_SIDE = 16384
 
 
-def _int(name: str, value, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-        raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
-    return value
-
-
 def build_scene(request: dict[str, Any]):
     """The ``bsdflab.render.Scene`` a normalised request describes."""
-    from bsdflab.scenes import scene
-
     s = scene(request["scene"], width=request["width"], height=request["height"], **request["options"])
     return s if request["max_depth"] is None else replace(s, max_depth=request["max_depth"])
 
 
 def normalise(request: dict[str, Any]) -> dict[str, Any]:
-    from bsdflab.render.render import MAX_SPP
-    from bsdflab.scenes import SCENES
-
     unknown = set(request) - FIELDS
     if unknown:
         raise ValueError(f"unknown render request fields: {', '.join(sorted(unknown))}")
@@ -52,13 +45,13 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
     if not isinstance(options, dict) or {"width", "height"} & set(options):
         raise ValueError("options must be a dict of the scene's keywords (width and height go outside it)")
     out = {"scene": name, "options": dict(options),
-           "width": _int("width", request.get("width", 320), 1, MAX_SIDE),
-           "height": _int("height", request.get("height", 180), 1, MAX_SIDE),
-           "spp": _int("spp", request.get("spp", 16), 1, MAX_SPP),
+           "width": check.integer("width", request.get("width", 320), 1, MAX_SIDE),
+           "height": check.integer("height", request.get("height", 180), 1, MAX_SIDE),
+           "spp": check.integer("spp", request.get("spp", 16), 1, MAX_SPP),
            "seed": check.seed(request.get("seed", 0)),
            "max_depth": request.get("max_depth")}
     if out["max_depth"] is not None:
-        out["max_depth"] = _int("max_depth", out["max_depth"], 1, 1024)
+        out["max_depth"] = check.integer("max_depth", out["max_depth"], 1, 1024)
     scene = build_scene(out)   # the scene's own checks (options, materials)
     out["max_depth"] = scene.max_depth
     _canonical(out)            # options must be plain JSON
@@ -66,8 +59,6 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
 
 
 def _canonical(request: dict[str, Any]) -> str:
-    from bsdflab.tables.file_format import canonical_json
-
     try:
         return canonical_json(request)
     except (TypeError, ValueError) as e:
@@ -96,9 +87,7 @@ def existing(request: dict[str, Any], out_dir: Path) -> dict[str, Any] | None:
         return None
 
 
-def run(request: dict[str, Any], out_dir: Path, progress, cancelled, client=None) -> dict[str, Any]:
-    from bsdflab.render import render, write_exr, write_png
-
+def run(request: dict[str, Any], out_dir: Path, progress, cancelled, runner=None) -> dict[str, Any]:
     out_dir = Path(out_dir)
     found = existing(request, out_dir)
     if found is not None:
@@ -119,10 +108,9 @@ def run(request: dict[str, Any], out_dir: Path, progress, cancelled, client=None
             progress(0.5 + 0.5 * fraction if tabulated else fraction)
 
     scene = build_scene(request)
-    extra = {} if client is None else {"client": client}
     with monitored(staged, cancelled):
         result = render(scene, spp=request["spp"], seed=request["seed"], progress=False,
-                        cache_dir=out_dir, **extra)
+                        cache_dir=out_dir, runner=runner)
     summary = {k2: str(v) for k2, v in result.summary().items()}
     write_png(png, result.mean)
     write_exr(exr, result.mean, summary)

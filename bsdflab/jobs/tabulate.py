@@ -25,9 +25,9 @@ from bsdflab.tables import TableGrid, cache_key, cached_table, read_attributes, 
 from bsdflab.tables.channels import table_channels
 from bsdflab.tables.file_format import HASH_ATTRIBUTE
 from bsdflab.tables.summary import relative_error_summary
-from bsdflab.tables.tabulate import _count   # the tabulator's own check of walk counts
+from bsdflab.tables.tabulate import DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES
+from bsdflab.bsdfs import from_dict
 
-DEFAULT_MIN_SAMPLES = 512
 FIELDS = {"model", "preset", "overrides", "grid", "rel_error", "wavelengths", "min_samples",
           "max_samples", "seed"}
 
@@ -48,8 +48,8 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
     wavelengths = request.get("wavelengths")
     if wavelengths is not None:
         wavelengths = [float(w) for w in table_channels(wavelengths)[1]]
-    min_samples = _count("min_samples", request.get("min_samples", DEFAULT_MIN_SAMPLES))
-    max_samples = _count("max_samples", request.get("max_samples", 65536))
+    min_samples = check.count("min_samples", request.get("min_samples", DEFAULT_MIN_SAMPLES))
+    max_samples = check.count("max_samples", request.get("max_samples", DEFAULT_MAX_SAMPLES))
     if max_samples < min_samples:
         raise ValueError(f"max_samples ({max_samples}) must be >= min_samples ({min_samples})")
     return {"model": model.to_dict(), "grid": grid.to_dict(),
@@ -89,18 +89,15 @@ def existing(request: dict[str, Any], out_dir: Path) -> dict[str, Any] | None:
         return None
 
 
-def run(request: dict[str, Any], out_dir: Path, progress, cancelled, client=None) -> dict[str, Any]:
-    from bsdflab.bsdfs import from_dict
-
+def run(request: dict[str, Any], out_dir: Path, progress, cancelled, runner=None) -> dict[str, Any]:
     model_dict, grid, rel_error, names, effort = _key_arguments(request)
     model = from_dict(model_dict)
-    extra = {} if client is None else {"client": client}
 
     def make():
         with monitored(lambda stage, fraction: progress(fraction), cancelled):
             return tabulate(model, grid, rel_error=rel_error, wavelengths=request["wavelengths"],
                             min_samples=request["min_samples"], max_samples=request["max_samples"],
-                            seed=request["seed"], progress=False, **extra)
+                            seed=request["seed"], progress=False, runner=runner)
 
     table, path, hit = cached_table(model_dict, grid, rel_error, names, make, directory=out_dir, **effort)
     if path is None:

@@ -126,8 +126,8 @@ class AddingDoublingOracle:
             "base_ior", base_ior, 0.0, lo_open=True)
         self.base_albedo = None if base_ior is not None else Spectrum.coerce(
             0.0 if base_albedo is None else base_albedo, "base_albedo", 0.0, 1.0)
-        self.nodes = _int_at_least("nodes", nodes, 4)
-        self.orders = None if orders is None else _int_at_least("orders", orders, 1)
+        self.nodes = check.integer("nodes", nodes, 4)
+        self.orders = None if orders is None else check.integer("orders", orders, 1)
         self.thin_depth = check.real_scalar("thin_depth", thin_depth, 0.0, lo_open=True)
 
     @classmethod
@@ -357,7 +357,3 @@ def _delta(o: op.Operator, shape) -> np.ndarray:
     return np.broadcast_to(o.Dc, shape)[:, 0].T
 
 
-def _int_at_least(name: str, value, lo: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
-        raise ValueError(f"{name} must be an integer >= {lo}, got {value!r}")
-    return int(value)

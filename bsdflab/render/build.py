@@ -2,17 +2,26 @@
 fail (unknown materials, unreadable meshes or maps, tables) before any rendering starts."""
 from __future__ import annotations
 
+import json
 import logging
 from typing import Any
 
 import numpy as np
 
 from bsdflab import _core
-from bsdflab.util import args as check
 from bsdflab.bsdfs.base import BSDF, from_dict
-from bsdflab.spectra import DEFAULT_WAVELENGTHS, rgb_to_spectrum, srgb_weights
 from bsdflab.render.environment import environment_image
+from bsdflab.render.geometry import build_mesh
 from bsdflab.render.scene import Material, Scene
+from bsdflab.render.textures import ScaleTexture
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, rgb_to_spectrum, srgb_weights
+from bsdflab.tables.cache import cached_table
+from bsdflab.tables.channels import table_channels
+from bsdflab.tables.data import TableGrid
+from bsdflab.tables.table_bsdf import TableBSDF, default_film_thickness
+from bsdflab.tables.tabulate import tabulate
+from bsdflab.util import args as check
+from bsdflab.util import limits
 
 log = logging.getLogger(__name__)
 TABULATED = "tabulated"
@@ -27,10 +36,6 @@ def resolve_bsdf(d: dict[str, Any], progress: bool = False, cache_dir=None, spec
     ``spectral``: for a spectral render, a table of a spectral model stores the 81 bins of
     the default grid (its own cache entry), so iridescent spectra multiply bin by bin along
     a path; an RGB render keeps the RGB table (3 channels: 27x less work per lookup)."""
-    from bsdflab.tables import TableGrid, cached_table, tabulate
-    from bsdflab.tables.channels import table_channels
-    from bsdflab.tables.table_bsdf import TableBSDF  # also registers {"type": "table"} with from_dict
-
     if d.get("type") != TABULATED:
         return from_dict(d)
 
@@ -67,8 +72,6 @@ def _spectrally_flat(model: BSDF) -> bool:
 
 def film_thickness(bsdf: BSDF) -> float:
     """The film thickness (nm) a scale texture modulates, or -1 without a film."""
-    from bsdflab.tables.table_bsdf import TableBSDF, default_film_thickness
-
     if isinstance(bsdf, TableBSDF):
         return bsdf.film_thickness_nm
     return default_film_thickness(bsdf.to_dict())
@@ -103,8 +106,6 @@ def spectral_lift(core, P, bsdf: BSDF | None = None) -> list[float]:
 def _resolver(progress: bool, cache_dir, spectral: bool = False):
     """resolve_bsdf memoised by the BSDF dict for one scene build: materials that share a
     BSDF (the snake's body and head) share its core object and its precomputation."""
-    import json
-
     memo: dict[str, BSDF] = {}
 
     def resolve(d: dict[str, Any]) -> BSDF:
@@ -117,8 +118,6 @@ def _resolver(progress: bool, cache_dir, spectral: bool = False):
 
 
 def _add_material(core_scene, material: Material, resolve) -> int:
-    from bsdflab.render.textures import ScaleTexture
-
     surface = resolve(material.bsdf)
     core, P = surface.render_core()
     gap_core, gap_P, gap_U = None, None, []
@@ -136,10 +135,6 @@ def build_render_scene(scene: Scene, base_dir: str | None = None, progress: bool
     """The committed ``_core.RenderScene`` for ``scene``; relative mesh and map paths are
     resolved against ``base_dir``. ``spectral``: built for a spectral render (tables of
     spectral models store the spectral bins, see ``resolve_bsdf``)."""
-    from bsdflab.scenes.geometry import build_mesh
-
-    from bsdflab.util import limits
-
     c = scene.camera  # the image buffers come after the meshes: count them in from the start
     limits.check_bytes(f"a {c.width} x {c.height} render", limits.render_bytes(c.width, c.height))
     core_scene = _core.RenderScene()

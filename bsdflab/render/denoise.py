@@ -5,16 +5,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from bsdflab.util.extras import require
+
 
 def denoise(result) -> np.ndarray:
     """The denoised (H, W, 3) float32 image of ``result`` (a RenderResult rendered with
     ``aovs=True``)."""
     if result.aovs is None:
         raise ValueError("denoise needs a render with aovs=True (albedo and normal images)")
-    try:
-        import pyoidn
-    except ImportError as e:  # an optional dependency: say how to get it
-        raise ValueError("--denoise needs the pyoidn package (pip install pyoidn)") from e
+    pyoidn = require("pyoidn", "denoise")
     color = np.ascontiguousarray(np.maximum(result.mean, 0.0), dtype=np.float32)
     albedo = np.ascontiguousarray(np.clip(result.aovs["albedo"], 0.0, 1.0), dtype=np.float32)
     normal = np.ascontiguousarray(result.aovs["normal"], dtype=np.float32)

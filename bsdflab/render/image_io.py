@@ -6,6 +6,7 @@ import os
 import numpy as np
 
 from bsdflab.util.files import write_atomically, write_together
+from bsdflab.util.native_output import quiet_native_output
 
 EXR_SUFFIX, PNG_SUFFIX = ".tmp.exr", ".tmp.png"
 
@@ -54,8 +55,6 @@ def write_exr_and_png(exr_path: str | os.PathLike, png_path: str | os.PathLike, 
 def read_exr(path: str | os.PathLike) -> np.ndarray:
     """The RGB pixels (H, W, 3) float32 of an OpenEXR file, or a clear ValueError."""
     import OpenEXR
-
-    from bsdflab.util.native_output import quiet_native_output
 
     path = os.fspath(path)
     if not os.path.isfile(path):

@@ -3,7 +3,7 @@
 World conventions (the same as Mitsuba 3, so scenes convert one-to-one): +Y is up; the
 ground is the plane y = 0; lengths are in scene units (the snake scene uses centimetres);
 colours and radiances are linear sRGB (D65). A scene names its geometry by *spec dicts*
-(``{"type": "sphere", ...}``, built into triangle meshes by ``bsdflab.scenes.geometry``),
+(``{"type": "sphere", ...}``, built into triangle meshes by ``bsdflab.render.geometry``),
 its materials by bsdflab BSDF dicts, and its lights as emissive shapes plus an environment.
 
 Nothing here computes light transport: ``bsdflab.render.render`` turns a ``Scene`` into the
@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from bsdflab.util import limits
-from bsdflab.util.args import brief, nesting
+from bsdflab.util.args import brief, integer, nesting
 
 ENVIRONMENT_TYPES = ("none", "constant", "sky", "envmap")
 MAX_RESOLUTION = 16384
@@ -37,12 +37,6 @@ def _vec3(name: str, value: Any, nonnegative: bool = False) -> tuple[float, floa
     if nonnegative and np.any(a < 0):
         raise ValueError(f"{name} must be >= 0, got {brief(value)}")
     return (float(a[0]), float(a[1]), float(a[2]))
-
-
-def _int_in(name: str, value: Any, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
-        raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {brief(value)}")
-    return int(value)
 
 
 def _positive(name: str, value: Any, hi: float = math.inf) -> float:
@@ -76,8 +70,8 @@ class Camera:
         for name in ("origin", "target", "up"):
             object.__setattr__(self, name, _vec3(f"camera {name}", getattr(self, name)))
         object.__setattr__(self, "fov_deg", _positive("camera fov_deg", self.fov_deg, 179.0))
-        object.__setattr__(self, "width", _int_in("width", self.width, 1, MAX_RESOLUTION))
-        object.__setattr__(self, "height", _int_in("height", self.height, 1, MAX_RESOLUTION))
+        object.__setattr__(self, "width", integer("width", self.width, 1, MAX_RESOLUTION))
+        object.__setattr__(self, "height", integer("height", self.height, 1, MAX_RESOLUTION))
         limits.check_count("width x height", self.width * self.height, "BSDFLAB_MAX_PIXELS")
         if max(abs(x) for x in (*self.origin, *self.target)) > 1e15:
             raise ValueError("camera origin and target must be within 1e15 of the world origin")
@@ -94,7 +88,7 @@ class Shape:
 
     geometry : dict
         ``{"type": ..., parameters}``; the types and their parameters are documented in
-        ``bsdflab.scenes.geometry`` (sphere, torus, rectangle, snake_body, snake_head, mesh).
+        ``bsdflab.render.geometry`` (sphere, torus, rectangle, snake_body, snake_head, mesh).
     material : str or None
         Key into ``Scene.materials``; None makes a black surface (a pure emitter).
     emission : 3 numbers or None
@@ -204,8 +198,8 @@ class Scene:
             if s.material is not None and s.material not in self.materials:
                 raise ValueError(f"shape {s.name!r} uses unknown material {s.material!r}; "
                                  f"materials: {', '.join(sorted(self.materials)) or '(none)'}")
-        object.__setattr__(self, "max_depth", _int_in("max_depth", self.max_depth, 1, 1024))
-        object.__setattr__(self, "rr_depth", _int_in("rr_depth", self.rr_depth, 1, 1024))
+        object.__setattr__(self, "max_depth", integer("max_depth", self.max_depth, 1, 1024))
+        object.__setattr__(self, "rr_depth", integer("rr_depth", self.rr_depth, 1, 1024))
         if self.environment.type == "none" and not any(s.emission and max(s.emission) > 0 for s in self.shapes):
             raise ValueError("the scene has no light: add an emissive shape or an environment")
 

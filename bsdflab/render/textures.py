@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from bsdflab import _core
+from bsdflab.util import args as check
 
 MAX_SCALES_AROUND = 1 << 20
 MAX_SEED = (1 << 64) - 1
@@ -30,12 +31,6 @@ def _number(name: str, value: Any, lo: float, hi: float, lo_open: bool = False) 
     if not math.isfinite(v) or below or v > hi:
         raise ValueError(f"{name} must be in {'(' if lo_open else '['}{lo:g}, {hi:g}], got {value!r}")
     return v
-
-
-def _integer(name: str, value: Any, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
-        raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
-    return int(value)
 
 
 @dataclass(frozen=True)
@@ -66,17 +61,15 @@ class ScaleTexture:
     def __post_init__(self):
         checked = {
             "scales_per_unit_u": _number("scales_per_unit_u", self.scales_per_unit_u, 0.0, 1e6, lo_open=True),
-            "scales_around": _integer("scales_around", self.scales_around, 3, MAX_SCALES_AROUND),
+            "scales_around": check.integer("scales_around", self.scales_around, 3, MAX_SCALES_AROUND),
             "gap": _number("gap", self.gap, 0.0, 0.5),
             "jitter": _number("jitter", self.jitter, 0.0, 0.3),
             "dome": _number("dome", self.dome, 0.0, 2.0),
             "tilt_deg": _number("tilt_deg", self.tilt_deg, 0.0, 45.0),
             "thickness_jitter": _number("thickness_jitter", self.thickness_jitter, 0.0, 0.9),
-            "seed": _integer("seed", self.seed, 0, MAX_SEED),
+            "seed": check.integer("seed", self.seed, 0, MAX_SEED),
         }
-        if not isinstance(self.periodic_v, (bool, np.bool_)):
-            raise ValueError(f"periodic_v must be True or False, got {self.periodic_v!r}")
-        checked["periodic_v"] = bool(self.periodic_v)
+        checked["periodic_v"] = check.flag("periodic_v", self.periodic_v)
         for name, value in checked.items():
             object.__setattr__(self, name, value)
 

@@ -1,10 +1,11 @@
-"""Geometry builders, procedural scenes and scene files for bsdflab's path tracer.
+"""Procedural scenes and scene files for bsdflab's path tracer (the layer above
+bsdflab.render, whose ``Scene`` they build).
 
-``scene(name, **options)`` builds a registered scene (``SCENES``); ``build_mesh`` turns a
-shape's geometry spec into a triangle mesh; ``save_scene`` / ``load_scene`` read and write
-scene files (docs/scene_format.md).
+``scene(name, **options)`` builds a registered scene (``SCENES``); ``save_scene`` /
+``load_scene`` read and write scene files (docs/scene_format.md). ``build_mesh`` (a shape's
+geometry spec as a triangle mesh) is the renderer's, bsdflab.render.geometry, re-exported.
 """
-from bsdflab.scenes.geometry import GEOMETRY_TYPES, Mesh, build_mesh, mesh_area, validate_mesh
+from bsdflab.render.geometry import GEOMETRY_TYPES, Mesh, build_mesh, mesh_area, validate_mesh
 from bsdflab.scenes.registry import SCENE_SETS, SCENES, scene, scene_set
 from bsdflab.scenes.scene_file import load_scene, save_scene
 

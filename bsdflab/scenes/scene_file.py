@@ -15,7 +15,7 @@ from dataclasses import replace
 from bsdflab.util import args as check
 from bsdflab.util.files import write_atomically
 from bsdflab.render import Scene
-from bsdflab.scenes.geometry import GEOMETRY_TYPES
+from bsdflab.render.geometry import GEOMETRY_TYPES
 
 FORMAT = "bsdflab-scene"
 VERSION = 1

@@ -23,6 +23,7 @@ from bsdflab import _core
 from bsdflab.util import args as check
 from bsdflab.tables.data import FORMAT_VERSION, TableData, TableGrid, check_table_memory
 from bsdflab.tables.file_format import canonical_json, read_table, write_table
+from bsdflab.tables.tabulate import ERROR_FLOOR, tabulate
 
 ENV_VAR = "BSDFLAB_CACHE_DIR"
 RGB = ("R", "G", "B")
@@ -31,8 +32,6 @@ log = logging.getLogger(__name__)
 
 
 def _tabulate_defaults() -> dict[str, Any]:
-    from bsdflab.tables.tabulate import tabulate
-
     params = inspect.signature(tabulate).parameters
     return {name: params[name].default for name in ("min_samples", "max_samples", "seed")}
 
@@ -78,8 +77,6 @@ def request_dict(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], r
                  channels: str | Sequence[Any], min_samples: int | None = None,
                  max_samples: int | None = None, seed: int | None = None) -> dict[str, Any]:
     """Everything that determines a table's content, with defaults resolved (the key's input)."""
-    from bsdflab.tables.tabulate import ERROR_FLOOR
-
     defaults = _tabulate_defaults()
     grid_obj = grid if isinstance(grid, TableGrid) else TableGrid.from_dict(dict(grid))
     return {

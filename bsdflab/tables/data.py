@@ -24,6 +24,9 @@ import numpy as np
 
 from bsdflab.util import args as check
 from bsdflab.util import limits
+from bsdflab.bsdfs.base import from_dict
+from bsdflab.lobes import Lobe
+from bsdflab.tables.channels import LUMINANCE_RGB
 
 FORMAT_VERSION = 2  # 2: optional keyed signature (bsdflab.signature); 1 is still read
 LOBES = ("reflection", "transmission")
@@ -158,8 +161,6 @@ class TableData:
             if np.any(self.values < 0):
                 raise ValueError("spectral table values must be >= 0 (a BSDF is never negative)")
             return
-        from bsdflab.tables.channels import LUMINANCE_RGB
-
         lum = self.values.astype(np.float64) @ LUMINANCE_RGB
         floor = -LUMINANCE_TOLERANCE * max(1.0, float(np.abs(lum).max(initial=0.0)))
         if lum.size and float(lum.min()) < floor:
@@ -181,9 +182,6 @@ class TableData:
         """The table's model rebuilt through ``from_dict`` (ValueError when it is not a
         valid model), checked against the table: layered models are split, and the
         transmission lobe is there exactly when the model transmits."""
-        from bsdflab.bsdfs.base import from_dict
-        from bsdflab.lobes import Lobe
-
         model = from_dict(self.model)
         layered = model.type_name == "layered"
         if self.split_direct != layered:

@@ -17,6 +17,10 @@ from bsdflab.bsdfs.base import BSDF, from_dict
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
 from bsdflab.tables.channels import LUMINANCE_RGB, channel_wavelengths
 from bsdflab.tables.data import TableData
+from bsdflab.bsdfs.interface_term import make_term
+from bsdflab.bsdfs.rough import RoughDielectric
+from bsdflab.lobes import Lobe
+from bsdflab.tables.file_format import read_table
 
 
 class TableBSDF(BSDF):
@@ -41,8 +45,6 @@ class TableBSDF(BSDF):
         if table is None and path is None:
             raise ValueError("give a table (TableData) or the path of a table file")
         if not isinstance(table, TableData):
-            from bsdflab.tables.file_format import read_table
-
             source = table if table is not None else path
             if not isinstance(source, (str, os.PathLike)):
                 raise ValueError(f"table must be a TableData or the path of a table file, "
@@ -56,8 +58,6 @@ class TableBSDF(BSDF):
 
     @property
     def lobes(self):
-        from bsdflab.lobes import Lobe
-
         return Lobe(self._core(self._channels(None)[0]).lobes)
 
     # The table fixes the channels: RGB tables answer in RGB, spectral ones at their own
@@ -160,9 +160,6 @@ def lookup_interface(top: BSDF, thickness_range, default_thickness: float, spect
     error 8.6e-5 at 2000 random off-grid points of the snake film, within
     FILM_LOOKUP_MAX_ERROR; 20 MB for the snake's thickness range). ``thickness_range`` (nm)
     is the (lo, hi) film-thickness range to tabulate, None for the model's own film only."""
-    from bsdflab.bsdfs.interface_term import make_term
-    from bsdflab.bsdfs.rough import RoughDielectric
-
     wl = DEFAULT_WAVELENGTHS
     exact = make_term(wl, top.ext_ior, top.film, int_ior=top.int_ior)
     lo, hi = thickness_range if (thickness_range and top.film) else (-1.0, -1.0)

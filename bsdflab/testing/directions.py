@@ -89,6 +89,4 @@ def single_direction(name: str, value) -> np.ndarray:
 
 def positive_int(name: str, value) -> int:
     """An integer >= 1 (bool rejected)."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{name} must be a positive integer, got {value!r}")
-    return int(value)
+    return check.integer(name, value, 1)

@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from bsdflab.util import args as check
 from scipy.special import erfc
 
 DEFAULT_RTOL = 1e-4
@@ -108,8 +110,7 @@ def image_z_test(mean_a, var_a, mean_b, var_b, alpha: float = 0.01, block: int =
         raise ValueError(f"shapes differ: mean_a {ma.shape}, var_a {va.shape}, mean_b {mb.shape}, var_b {vb.shape}")
     if not 0 < alpha < 1:
         raise ValueError(f"alpha must be in (0, 1), got {alpha!r}")
-    if isinstance(block, bool) or not isinstance(block, (int, np.integer)) or block < 1:
-        raise ValueError(f"block must be an integer >= 1, got {block!r}")
+    block = check.integer("block", block, 1)
     if not (rtol >= 0 and atol >= 0):
         raise ValueError(f"rtol and atol must be >= 0, got {rtol!r}, {atol!r}")
     if np.any(va < 0) or np.any(vb < 0):

@@ -126,15 +126,21 @@ def seed(value: Any, name: str = "seed") -> int:
     return integer(name, value, 0, MAX_SEED)
 
 
-def integer(name: str, value: Any, lo: int, hi: int) -> int:
-    """An int (or numpy integer; not a bool) in [lo, hi]."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
-        raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {brief(value)}")
+def integer(name: str, value: Any, lo: int, hi: int | None = None) -> int:
+    """An int (or numpy integer; not a bool) in [lo, hi] (``hi`` None: no upper bound).
+
+    The one integer check of the package: every message reads "NAME must be an integer in
+    [LO, HI], got VALUE" (or "... an integer >= LO, got VALUE")."""
+    if (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo
+            or (hi is not None and value > hi)):
+        bounds = f"in [{lo}, {hi}]" if hi is not None else f">= {lo}"
+        raise ValueError(f"{name} must be an integer {bounds}, got {brief(value)}")
     return int(value)
 
 
 def flag(name: str, value: Any) -> bool:
-    """A boolean: True or False (numpy bools too); not 0/1, strings or other truthy things."""
+    """A boolean: True or False (numpy bools too); not 0/1, strings or other truthy things.
+    The one flag check of the package ("NAME must be true or false, got VALUE")."""
     if not isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{name} must be true or false, got {brief(value)}")
     return bool(value)

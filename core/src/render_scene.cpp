@@ -1,16 +1,15 @@
+// The scene's geometry: meshes into Embree, intersection and occlusion, surface hits.
+// Material colour is in render_colour.cpp, emitters and the environment in
+// render_lights.cpp, Embree-only probes (benchmarks, tests) in render_probes.cpp.
 #include "bsdflab/render/scene.h"
 #include <embree3/rtcore.h>
 #include <algorithm>
-#include <atomic>
-#include <chrono>
 #include <cmath>
 #include <limits>
-#include <mutex>
 #include <stdexcept>
 #include "bsdflab/frame.h"
-#include "bsdflab/parallel.h"
-#include "bsdflab/sampling.h"
-#include "bsdflab/scratch.h"
+#include "bsdflab/scratch.h" // kLuminanceRGB
+#include "render_scene_impl.h"
 
 namespace bsdflab {
 
@@ -22,68 +21,18 @@ void on_embree_error(void *user, RTCError code, const char *message) {
 }
 } // namespace
 
-void RenderBSDF::to_rgb(const double *channels, double rgb[3]) const {
-    if (P.empty()) {
-        for (int c = 0; c < 3; ++c) rgb[c] = channels[c];
-        return;
-    }
-    const int C = bsdf->channels();
-    for (int r = 0; r < 3; ++r) {
-        double s = 0;
-        const double *row = &P[std::size_t(r) * C];
-        for (int c = 0; c < C; ++c) s += row[c] * channels[c];
-        rgb[r] = s;
-    }
+RenderScene::Embree::Embree() {
+    device = rtcNewDevice(nullptr);
+    if (!device) throw std::runtime_error("could not create an Embree device");
+    rtcSetDeviceErrorFunction(device, on_embree_error, &last_error);
+    scene = rtcNewScene(device);
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
 }
 
-void RenderBSDF::to_spectrum(const double *channels, double out[kSpectralBins]) const {
-    if (U.empty()) {
-        for (int l = 0; l < kSpectralBins; ++l) out[l] = channels[l];
-        return;
-    }
-    const int C = bsdf->channels();
-    for (int l = 0; l < kSpectralBins; ++l) {
-        const double *row = &U[std::size_t(l) * C];
-        double s = 0;
-        for (int c = 0; c < C; ++c) s += row[c] * channels[c];
-        out[l] = s;
-    }
+RenderScene::Embree::~Embree() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
 }
-
-void RenderScene::set_spectral(std::vector<double> U, std::vector<double> W) {
-    if (committed_) throw std::logic_error("scene already committed: set the spectral matrices before commit()");
-    if (U.size() != 3u * kSpectralBins || W.size() != 3u * kSpectralBins)
-        throw std::invalid_argument("spectral matrices must be (81 x 3) and (3 x 81)");
-    U_ = std::move(U);
-    W_ = std::move(W);
-}
-
-void RenderScene::lift(const double rgb[3], double out[kSpectralBins]) const {
-    for (int l = 0; l < kSpectralBins; ++l)
-        out[l] = U_[3 * l] * rgb[0] + U_[3 * l + 1] * rgb[1] + U_[3 * l + 2] * rgb[2];
-}
-
-struct RenderScene::Mesh {
-    MeshInput in;
-    std::vector<double> area; // per triangle
-};
-
-struct RenderScene::Embree {
-    std::string last_error;
-    RTCDevice device = nullptr;
-    RTCScene scene = nullptr;
-    Embree() {
-        device = rtcNewDevice(nullptr);
-        if (!device) throw std::runtime_error("could not create an Embree device");
-        rtcSetDeviceErrorFunction(device, on_embree_error, &last_error);
-        scene = rtcNewScene(device);
-        rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-    }
-    ~Embree() {
-        if (scene) rtcReleaseScene(scene);
-        if (device) rtcReleaseDevice(device);
-    }
-};
 
 RenderScene::RenderScene() : embree_(std::make_unique<Embree>()) {}
 RenderScene::~RenderScene() = default;
@@ -282,180 +231,6 @@ bool RenderScene::occluded(const Vec3 &o, const Vec3 &d, double tmax) const {
     r.flags = 0;
     rtcOccluded1(embree_->scene, &ctx, &r);
     return r.tfar < 0.0f;
-}
-
-namespace {
-// Packs up to 16 recorded rays of one kind into Embree's SoA packet; returns the count.
-template <typename Ray16>
-int pack16(const float *rays, std::size_t begin, std::size_t end, bool shadow, Ray16 &p, int valid[16]) {
-    int k = 0;
-    for (std::size_t i = begin; i < end && k < 16; ++i) {
-        const float *r = &rays[8 * i];
-        if ((r[7] != 0) != shadow) continue;
-        p.org_x[k] = r[0], p.org_y[k] = r[1], p.org_z[k] = r[2];
-        p.dir_x[k] = r[3], p.dir_y[k] = r[4], p.dir_z[k] = r[5];
-        p.tnear[k] = 0.0f, p.tfar[k] = r[6], p.time[k] = 0.0f;
-        p.mask[k] = 0xffffffffu, p.id[k] = 0, p.flags[k] = 0;
-        valid[k++] = -1;
-    }
-    for (int j = k; j < 16; ++j) valid[j] = 0;
-    return k;
-}
-} // namespace
-
-double RenderScene::trace_recorded(const float *rays, std::size_t n, int packet) const {
-    if (packet != 1 && packet != 16) throw std::invalid_argument("packet width must be 1 or 16");
-    std::atomic<std::size_t> hits{0}; // consumed, so the work cannot be optimised away
-    const auto start = std::chrono::steady_clock::now();
-    if (packet == 16) {
-        // Each block is scanned twice, once per kind, so packets hold rays of one kind.
-        parallel_for(n, 4096, [&](std::size_t begin, std::size_t end) {
-            RTCIntersectContext ctx;
-            rtcInitIntersectContext(&ctx);
-            std::size_t local = 0;
-            alignas(64) int valid[16];
-            for (bool shadow : {false, true}) {
-                std::size_t i = begin;
-                while (i < end) {
-                    // Find the window of `end` that holds the next 16 rays of this kind.
-                    std::size_t j = i, taken = 0;
-                    while (j < end && taken < 16) taken += ((rays[8 * j++ + 7] != 0) == shadow);
-                    if (shadow) {
-                        alignas(64) RTCRay16 r;
-                        if (pack16(rays, i, j, true, r, valid)) {
-                            rtcOccluded16(valid, embree_->scene, &ctx, &r);
-                            for (int k = 0; k < 16; ++k) local += valid[k] && r.tfar[k] < 0.0f;
-                        }
-                    } else {
-                        alignas(64) RTCRayHit16 rh;
-                        if (pack16(rays, i, j, false, rh.ray, valid)) {
-                            for (int k = 0; k < 16; ++k) rh.hit.geomID[k] = rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-                            rtcIntersect16(valid, embree_->scene, &ctx, &rh);
-                            for (int k = 0; k < 16; ++k) local += valid[k] && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
-                        }
-                    }
-                    i = j;
-                }
-            }
-            hits += local;
-        });
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        return hits.load() > n ? -1.0 : seconds;
-    }
-    parallel_for(n, 4096, [&](std::size_t begin, std::size_t end) {
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        std::size_t local = 0;
-        for (std::size_t i = begin; i < end; ++i) {
-            const float *r = &rays[8 * i];
-            RTCRayHit rh;
-            rh.ray.org_x = r[0];
-            rh.ray.org_y = r[1];
-            rh.ray.org_z = r[2];
-            rh.ray.dir_x = r[3];
-            rh.ray.dir_y = r[4];
-            rh.ray.dir_z = r[5];
-            rh.ray.tnear = 0.0f;
-            rh.ray.tfar = r[6];
-            rh.ray.time = 0.0f;
-            rh.ray.mask = 0xffffffffu;
-            rh.ray.id = 0;
-            rh.ray.flags = 0;
-            if (r[7] != 0) {
-                rtcOccluded1(embree_->scene, &ctx, &rh.ray);
-                local += rh.ray.tfar < 0.0f;
-            } else {
-                rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-                rtcIntersect1(embree_->scene, &ctx, &rh);
-                local += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-            }
-        }
-        hits += local;
-    });
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return hits.load() > n ? -1.0 : seconds; // never true; keeps the hit count live
-}
-
-void RenderScene::first_hits(const float *rays, std::size_t n, int *mesh) const {
-    parallel_for(n, 4096, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) {
-            const float *r = &rays[6 * i];
-            SurfaceHit hit;
-            mesh[i] = intersect({r[0], r[1], r[2]}, {r[3], r[4], r[5]}, std::numeric_limits<double>::infinity(), hit)
-                          ? hit.mesh
-                          : -1;
-        }
-    });
-}
-
-void RenderScene::emitted(const SurfaceHit &hit, const Vec3 &w, double rgb[3]) const {
-    const double *e = meshes_[hit.mesh].in.emission;
-    bool front = dot(hit.ns, w) > 0;
-    for (int c = 0; c < 3; ++c) rgb[c] = front ? e[c] : 0.0;
-}
-
-double RenderScene::env_selection() const {
-    if (!environment_.active()) return 0.0;
-    return lights_.empty() ? 1.0 : 0.5;
-}
-
-EmitterSample RenderScene::sample_emitter(const Vec3 &ref, double u0, double u1, double u2) const {
-    EmitterSample s;
-    const double p_env = env_selection();
-    if (p_env == 0 && lights_.empty()) return s;
-    if (u0 < p_env) {
-        double pdf;
-        Vec3 d = environment_.sample(u1, u2, pdf, s.radiance);
-        if (!(pdf > 0)) {
-            s.radiance[0] = s.radiance[1] = s.radiance[2] = 0.0;
-            return s;
-        }
-        s.wo = d;
-        s.dist = std::numeric_limits<double>::infinity();
-        s.pdf = pdf * p_env;
-        return s;
-    }
-    double u_rest;
-    std::size_t k = light_choice_.sample(p_env > 0 ? (u0 - p_env) / (1 - p_env) : u0, u_rest);
-    auto [m, f] = lights_[k];
-    // Uniform point on the triangle (square-root parameterisation).
-    double su = std::sqrt(u1), b1 = 1 - su, b2 = u2 * su;
-    (void)u_rest;
-    SurfaceHit h;
-    fill_hit(m, f, b1, b2, h);
-    Vec3 to = h.p - ref;
-    double d2 = dot(to, to);
-    if (!(d2 > 0)) return s;
-    double dist = std::sqrt(d2);
-    Vec3 wo = to * (1 / dist);
-    double cos_l = std::abs(dot(h.ng, wo));
-    if (!(cos_l > 1e-12)) return s;
-    emitted(h, -wo, s.radiance);
-    s.wo = wo;
-    s.dist = dist;
-    s.pdf = (1 - p_env) * light_choice_.prob(k) / meshes_[m].area[f] * d2 / cos_l;
-    return s;
-}
-
-double RenderScene::emitter_pdf(const Vec3 &ref, const SurfaceHit &hit) const {
-    const auto &probs = light_prob_[hit.mesh];
-    if (probs.empty()) return 0.0;
-    Vec3 to = hit.p - ref;
-    double d2 = dot(to, to);
-    double cos_l = std::abs(dot(hit.ng, to)) / std::sqrt(d2);
-    if (!(cos_l > 1e-12)) return 0.0;
-    return (1 - env_selection()) * probs[hit.prim] / meshes_[hit.mesh].area[hit.prim] * d2 / cos_l;
-}
-
-double RenderScene::environment_pdf(const Vec3 &d) const {
-    double p = env_selection();
-    return p > 0 ? p * environment_.pdf(d) : 0.0;
-}
-
-void RenderScene::environment_radiance(const Vec3 &d, double rgb[3], double &pdf) const {
-    environment_.eval_pdf(d, rgb, pdf);
-    pdf *= env_selection();
 }
 
 } // namespace bsdflab

@@ -25,6 +25,7 @@ each is from the exact spectral Airy reflectance (`bsdflab.optics.thin_film`):
 Every function returns linear sRGB (D65) reflectance, shape (..., 3), for unpolarised light,
 so the colour-difference study (``study.py``) compares them all in the same space.
 """
+from bsdflab.reference.approximations._optics import XYZ_TO_SRGB  # the shared sRGB matrix
 from bsdflab.reference.approximations.belcour_barla import belcour_barla_rgb, belcour_barla_xyz, xyz_sensitivity_exact, xyz_sensitivity_gaussian
 from bsdflab.reference.approximations.cycles import cycles_thin_film_rgb
 from bsdflab.reference.approximations.gltf import gltf_iridescence_rgb
@@ -41,5 +42,5 @@ MODELS = {
     "seed code (double phase, 3 wavelengths)": seed_rgb,
 }
 
-__all__ = ["CYCLES", "MATERIALX", "MODELS", "belcour_barla_rgb", "cycles_thin_film_rgb", "belcour_barla_xyz", "gltf_iridescence_rgb", "seed_reflectance", "seed_rgb",
+__all__ = ["CYCLES", "MATERIALX", "MODELS", "XYZ_TO_SRGB", "belcour_barla_rgb", "cycles_thin_film_rgb", "belcour_barla_xyz", "gltf_iridescence_rgb", "seed_reflectance", "seed_rgb",
            "xyz_sensitivity_exact", "xyz_sensitivity_gaussian"]

@@ -21,7 +21,7 @@ HEADROOM = 3 << 29  # 1.5 GiB
 RUNNER = textwrap.dedent("""
     import resource, sys
     import bsdflab, bsdflab.render, bsdflab.scenes, bsdflab.tables  # imports first: their mappings
-    from bsdflab.scenes.geometry import build_mesh
+    from bsdflab.render.geometry import build_mesh
     with open("/proc/self/status") as f:
         vm = next(int(line.split()[1]) * 1024 for line in f if line.startswith("VmSize:"))
     resource.setrlimit(resource.RLIMIT_AS, (vm + {headroom}, vm + {headroom}))
@@ -71,7 +71,7 @@ def test_huge_request_is_refused_before_allocating(name):
 def test_caps_are_configurable(monkeypatch):
     from bsdflab.util import limits
     from bsdflab.render import Camera
-    from bsdflab.scenes.geometry import build_mesh
+    from bsdflab.render.geometry import build_mesh
 
     monkeypatch.setenv("BSDFLAB_MAX_PIXELS", "1_000")
     with pytest.raises(ValueError, match="BSDFLAB_MAX_PIXELS"):

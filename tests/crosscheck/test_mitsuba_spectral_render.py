@@ -255,5 +255,5 @@ def test_spectral_conversion_needs_a_spectral_variant_and_no_fallback():
         render_mitsuba(scene, 4, spectral=True, variant="llvm_ad_rgb")
     with pytest.raises(ValueError, match="variant must be"):
         render_mitsuba(scene, 4, variant="llvm_ad_spectral")  # RGB scene, spectral variant
-    with pytest.raises(ValueError, match="spectral must be True or False"):
+    with pytest.raises(ValueError, match="spectral must be true or false"):
         render_mitsuba(scene, 4, spectral="yes")

@@ -19,10 +19,11 @@ import pytest
 
 
 
-from bsdflab.distributed import connect  # noqa: E402
-from bsdflab.distributed.render_units import plan_units  # noqa: E402
-from bsdflab.render import render  # noqa: E402
-from bsdflab.scenes import scene  # noqa: E402
+from bsdflab.distributed import DaskRunner, connect
+from bsdflab.render import render
+from bsdflab.render.units import plan_units, render_units
+from bsdflab.scenes import scene
+from bsdflab.tables.units import tabulate_units
 
 BSDFLAB = [sys.executable, "-m", "bsdflab.cli.main"]
 
@@ -53,9 +54,7 @@ def test_render_equals_the_local_render_bit_for_bit(client):
     s = scene("basic-materials", width=40, height=30)
     local = render(s, spp=6, seed=3, pass_spp=2, progress=False)
     # Small units: many bands x 3 passes arrive in any order on two workers.
-    from bsdflab.distributed.render import render_on_cluster
-
-    remote = render_on_cluster(client, s, spp=6, seed=3, pass_spp=2, strategy=0, progress=False,
+    remote = render_units(DaskRunner(client), s, spp=6, seed=3, pass_spp=2, strategy=0, progress=False,
                                unit_samples=40 * 2 * 4)
     assert remote.settings["units"] == 8 * 3
     assert np.array_equal(local.mean, remote.mean)
@@ -84,8 +83,6 @@ def test_spectral_render_of_a_table_equals_the_local_one(client, tmp_path):
 
 
 def test_a_worker_killed_mid_render_changes_nothing(client):
-    from bsdflab.distributed.render import render_on_cluster
-
     s = scene("basic-materials", width=48, height=36)
     local = render(s, spp=8, seed=5, pass_spp=1, progress=False)
     pids = list(client.run(os.getpid).values())
@@ -96,7 +93,7 @@ def test_a_worker_killed_mid_render_changes_nothing(client):
             killed.set()
             os.kill(pids[0], signal.SIGKILL)  # the nanny restarts it; its units are redone
 
-    remote = render_on_cluster(client, s, spp=8, seed=5, pass_spp=1, strategy=0, progress=False,
+    remote = render_units(DaskRunner(client), s, spp=8, seed=5, pass_spp=1, strategy=0, progress=False,
                                unit_samples=48 * 4, progress_callback=progress)
     assert killed.is_set()
     assert np.array_equal(local.mean, remote.mean)
@@ -142,14 +139,13 @@ def _small_table_args():
 
 
 def test_table_equals_the_local_table_bit_for_bit(client):
-    from bsdflab.distributed.tabulate_units import tabulate_on_cluster
     from bsdflab.tables import tabulate
 
     model, grid = _small_table_args()
     kw = dict(rel_error=0.05, wavelengths=None, min_samples=32, max_samples=256, seed=11)
     local = tabulate(model, grid, progress=False, **kw)
     # 2 x 3 x 4 x 3 = 72 cells in blocks of one slice (12 cells): 6 units per stage.
-    remote = tabulate_on_cluster(client, model, grid, progress=False, unit_cells=12, **kw)
+    remote = tabulate_units(DaskRunner(client), model, grid, progress=False, unit_cells=12, **kw)
     assert remote.meta["units"] == 12
     for name in ("values", "stderr", "samples"):
         assert np.array_equal(getattr(local, name), getattr(remote, name)), name
@@ -159,7 +155,6 @@ def test_table_equals_the_local_table_bit_for_bit(client):
 
 def test_a_worker_killed_mid_tabulation_changes_nothing(client):
     from bsdflab.util.progress import monitored
-    from bsdflab.distributed.tabulate_units import tabulate_on_cluster
     from bsdflab.tables import tabulate
 
     model, grid = _small_table_args()
@@ -174,7 +169,7 @@ def test_a_worker_killed_mid_tabulation_changes_nothing(client):
             os.kill(pids[1], signal.SIGKILL)
 
     with monitored(progress, lambda: False):
-        remote = tabulate_on_cluster(client, model, grid, progress=False, unit_cells=12, **kw)
+        remote = tabulate_units(DaskRunner(client), model, grid, progress=False, unit_cells=12, **kw)
     assert killed
     client.wait_for_workers(2, timeout=60)
     assert pids[1] not in client.run(os.getpid).values()  # the worker really was replaced
@@ -184,7 +179,7 @@ def test_a_worker_killed_mid_tabulation_changes_nothing(client):
 
 def test_service_executor_runs_jobs_on_the_cluster(client, tmp_path):
     """BSDFLAB_EXECUTOR=dask:<address>: the service's jobs, their units on the cluster."""
-    from bsdflab.jobs.executor import make_executor
+    from bsdflab.jobs import make_executor
     from bsdflab.jobs.kinds import get_kind
     from bsdflab.render import read_exr
 
@@ -199,7 +194,7 @@ def test_service_executor_runs_jobs_on_the_cluster(client, tmp_path):
 
 def test_cancelling_a_cluster_job_cancels_its_units(client, tmp_path):
     from bsdflab.util.progress import JobCancelled
-    from bsdflab.jobs.executor import make_executor
+    from bsdflab.jobs import make_executor
     from bsdflab.jobs.kinds import get_kind
 
     request = get_kind("render").normalise({"scene": "basic-materials", "width": 160, "height": 120,

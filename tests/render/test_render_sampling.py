@@ -8,7 +8,7 @@ import numpy as np
 
 from bsdflab import _core
 from bsdflab.scenes import scene
-from bsdflab.scenes.geometry import build_mesh
+from bsdflab.render.geometry import build_mesh
 from support.environment_integral import estimate_z, sphere_integral
 
 Z = 3.9  # two-sided 1e-4 per compared quantity

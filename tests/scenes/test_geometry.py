@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from bsdflab.scenes.curves import SNAKE_DEFAULTS
-from bsdflab.scenes.geometry import GEOMETRY_TYPES, Mesh, build_mesh, mesh_area, triangle_normals, validate_mesh
+from bsdflab.render.curves import SNAKE_DEFAULTS
+from bsdflab.render.geometry import GEOMETRY_TYPES, Mesh, build_mesh, mesh_area, triangle_normals, validate_mesh
 
 
 def _area_convergence(spec_at, exact):

@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 import bsdflab as bl
 from bsdflab import optics, presets
 from bsdflab.render import Camera, Scene
-from bsdflab.scenes.geometry import build_mesh
+from bsdflab.render.geometry import build_mesh
 from bsdflab.tables import TableGrid
 
 FAST_EXAMPLES = 250   # per property in CI: ~1500 cases, ~20 s on 2 loaded cores

@@ -23,7 +23,7 @@ from bsdflab.bsdfs.interface_term import make_term
 from bsdflab.presets import FILM_THICKNESS_NM, iridophore_stack, preset
 from bsdflab.spectra import DEFAULT_WAVELENGTHS
 from bsdflab.tables import TableGrid, tabulate
-from bsdflab.tables.tabulate import _tabulator, cell_count, finish_cells, floor_scale, pilot_cells
+from bsdflab.tables.stages import _tabulator, cell_count, finish_cells, floor_scale, pilot_cells
 from bsdflab.testing import sidak_z_limit
 
 MAX_ERROR = 1e-7

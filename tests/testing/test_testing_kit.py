@@ -277,7 +277,7 @@ def test_furnace_per_wavelength_and_below_the_surface():
     # A one-sided diffuse surface lit from below scatters nothing; failed samples count 0.
     below = albedo_sampled(bl.Diffuse(0.5), [0.0, 0.0, -1.0], n=1000)
     np.testing.assert_array_equal(below.mean, 0.0)
-    with pytest.raises(ValueError, match="n must be a positive integer"):
+    with pytest.raises(ValueError, match="n must be an integer >= 1"):
         albedo_uniform(bl.Diffuse(0.5), WI_FURNACE, n=0)
 
 

@@ -41,9 +41,8 @@ STUDY_EFFORT = effort({"angles": 19, "thicknesses": 61}, {"angles": 46, "thickne
                           "to ~3.5 at 700 nm for the snake's film, reported in the study)",
                 effort=effort({}, {}), seed=0)
 def _specifications(ctx):
-    from bsdflab.reference.approximations import MODELS, belcour_barla_rgb, xyz_sensitivity_gaussian
-    from bsdflab.reference.approximations._optics import XYZ_TO_SRGB
-    from bsdflab.reference.approximations import belcour_barla_xyz
+    from bsdflab.reference.approximations import (MODELS, XYZ_TO_SRGB, belcour_barla_rgb, belcour_barla_xyz,
+                                                  xyz_sensitivity_gaussian)
     from bsdflab.reference.approximations.study import delta_e00_xyz_e, exact_rgb, exact_xyz_illuminant_e
 
     d = np.linspace(0.0, 1500.0, 31)

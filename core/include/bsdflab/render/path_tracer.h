@@ -16,6 +16,7 @@
 #include <memory>
 #include <vector>
 #include "bsdflab/render/scene.h"
+#include "bsdflab/rng.h"
 
 namespace bsdflab {
 
@@ -93,6 +94,11 @@ private:
     void trace_path(double px, double py, uint64_t sample_seed, double L[3], RayLog &log) const;
     template <int N>
     void trace_path_in(double px, double py, uint64_t sample_seed, double L[3], RayLog &log) const;
+    // Next-event estimation at a path vertex (pbrt-v4's SampleLd): adds the sampled
+    // emitter's contribution to L.
+    template <int N>
+    void sample_direct(const SurfaceHit &hit, const ShadingPoint &sp, const Vec3 &wi, const double *beta,
+                       double L[3], PCG32 &rng, double *buf, RayLog &log) const;
     void render_tile(std::size_t tile, int pass, int spp);
     // Pixels [x0, x1) x [y0, y1) of one pass; out_sum/out_sq point at pixel (x0, y0) of
     // row-major buffers whose rows are `stride` pixels long.

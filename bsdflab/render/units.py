@@ -4,7 +4,8 @@ A unit is a pure function of (scene dict, render settings, band, pass): the C++ 
 every (pixel, pass) from the render seed, so a unit computes exactly the numbers the local
 renderer computes for those pixels in that pass, on any worker, on every retry. The driver
 adds units pass by pass in order — the local renderer's own order of additions — so the
-distributed image equals the local one bit for bit (tests/test_distributed.py).
+image equals the in-process one bit for bit on any runner (bsdflab.util.runners: this
+process, or a Dask cluster; tests/distributed/test_distributed.py).
 
 What crosses the wire: the scene as its plain dict (``Scene.to_dict``), the settings as a
 dict, and table files as bytes (a tabulated material is resolved once by the driver; each
@@ -19,11 +20,21 @@ import json
 import os
 import tempfile
 import threading
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from bsdflab import _core
+from bsdflab.render.build import TABULATED, build_render_scene, resolve_bsdf
+from bsdflab.render.result import RenderResult, render_result
+from bsdflab.render.scene import Scene
+from bsdflab.tables.file_format import write_table
+from bsdflab.util import args as check
+from bsdflab.util.files import write_atomically
+from bsdflab.util.runners import Runner, unit_key
 
 # Samples in one unit when the caller does not say: ~0.5-2 s of one core on the snake and
 # basic-materials scenes (bench/bench_distributed.py measures per-unit overhead at a few
@@ -43,8 +54,7 @@ def plan_units(width: int, height: int, spp: int, pass_spp: int,
                unit_samples: int = DEFAULT_UNIT_SAMPLES) -> list[RenderUnit]:
     """Bands of whole rows × passes, each about ``unit_samples`` samples; pass-major order, so
     early passes (and a usable preview) complete first."""
-    if not isinstance(unit_samples, int) or unit_samples < 1:
-        raise ValueError(f"unit_samples must be a positive integer, got {unit_samples!r}")
+    unit_samples = check.integer("unit_samples", unit_samples, 1, 1 << 62)
     passes = (spp + pass_spp - 1) // pass_spp
     rows = max(1, min(height, unit_samples // max(1, width * pass_spp)))
     bands = [(y, min(y + rows, height)) for y in range(0, height, rows)]
@@ -66,8 +76,6 @@ def resolve_tables(scene, progress: bool, cache_dir, spectral: bool = False) -> 
     """The scene's dict with every tabulated material replaced by a reference to its table
     file's content hash, and those files' bytes (tabulating missing tables here, once;
     spectral tables for a spectral render, as in-process)."""
-    from bsdflab.render.build import TABULATED, resolve_bsdf
-
     d = scene.to_dict()
     files: dict[str, bytes] = {}
 
@@ -92,8 +100,6 @@ def _table_bytes(table) -> bytes:
     the table written to a temporary file here."""
     if table.path is not None:
         return Path(table.path).read_bytes()
-    from bsdflab.tables.file_format import write_table
-
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "table.exr"
         write_table(path, table.table)
@@ -112,8 +118,6 @@ def _table_dir() -> Path:
 
 
 def _local_table(digest: str, data: bytes) -> str:
-    from bsdflab.util.files import write_atomically
-
     if hashlib.sha256(data).hexdigest() != digest:
         raise ValueError(f"table bytes do not match their hash {digest}")
     path = _table_dir() / f"{digest}.exr"
@@ -123,10 +127,6 @@ def _local_table(digest: str, data: bytes) -> str:
 
 
 def _job_for(scene_dict: dict[str, Any], tables: dict[str, bytes], settings: dict[str, Any]):
-    from bsdflab import _core
-    from bsdflab.render.build import build_render_scene
-    from bsdflab.render.scene import Scene
-
     key = hashlib.sha256(json.dumps([scene_dict, settings], sort_keys=True).encode()).hexdigest()
     with _lock:
         job = _built.get(key)
@@ -153,3 +153,48 @@ def render_unit(scene_dict: dict[str, Any], tables: dict[str, bytes], settings: 
     job = _job_for(scene_dict, tables, settings)
     width = int(scene_dict["camera"]["width"])
     return job.render_window(0, unit.y0, width, unit.y1, unit.pass_index)
+
+
+# -- the driver -------------------------------------------------------------------------------
+def render_units(runner: Runner, scene: Scene, spp: int, seed: int, pass_spp: int, strategy: int,
+                 spectral: bool = False, progress: bool = True, cache_dir=None,
+                 unit_samples: int = DEFAULT_UNIT_SAMPLES, progress_callback=None,
+                 cancelled=None) -> RenderResult:
+    """Render ``scene`` (validated by the caller) in units on ``runner``; returns the
+    RenderResult the in-process renderer would, bit for bit (module docstring)."""
+    scene_dict, tables = resolve_tables(scene, progress, cache_dir, spectral=spectral)
+    settings = job_settings(scene_dict, spp, pass_spp, seed, strategy, spectral)
+    width, height = scene.camera.width, scene.camera.height
+    units = plan_units(width, height, spp, pass_spp, unit_samples)
+    passes = units[-1].pass_index + 1
+    bands = sorted({(u.y0, u.y1) for u in units})
+
+    total = np.zeros((height, width, 3)), np.zeros((height, width, 3))
+    # Units arrive in any order; each band adds its passes strictly in order (the local
+    # renderer's order of floating-point additions), holding early arrivals until then.
+    next_pass = {b: 0 for b in bands}
+    waiting: dict[tuple[int, int], dict[int, tuple]] = {b: {} for b in bands}
+    invalid = 0
+
+    def add(unit, value):
+        nonlocal invalid
+        band = (unit.y0, unit.y1)
+        waiting[band][unit.pass_index] = value
+        while next_pass[band] in waiting[band]:
+            s, q, bad = waiting[band].pop(next_pass[band])
+            total[0][band[0]:band[1]] += s
+            total[1][band[0]:band[1]] += q
+            invalid += int(bad)
+            next_pass[band] += 1
+
+    start = time.perf_counter()
+    runner.run(render_unit, [scene_dict, tables, settings], units, add,
+               key=f"bsdflab-render-{unit_key(scene_dict, settings, sorted(tables), unit_samples)}",
+               progress=progress, desc="rendering", progress_callback=progress_callback,
+               cancelled=cancelled)
+    seconds = time.perf_counter() - start
+    if any(n != passes for n in next_pass.values()):
+        raise RuntimeError("render units: a band is missing passes")  # a driver bug, never input
+    mean, variance = _core.RenderJob.finish_image(total[0], total[1], float(spp))
+    return render_result(scene, mean, variance, spp, seconds, invalid, seed, spectral,
+                         units=len(units), workers=runner.workers())

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bsdflab.scenes.mesh import Mesh, Params, grid_indices, normalise, reserve
+from bsdflab.render.mesh import Mesh, Params, grid_indices, normalise, reserve
 
 SNAKE_DEFAULTS = {
     "length": 100.0,

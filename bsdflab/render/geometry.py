@@ -15,7 +15,7 @@ after the type's own placement. Types and parameters (lengths in scene units):
   Two triangles, uv in [0, 1]^2.
 - ``disk``: center, normal, radius 1, resolution 64 (a fan); uv = (0.5, 0.5) + the
   in-plane position / (2 radius), oriented like the rectangle.
-- ``snake_body``, ``snake_head``: see ``bsdflab.scenes.curves`` (SNAKE_DEFAULTS).
+- ``snake_body``, ``snake_head``: see ``bsdflab.render.curves`` (SNAKE_DEFAULTS).
 - ``mesh``: path (OBJ/PLY/STL, relative to ``base_dir``), smooth (True: per-vertex
   normals from the file or area-weighted; False: flat shading).
 
@@ -30,10 +30,11 @@ from typing import Any, Callable
 import numpy as np
 
 from bsdflab.util.args import brief
-from bsdflab.scenes import curves
-from bsdflab.scenes.mesh import MAX_SEGMENTS, Mesh, grid_indices, normalise as _normalise, reserve
-from bsdflab.scenes.mesh import Params as _Params
-from bsdflab.scenes.mesh import plane_axes as _orthonormal
+from bsdflab.render.curves import SNAKE_DEFAULTS, snake_body, snake_head, snake_layout
+from bsdflab.render.mesh import MAX_SEGMENTS, Mesh, grid_indices, normalise as _normalise, reserve
+from bsdflab.render.mesh import Params as _Params
+from bsdflab.render.mesh import plane_axes as _orthonormal
+from bsdflab.util import limits
 
 __all__ = ["GEOMETRY_TYPES", "MAX_SEGMENTS", "Mesh", "build_mesh", "grid_indices", "mesh_area",
            "transform_mesh", "triangle_normals", "validate_mesh"]
@@ -130,8 +131,6 @@ def _mesh_file(p: _Params, base_dir: str | None) -> Mesh:
     full = path if base_dir is None or os.path.isabs(path) else os.path.join(base_dir, path)
     if not os.path.isfile(full):
         raise ValueError(f"mesh: cannot read {full}: {'not a file' if os.path.exists(full) else 'no such file'}")
-    from bsdflab.util import limits
-
     limits.check_bytes(f"mesh: {full}", limits.MESH_FILE_EXPANSION * os.path.getsize(full))
     try:
         loaded = trimesh.load(full, force="mesh", process=False)
@@ -195,13 +194,13 @@ def transform_mesh(mesh: Mesh, m: np.ndarray) -> Mesh:
 # -- entry point ---------------------------------------------------------------------------
 def _snake(kind: str) -> Callable[[_Params], Mesh]:
     def build(p: _Params) -> Mesh:
-        layout = curves.snake_layout(p)
-        return curves.snake_body(layout) if kind == "snake_body" else curves.snake_head(layout)
+        layout = snake_layout(p)
+        return snake_body(layout) if kind == "snake_body" else snake_head(layout)
     return build
 
 
 def _snake_defaults() -> dict[str, Any]:
-    return curves.SNAKE_DEFAULTS
+    return SNAKE_DEFAULTS
 
 
 _ORIGIN = [0.0, 0.0, 0.0]

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from bsdflab.util.args import brief
+from bsdflab.util import limits
 
 MAX_SEGMENTS = 4096
 
@@ -82,8 +83,6 @@ class Params:
 
 def reserve(kind: str, vertices: int, triangles: int) -> None:
     """Refuse a mesh whose size would exceed the caps, before building it (bsdflab.util.limits)."""
-    from bsdflab.util import limits
-
     limits.check_count(f"{kind}: triangles", int(triangles), "BSDFLAB_MAX_TRIANGLES")
     limits.check_bytes(f"{kind} mesh ({int(vertices)} vertices, {int(triangles)} triangles)",
                        limits.mesh_bytes(vertices, triangles))

@@ -1,0 +1,91 @@
+"""The Dask runner: work units on a Dask cluster — submit, collect as they complete, show
+progress, cancel on Ctrl-C. It registers itself as the ``"dask"`` runner
+(bsdflab.util.runners), so ``tabulate(..., client=)``, ``render(..., client=)`` and the job
+executor spec ``dask:<address>`` / ``dask:local:N`` reach it by name: no layer below this one
+knows Dask exists.
+
+Faults are Dask's business: units are pure, so a unit lost with a killed worker is simply
+recomputed elsewhere (the nanny restarts the worker; the scheduler reschedules its tasks;
+``retries`` covers units that raised on a sick worker). The runner only hands results back
+as they arrive and never writes a file itself — callers write once, atomically, after the
+last unit.
+"""
+from __future__ import annotations
+
+import contextlib
+import time
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
+
+from distributed import as_completed
+
+from bsdflab.distributed.cluster import connect
+from bsdflab.util.progress import JobCancelled, cancel_requested
+from bsdflab.util.runners import Runner, finished_unit, progress_bar
+
+# Reruns of a unit that raised (beyond the scheduler's own rescheduling of units whose
+# worker died, which `distributed.scheduler.allowed-failures` bounds).
+RETRIES = 2
+POLL_S = 0.05
+
+
+class DaskRunner(Runner):
+    """Units on the workers of ``client`` (a ``distributed.Client``)."""
+
+    name = "dask"
+
+    def __init__(self, client):
+        self.client = client
+
+    def workers(self) -> int:
+        return len(self.client.scheduler_info().get("workers", {}))
+
+    @classmethod
+    @contextlib.contextmanager
+    def connect(cls, target: str) -> Iterator["DaskRunner"]:
+        """``target``: a scheduler address or ``local:N`` (a LocalCluster of N workers)."""
+        target = target.strip()
+        local = target.startswith("local:")
+        with (connect(cluster=target) if local else connect(scheduler=target)) as client:
+            yield cls(client)
+
+    def run(self, fn: Callable[..., Any], shared: Sequence[Any], units: Sequence[Any],
+            on_result: Callable[[Any, Any], None], *, key: str, desc: str = "units",
+            progress: bool = True, progress_callback: Callable[[float], None] | None = None,
+            cancelled: Callable[[], bool] | None = None) -> None:
+        """``Runner.run`` on the cluster. ``shared`` values are scattered once (broadcast)
+        instead of being sent with every unit; unit ``i`` is the task ``f"{key}-{i}"``.
+        Ctrl-C, a job monitor's cancel or ``cancelled()`` cancel every outstanding unit."""
+        client = self.client
+        # Wrapped in a list: scatter() would take a dict's items as separate pieces of data.
+        # Fresh keys (hash=False): a content-hash key shared with an earlier, just-released
+        # scatter of the same value could be forgotten under this job ("lost dependencies").
+        shared_futures = [client.scatter([v], broadcast=True, hash=False)[0] for v in shared]
+        futures = [client.submit(fn, *shared_futures, u, key=f"{key}-{i}", retries=RETRIES, pure=False)
+                   for i, u in enumerate(units)]
+        unit_of = {f.key: u for f, u in zip(futures, units)}
+        done = 0
+        stop = cancelled or (lambda: False)
+        try:
+            with progress_bar(len(units), desc, progress) as bar:
+                pending = as_completed(futures)
+                while not pending.is_empty():
+                    # Poll rather than block on the next unit, so a cancel is seen within
+                    # POLL_S even while every outstanding unit is long.
+                    if cancel_requested() or stop():
+                        raise JobCancelled(f"{desc} cancelled")
+                    batch = pending.next_batch(block=False)
+                    if not batch:
+                        time.sleep(POLL_S)
+                        continue
+                    for future in batch:
+                        on_result(unit_of[future.key], future.result())
+                        future.release()
+                        done += 1
+                        finished_unit(bar, desc, done / len(units), progress_callback)
+        except BaseException:
+            client.cancel(futures)
+            raise
+        finally:
+            for f in shared_futures:
+                f.release()

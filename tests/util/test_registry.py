@@ -1,0 +1,50 @@
+"""The BSDF registry finds every type whatever was imported first (lazy entries for types
+defined above bsdflab.bsdfs), checked in fresh interpreters."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import bsdflab as bl
+from bsdflab.bsdfs.base import BSDF, TYPES
+from bsdflab.tables import TableGrid, tabulate, write_table
+
+
+def _all_subclasses(cls):
+    for sub in cls.__subclasses__():
+        yield sub
+        yield from _all_subclasses(sub)
+
+
+def _fresh(code: str) -> str:
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    return p.stdout.strip()
+
+
+def test_every_type_defined_above_bsdfs_has_a_lazy_entry():
+    import bsdflab.tables  # noqa: F401 -- every module that defines a type
+
+    above = {c.type_name: c.__module__ for c in _all_subclasses(BSDF)
+             if c.type_name and not c.__module__.startswith("bsdflab.bsdfs.")}
+    assert above and {name: TYPES.lazy().get(name) for name in above} == above
+
+
+def test_a_table_from_its_dict_without_importing_tables_first(tmp_path):
+    path = tmp_path / "t.exr"
+    write_table(path, tabulate(bl.Diffuse(0.5), TableGrid(3, 4, 3), progress=False))
+    out = _fresh(
+        "import sys\n"
+        "from bsdflab.bsdfs.base import TYPES, from_dict\n"
+        "before = 'bsdflab.tables.table_bsdf' in sys.modules\n"
+        f"b = from_dict({{'type': 'table', 'path': {str(path)!r}}})\n"
+        "print(before, type(b).__name__, all(TYPES.get(n) is not None for n in TYPES.names()))\n")
+    assert out == "False TableBSDF True"
+
+
+def test_a_layered_model_from_its_dict_in_a_fresh_interpreter():
+    d = bl.presets.xenopeltis().to_dict()
+    out = _fresh(f"import json\nfrom bsdflab.bsdfs.base import from_dict\n"
+                 f"print(from_dict(json.loads({json.dumps(d)!r})).type_name)")
+    assert out == "layered"
