@@ -42,6 +42,13 @@ setup() {
     "$VENV/bin/python" -m pip install -q -e ".[test]"
 }
 
+# Lint and format checks (configs: [tool.ruff] in pyproject.toml, .clang-format): fail
+# before the tests run. `ruff check --fix .` and `clang-format -i` fix most findings.
+lint() {
+    "$VENV/bin/ruff" check .
+    find core \( -name '*.h' -o -name '*.cpp' \) -print0 | xargs -0 "$VENV/bin/clang-format" --dry-run --Werror
+}
+
 cmd=${1:-demo}
 shift || true
 case "$cmd" in
@@ -54,6 +61,7 @@ case "$cmd" in
         ;;
     test)
         setup
+        lint
         "$VENV/bin/python" -m pytest -m "not slow" "$@"
         ;;
     *) echo "usage: ./dev.sh [demo|test|setup] [args...]" >&2; exit 2 ;;

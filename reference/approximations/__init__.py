@@ -14,24 +14,25 @@ each is from the exact spectral Airy reflectance (`bsdflab.optics.thin_film`):
 ``gltf``            glTF ``KHR_materials_iridescence`` (Khronos, 2022, appendix "Implementation"):
                     the same series with Schlick's Fresnel approximation, phases 0 or pi, two
                     terms, the base index recovered from F0, negative colours clamped.
-``seed_film``       The snake paper's public code (Padron-Griffe et al. 2023, Mitsuba 0.6
-                    ``dielectricThinFilm``): the Airy sum with an extra reflection phase on top
-                    of signed amplitudes (counted twice) at three wavelengths taken as RGB.
+``double_phase_film``  The snake-skin paper's public code (Padrón-Griffe et al., CEIG 2023,
+                    Mitsuba 0.6 ``dielectricThinFilm``): the Airy sum with an extra reflection
+                    phase on top of signed amplitudes (counted twice) at three wavelengths
+                    taken as RGB.
 
 Every function returns linear sRGB (D65) reflectance, shape (..., 3), for unpolarised light,
 so the colour-difference study (``study.py``) compares them all in the same space.
 """
 from bsdflab.reference.approximations.belcour_barla import belcour_barla_rgb, belcour_barla_xyz, xyz_sensitivity_exact, xyz_sensitivity_gaussian
 from bsdflab.reference.approximations.gltf import gltf_iridescence_rgb
-from bsdflab.reference.approximations.seed_film import seed_reflectance, seed_rgb
+from bsdflab.reference.approximations.double_phase_film import double_phase_reflectance, double_phase_rgb
 
 MODELS = {
     "Belcour-Barla (MaterialX, OpenPBR, Standard Surface, Cycles)": belcour_barla_rgb,
     "Belcour-Barla fit alone (XYZ to sRGB with E to D65)":
         lambda *a: belcour_barla_rgb(*a, sensitivity="gaussian-srgb"),
     "glTF KHR_materials_iridescence": gltf_iridescence_rgb,
-    "seed code (double phase, 3 wavelengths)": seed_rgb,
+    "Padrón-Griffe et al. 2023 code (double phase, 3 wavelengths)": double_phase_rgb,
 }
 
-__all__ = ["MODELS", "belcour_barla_rgb", "belcour_barla_xyz", "gltf_iridescence_rgb", "seed_reflectance", "seed_rgb",
+__all__ = ["MODELS", "belcour_barla_rgb", "belcour_barla_xyz", "gltf_iridescence_rgb", "double_phase_reflectance", "double_phase_rgb",
            "xyz_sensitivity_exact", "xyz_sensitivity_gaussian"]

@@ -16,17 +16,16 @@ import dataclasses
 import numpy as np
 import pytest
 
-pytest.importorskip("mitsuba")
 
-from bsdflab.bsdfs import Dielectric, RoughConductor, RoughDielectric  # noqa: E402
-from bsdflab.lobes import Lobe  # noqa: E402
-from bsdflab.reference import mitsuba_bsdf as mb  # noqa: E402
-from bsdflab.reference import mitsuba_rough as mr  # noqa: E402
-from bsdflab.reference.comparison import TARGET, assert_agrees  # noqa: E402
-from bsdflab.reference.mitsuba_calls import mitsuba_answers  # noqa: E402
-from bsdflab.reference.mitsuba_env import mitsuba  # noqa: E402
-from bsdflab.reference.query_sets import Queries, bsdflab_answers, draw_queries  # noqa: E402
-from bsdflab.reference.visible_normals import bsdflab_uniforms  # noqa: E402
+from bsdflab.bsdfs import Dielectric, RoughConductor, RoughDielectric
+from bsdflab.lobes import Lobe
+from bsdflab.reference import mitsuba_bsdf as mb
+from bsdflab.reference import mitsuba_rough as mr
+from bsdflab.reference.comparison import TARGET, assert_agrees
+from bsdflab.reference.mitsuba_calls import mitsuba_answers
+from bsdflab.reference.mitsuba_env import mitsuba
+from bsdflab.reference.query_sets import Queries, bsdflab_answers, draw_queries
+from bsdflab.reference.visible_normals import bsdflab_uniforms
 
 pytestmark = pytest.mark.mitsuba
 

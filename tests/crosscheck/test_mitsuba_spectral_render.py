@@ -26,14 +26,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("mitsuba")
-pytestmark = pytest.mark.mitsuba
+from bsdflab.render import Camera, Environment, Material, Scene, Shape, render
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, rgb_to_spectrum, srgb_weights
+from bsdflab.testing import image_z_test, sidak_z_limit
+from bsdflab.validation.checks.renderer import sphere_on_floor
+from support.render_scenes import scaled_diffuse
 
-from bsdflab.render import Camera, Environment, Material, Scene, Shape, render  # noqa: E402
-from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, rgb_to_spectrum, srgb_weights  # noqa: E402
-from bsdflab.testing import image_z_test, sidak_z_limit  # noqa: E402
-from bsdflab.validation.checks.renderer import sphere_on_floor  # noqa: E402
-from support.render_scenes import scaled_diffuse  # noqa: E402
+pytestmark = pytest.mark.mitsuba
 
 ALPHA = 1e-3
 WIDTH, HEIGHT = 48, 36

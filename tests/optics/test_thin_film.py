@@ -179,17 +179,18 @@ def test_06_thickness_sweep_matches_colour_thin_film():
         assert np.max(np.abs(got_T - T[..., i])) <= TOL
 
 
-# -- the seed's bug -------------------------------------------------------------------
+# -- the double-counted phase -------------------------------------------------------------------
 
-def test_07_seed_counter_example():
-    """The seed's double-counted phase (reference/approximations/seed_film.py) gives the
-    digest's 0.0854 where tmm and bsdflab give 0.0218: the registry's check, run here."""
+def test_07_double_phase_counter_example():
+    """The double-counted phase of Padrón-Griffe et al. 2023's code
+    (reference/approximations/double_phase_film.py) gives 0.0854 where tmm and bsdflab give
+    0.0218: the registry's check, run here."""
     from bsdflab.validation import REGISTRY, load_checks, run_check
 
     load_checks()
-    result = run_check(REGISTRY["films/seed-counter-example"], "quick")
+    result = run_check(REGISTRY["films/double-phase-counter-example"], "quick")
     assert result.status == "pass", result.message
-    assert abs(result.details["bsdflab"] - result.details["seed"]) > 0.06
+    assert abs(result.details["bsdflab"] - result.details["double_phase"]) > 0.06
 
 
 # -- physics checks -------------------------------------------------------------------

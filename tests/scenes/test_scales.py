@@ -119,12 +119,12 @@ def test_01_nearest_centre_and_gap_partition(params):
     clear = separation > 1e-9  # not on a boundary, where rounding may pick either side
     assert clear.mean() > 0.999
     np.testing.assert_array_equal(r["id"][clear], ref_id[clear])
-    np.testing.assert_allclose(r["edge_distance"], ref_edge, atol=1e-9)
+    np.testing.assert_allclose(r["edge_distance"], ref_edge, atol=1e-9, rtol=0)
     # exactly one of {scale, gap}, and the gap is where the edge is closer than gap / 2
     np.testing.assert_array_equal(r["gap"], r["edge_distance"] < t.gap / 2)
     scale = ~r["gap"] & clear
-    np.testing.assert_allclose(r["slope_u"][scale], ref_slopes[scale, 0], atol=1e-9)
-    np.testing.assert_allclose(r["slope_v"][scale], ref_slopes[scale, 1], atol=1e-9)
+    np.testing.assert_allclose(r["slope_u"][scale], ref_slopes[scale, 0], atol=1e-9, rtol=0)
+    np.testing.assert_allclose(r["slope_v"][scale], ref_slopes[scale, 1], atol=1e-9, rtol=0)
     assert not np.any(r["gap"] & (r["thickness_factor"] != 1))
     assert not np.any(r["gap"] & ((r["slope_u"] != 0) | (r["slope_v"] != 0)))
 
@@ -197,13 +197,13 @@ def test_06_periodic_in_v_and_seamless():
         np.testing.assert_array_equal(s["id"][clear], r["id"][clear])
         np.testing.assert_array_equal(s["gap"][clear], r["gap"][clear])
         for key in ("slope_u", "slope_v", "thickness_factor", "edge_distance"):
-            np.testing.assert_allclose(s[key], r[key], atol=1e-9)
+            np.testing.assert_allclose(s[key], r[key], atol=1e-9, rtol=0)
     # across the seam: v just below 1 and just above 0 lie in the same scale
     uu = np.linspace(0, 1, 2001)
     below, above = t.lookup(uu, 1 - 1e-9), t.lookup(uu, 1e-9)
     clear = below["edge_distance"] > 1e-6
     np.testing.assert_array_equal(below["id"][clear], above["id"][clear])
-    np.testing.assert_allclose(below["edge_distance"], above["edge_distance"], atol=1e-6)
+    np.testing.assert_allclose(below["edge_distance"], above["edge_distance"], atol=1e-6, rtol=0)
 
 
 def test_07_non_periodic_v_does_not_wrap():
@@ -250,7 +250,7 @@ def test_09_dome_is_convex():
     # the height falls away from the centre: the gradient points back to it
     cross = outward[:, 0] * slope[:, 1] - outward[:, 1] * slope[:, 0]
     assert np.all((outward * slope).sum(axis=1) <= 1e-12)
-    np.testing.assert_allclose(cross, 0, atol=1e-9)
+    np.testing.assert_allclose(cross, 0, atol=1e-9, rtol=0)
     magnitude = np.hypot(slope[:, 0], slope[:, 1])
     assert magnitude.max() <= t.dome + 1e-12 and magnitude.max() > 0.95 * t.dome
     near_centre = np.linalg.norm(outward, axis=1) < 0.05

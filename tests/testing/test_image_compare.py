@@ -104,7 +104,7 @@ def test_block_average_of_means_and_variances():
     m, v = block_average(mean, var, 2)
     assert m.shape == v.shape == (2, 3, 3)  # the last row and column are dropped
     assert m[1, 2, 0] == pytest.approx(mean[2:4, 4:6, 0].mean())
-    assert np.allclose(v, 1 / 4)
+    assert np.allclose(v, 1 / 4, rtol=1e-14, atol=0)
     with pytest.raises(ValueError, match="larger than the image"):
         block_average(mean, var, 8)
 
