@@ -31,7 +31,8 @@ class Conductor(ConductorParams, BSDF):
         Reflect from both sides (default: the underside is black, as in Mitsuba).
     film : list of Layer or dicts, optional
         A thin-film coating (top first), e.g. ``[{"material": 1.5, "thickness_nm": 400}]``
-        (like the ``conductorThinFilm`` of Padrón-Griffe et al. 2023). Its thickness can vary per query (``thickness=``).
+        (like the ``conductorThinFilm`` of Padrón-Griffe et al. 2023). Its thickness can vary
+        per query (``thickness=``).
     """
 
     type_name = "conductor"

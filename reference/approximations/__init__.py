@@ -34,5 +34,5 @@ MODELS = {
     "Padrón-Griffe et al. 2023 code (double phase, 3 wavelengths)": double_phase_rgb,
 }
 
-__all__ = ["MODELS", "belcour_barla_rgb", "belcour_barla_xyz", "gltf_iridescence_rgb", "double_phase_reflectance", "double_phase_rgb",
-           "xyz_sensitivity_exact", "xyz_sensitivity_gaussian"]
+__all__ = ["MODELS", "belcour_barla_rgb", "belcour_barla_xyz", "double_phase_reflectance", "double_phase_rgb",
+           "gltf_iridescence_rgb", "xyz_sensitivity_exact", "xyz_sensitivity_gaussian"]

@@ -30,7 +30,7 @@ def double_phase_reflectance(n0, n1, n2, thickness_nm, wavelength_nm, cos_theta)
     phase = np.exp(2j * (2.0 * np.pi * n1 * d * c1 / wl))
     extra = np.where(n1 > n0, -1.0, 1.0)  # e^{i pi}: the phase counted a second time
     R = 0.0
-    for r01, r12 in zip(dielectric_amplitudes(n0, n1, c0, c1), dielectric_amplitudes(n1, n2, c1, c2)):
+    for r01, r12 in zip(dielectric_amplitudes(n0, n1, c0, c1), dielectric_amplitudes(n1, n2, c1, c2), strict=True):
         a = r01 * extra
         R = R + 0.5 * np.abs((a + r12 * phase) / (1.0 + a * r12 * phase)) ** 2
     return np.where(tir, 1.0, R)

@@ -26,8 +26,9 @@ def test_indices_outside_the_physical_range_are_refused(make, name):
 
 def test_accepted_extremes_stay_finite():
     # the ends of the documented ranges: every output finite
-    for model in (bl.Dielectric(1e3, 1e3 / 100), bl.Dielectric(1e-3, 1e-3 * 100), bl.RoughDielectric(0.3, 2.0, 1e-3 * 100),
-                  bl.RoughDielectric(4.0, 1e3, 10.0), bl.Conductor(eta=1e-3, k=1e3), bl.RoughConductor(1e-4, eta=1e3, k=0.0)):
+    for model in (bl.Dielectric(1e3, 1e3 / 100), bl.Dielectric(1e-3, 1e-3 * 100),
+                  bl.RoughDielectric(0.3, 2.0, 1e-3 * 100), bl.RoughDielectric(4.0, 1e3, 10.0),
+                  bl.Conductor(eta=1e-3, k=1e3), bl.RoughConductor(1e-4, eta=1e3, k=0.0)):
         wi = np.array([[0.0, 0.6, 0.8], [0.0, 0.6, -0.8], [0.999, 0.0, np.sqrt(1 - 0.999**2)]])
         s = model.sample(wi, seed=1)
         for a in (model.eval(wi, wi[::-1]), model.pdf(wi, wi[::-1]), s.weight, s.wo, s.pdf):

@@ -36,7 +36,7 @@ def test_02_sample_weight_is_fresnel_reflectance(metal, theta):
     eta, k = metal_ior(metal)
     wi = directions_at(np.cos(theta), 0.7)
     s = bl.Conductor(material=metal).sample(wi)
-    expected = [tmm_unpolarised_R(e + 1j * kk, theta) for e, kk in zip(eta.at(wl), k.at(wl))]
+    expected = [tmm_unpolarised_R(e + 1j * kk, theta) for e, kk in zip(eta.at(wl), k.at(wl), strict=True)]
     s = bl.Conductor(material=metal).sample(wi, wavelengths=wl)
     assert np.allclose(s.weight[0], expected, rtol=1e-12, atol=1e-14)
     assert np.allclose(s.wo[0], wi * [-1, -1, 1], atol=1e-15, rtol=0)

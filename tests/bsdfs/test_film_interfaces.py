@@ -48,7 +48,7 @@ def test_02_conductor_film_matches_tmm(theta):
     c = bl.Conductor(material="Au", film=[{"material": 1.5, "thickness_nm": 250.0}])
     eta, k = bl.optics.metal_ior("Au")
     n_au = eta.at(WL) + 1j * k.at(WL)
-    R = np.array([tmm_R([1.000277, 1.5, n], [np.inf, 250.0, np.inf], theta, w) for n, w in zip(n_au, WL)])
+    R = np.array([tmm_R([1.000277, 1.5, n], [np.inf, 250.0, np.inf], theta, w) for n, w in zip(n_au, WL, strict=True)])
     s = c.sample(directions_at(np.cos(theta)), wavelengths=WL)
     assert np.allclose(s.weight[0], R, rtol=1e-10)
 

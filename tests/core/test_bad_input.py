@@ -80,7 +80,8 @@ def test_04_core_tolerates_degenerate_directions(core):
     wo, weight, pdf, lobe, eta = core.sample(bad, np.full(len(bad), 0.5), np.full((len(bad), 2), 0.5))
     assert np.all(lobe == 0) and np.all(weight == 0) and np.all(np.isfinite(wo))
     # out-of-range uniforms (the core's callers may pass anything) never produce NaN
-    u1 = np.array([np.nan, -1.0, 2.0]); u2 = np.array([[np.nan, 0.5], [-3, 7], [0.5, np.inf]])
+    u1 = np.array([np.nan, -1.0, 2.0])
+    u2 = np.array([[np.nan, 0.5], [-3, 7], [0.5, np.inf]])
     wo, weight, pdf, lobe, eta = core.sample(good[:3], u1, u2)
     assert np.all(np.isfinite(weight)) and np.all(np.isfinite(pdf))
 

@@ -199,7 +199,9 @@ def _scaled_sample(cls, monkeypatch, weight_of=None, pdf_scale=1.0):
 def test_09_the_harness_catches_bsdflab_sampling_errors(monkeypatch):
     """Errors in bsdflab's sample (consistent eval / pdf) are caught by the cross-check
     with Mitsuba's eval / pdf -- the float32 bounds never compare a sample with itself."""
-    transmitted = lambda s: (s.lobe == int(Lobe.GLOSSY_TRANSMISSION))[:, None]
+    def transmitted(s):
+        return (s.lobe == int(Lobe.GLOSSY_TRANSMISSION))[:, None]
+
     # a transmission weight without the radiance scaling (n_i / n_t)^2
     _scaled_sample(RoughDielectric, monkeypatch,
                    weight_of=lambda s: np.where(transmitted(s), s.weight * s.eta[:, None] ** 2, s.weight))

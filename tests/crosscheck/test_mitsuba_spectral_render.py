@@ -170,8 +170,9 @@ def test_residual_of_the_mapping_is_far_below_the_noise():
     """What Mitsuba's estimator converges to differs from our value by the ramps at the band
     edges only: <= 1e-4 relative (6e-5 measured, in the weak blue of two red bounces) on
     this test's spectra (one to three bounces on the diffuse colours, copper at two
-    angles), against per-pixel noise of 1-7 % (a bias of 1e-4 moves z by < 0.01). Linear spectra through Mitsuba's own CIE film would leave up
-    to 1e-2 (printed in docs/spectral_rendering.md), the reason for the step mapping."""
+    angles), against per-pixel noise of 1-7 % (a bias of 1e-4 moves z by < 0.01). Linear spectra
+    through Mitsuba's own CIE film would leave up to 1e-2 (printed in docs/spectral_rendering.md), the
+    reason for the step mapping."""
     from bsdflab import Conductor
     from bsdflab.reference.mitsuba_spectral import residual
 

@@ -149,7 +149,7 @@ def calibration_failures(truths, posteriors, bins, seed=0, ranks_from=19):
             failed.append((f"coverage {j}", int(counts[j]), (c_lo, c_hi)))
     # ranks of the truth among ranks_from draws: uniform on 0..ranks_from
     ranks = np.array([np.sum(d[rng.choice(len(d), ranks_from, replace=False)] < t, axis=0)
-                      for d, t in zip(posteriors, truths)])
+                      for d, t in zip(posteriors, truths, strict=True)])
     for j in range(2):
         hist = np.histogram(ranks[:, j], bins=bins, range=(0, ranks_from + 1))[0]
         p = stats.chisquare(hist).pvalue
@@ -158,7 +158,7 @@ def calibration_failures(truths, posteriors, bins, seed=0, ranks_from=19):
     return failed
 
 
-SBC_DATASETS = 40
+SBC_DATASETS = 48
 
 
 def test_simulation_based_calibration_small():
@@ -271,7 +271,8 @@ def test_free_noise_scale_finds_understated_sigmas():
     data = simulate(cfg)[0]
     config = fit_config(steps=600, seed=3).__class__.parse(tomllib.loads(
         FIT_TOML.format(walkers=8, steps=600, seed=3).replace(
-            "base_albedo = 0.3", 'base_albedo = 0.3\nnoise_scale = { prior = "lognormal", median = 1.0, sigma = 1.0 }')))
+            "base_albedo = 0.3",
+            'base_albedo = 0.3\nnoise_scale = { prior = "lognormal", median = 1.0, sigma = 1.0 }')))
     run = run_sampler(LogPosterior(data, config), config.sampler, progress=False)
     lo, hi = np.quantile(run.draws()[:, run.names.index("noise_scale")], [0.05, 0.95])
     # 70 rows: the scale's posterior sd is ~2/sqrt(2*70) = 0.17, so [lo, hi] spans ~1.6-2.4
@@ -289,7 +290,7 @@ def test_appearance_colour_against_colour_science():
 
     full = np.append(default_theta(film_thickness_nm=430.0), 1.0)
     spectrum = specular_spectra(full, [30.0], 1, 8)[0, 0]
-    sd = colour.SpectralDistribution(dict(zip(DEFAULT_WAVELENGTHS, spectrum)))
+    sd = colour.SpectralDistribution(dict(zip(DEFAULT_WAVELENGTHS, spectrum, strict=True)))
     xyz = colour.sd_to_XYZ(sd, colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"],
                            colour.SDS_ILLUMINANTS["D65"], method="Integration") / 100.0
     white = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]

@@ -256,7 +256,7 @@ def test_09_thread_count_does_not_change_any_bit(monkeypatch):
         s = m.sample(wi_many, seed=3, wavelengths=[450.0, 650.0])
         results.append((e.value, e.stderr, s.wo, s.weight))
     for other in results[1:]:
-        for x, y in zip(results[0], other):
+        for x, y in zip(results[0], other, strict=True):
             assert np.array_equal(x, y)
 
 

@@ -13,9 +13,9 @@ def colour_reference_rgb(values, wavelengths):
     shape = colour.SpectralShape(wavelengths[0], wavelengths[-1], wavelengths[1] - wavelengths[0])
     cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape)
     illum = colour.SDS_ILLUMINANTS["D65"].copy().align(shape)
-    sd = colour.SpectralDistribution(dict(zip(wavelengths, values)))
+    sd = colour.SpectralDistribution(dict(zip(wavelengths, values, strict=True)))
     XYZ = colour.sd_to_XYZ(sd, cmfs, illum, method="Integration") / 100
-    white = colour.sd_to_XYZ(colour.SpectralDistribution(dict(zip(wavelengths, np.ones_like(values)))),
+    white = colour.sd_to_XYZ(colour.SpectralDistribution(dict(zip(wavelengths, np.ones_like(values), strict=True))),
                              cmfs, illum, method="Integration") / 100
     return colour.XYZ_to_RGB(XYZ, rgb_colourspace(), illuminant=colour.XYZ_to_xy(white),
                              chromatic_adaptation_transform="Bradford")

@@ -67,9 +67,9 @@ def max_errors_vs_tmm(stack, rng, reverse):
     media, thicknesses = media_of(stack.reversed() if reverse else stack)
     err = np.zeros(4)
     for pol in "sp":
-        for i, (wl, th) in enumerate(zip(wavelengths, thetas)):
+        for i, (wl, th) in enumerate(zip(wavelengths, thetas, strict=True)):
             ref = tmm_reference(pol, media, thicknesses, th, wl)
-            err = np.maximum(err, [abs(g[i] - x) for g, x in zip(got[pol], ref)])
+            err = np.maximum(err, [abs(g[i] - x) for g, x in zip(got[pol], ref, strict=True)])
     return err
 
 
@@ -113,7 +113,7 @@ def test_03_single_film_path_equals_stack_path():
     wl = rng.uniform(380, 780, n)
     one = _core.thin_film(idx[:, 0], idx[:, 1], idx[:, 2], d, cos0, wl)
     many = _core.film_stack(idx, d[:, None], cos0, wl)
-    for a, b in zip(one, many):  # the same sums, with the fractions cleared in `one`
+    for a, b in zip(one, many, strict=True):  # the same sums, with the fractions cleared in `one`
         assert np.max(np.abs(a - b) / (1 + np.abs(b))) < 1e-13
 
 
@@ -144,8 +144,8 @@ def test_04_lossless_stacks_match_colour_at_oblique_incidence():
     err = 0.0
     for _ in range(100):
         stack = random_stack(rng, False)
-        stack = FilmStack(stack.incident, [Layer(l.material.n, l.thickness_nm)
-                                           for l in stack.layers], stack.substrate)
+        stack = FilmStack(stack.incident, [Layer(layer.material.n, layer.thickness_nm)
+                                           for layer in stack.layers], stack.substrate)
         media, _ = media_of(stack)
         # keep every refraction angle real: n0 sin(theta) < min n_j
         ratio = min(m.real for m in media[1:]) / media[0].real
@@ -199,8 +199,8 @@ def test_08_lossless_energy_conservation_both_sides():
     rng = np.random.default_rng(5)
     for _ in range(50):
         stack = random_stack(rng, False)
-        stack = FilmStack(stack.incident, [Layer(l.material.n, l.thickness_nm)
-                                           for l in stack.layers], stack.substrate)
+        stack = FilmStack(stack.incident, [Layer(layer.material.n, layer.thickness_nm)
+                                           for layer in stack.layers], stack.substrate)
         wl, th = rng.uniform(380, 780, 50), rng.uniform(0, np.pi / 2, 50)
         for reverse in (False, True):
             for pol in "sp":

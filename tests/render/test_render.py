@@ -147,7 +147,8 @@ def test_08_same_seed_same_image_other_seed_other_image():
 
 
 def test_09_image_does_not_depend_on_thread_count(tmp_path):
-    out = images_per_thread_count(tmp_path, "from support.render_scenes import light_over_plane; from bsdflab.render import render",
+    out = images_per_thread_count(tmp_path, "from support.render_scenes import light_over_plane; "
+                                  "from bsdflab.render import render",
                                   "render(light_over_plane(size=20), spp=6, seed=2, progress=False).mean")
     assert np.array_equal(out["1"], out["2"])
 

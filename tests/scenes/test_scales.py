@@ -143,7 +143,8 @@ def test_02_search_neighbourhood_at_maximum_jitter():
         clear = (separation > 1e-9) & (np.abs(ref_edge - t.gap / 2) > 1e-9)
         scale = clear & ~r["gap"]
         mismatches += np.sum(clear & ((r["id"] != ref_id) | (np.abs(r["edge_distance"] - ref_edge) > 1e-9)))
-        mismatches += np.sum(scale & (np.hypot(r["slope_u"] - ref_slopes[:, 0], r["slope_v"] - ref_slopes[:, 1]) > 1e-9))
+        slope_error = np.hypot(r["slope_u"] - ref_slopes[:, 0], r["slope_v"] - ref_slopes[:, 1])
+        mismatches += np.sum(scale & (slope_error > 1e-9))
     assert mismatches == 0
 
 
@@ -223,8 +224,9 @@ def test_08_thickness_and_slope_variation():
     thickness = r["thickness_factor"][inside][first]
     assert len(ids) > 900
     # constant within a scale: every point carries its scale's first value
-    per_scale = dict(zip(ids.tolist(), thickness.tolist()))
-    assert all(per_scale[i] == x for i, x in zip(r["id"][inside].tolist(), r["thickness_factor"][inside].tolist()))
+    per_scale = dict(zip(ids.tolist(), thickness.tolist(), strict=True))
+    pairs = zip(r["id"][inside].tolist(), r["thickness_factor"][inside].tolist(), strict=True)
+    assert all(per_scale[i] == x for i, x in pairs)
     assert abs(thickness.mean() - 1) < 0.02
     assert thickness.min() >= 0.8 and thickness.max() <= 1.2
     assert thickness.min() < 0.81 and thickness.max() > 1.19
@@ -274,8 +276,8 @@ def test_10_scale_count_and_six_neighbours():
     pairs = set()
     for a, b in ((grid_ids[:-1, :], grid_ids[1:, :]), (grid_ids, np.roll(grid_ids, -1, axis=1))):
         differ = a != b
-        pairs |= set(zip(a[differ].tolist(), b[differ].tolist()))
-        pairs |= set(zip(b[differ].tolist(), a[differ].tolist()))
+        pairs |= set(zip(a[differ].tolist(), b[differ].tolist(), strict=True))
+        pairs |= set(zip(b[differ].tolist(), a[differ].tolist(), strict=True))
     inner = set(ref_ids[(i >= 2) & (i <= 7)].tolist())  # whose neighbours are all in the window
     neighbours = {k: 0 for k in inner}
     for a, _ in pairs:

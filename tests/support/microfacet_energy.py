@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import erf
 
+from bsdflab.optics import fresnel_reflectance
+
 
 def smith_lambda(dist: str, alpha: float, cos_theta: np.ndarray) -> np.ndarray:
     """Smith's Lambda of a direction with |cos theta| = cos_theta (GGX or Beckmann)."""
@@ -57,14 +59,9 @@ def _normals(dist, alpha, n):
     return m, w
 
 
-def _fresnel_dielectric(cos_i, eta):
-    """Unpolarised Fresnel reflectance and the refracted cosine (0 under TIR), eta = n_t / n_i."""
-    sin2_t = (1.0 - cos_i * cos_i) / (eta * eta)
-    tir = sin2_t >= 1.0
-    cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
-    rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
-    rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
-    return np.where(tir, 1.0, 0.5 * (rs * rs + rp * rp)), np.where(tir, 0.0, cos_t)
+def _refracted_cos(cos_i, eta):
+    """cos theta_t by Snell's law for eta = n_t / n_i; 0 under total internal reflection."""
+    return np.sqrt(np.maximum(0.0, 1.0 - (1.0 - cos_i * cos_i) / (eta * eta)))
 
 
 def energy(dist: str, alpha: float, wi, eta: float | None = None, n: int = 512) -> float:
@@ -82,7 +79,9 @@ def energy(dist: str, alpha: float, wi, eta: float | None = None, n: int = 512) 
     g_r = _g1(dist, alpha, wr, m)
     if rel is None:
         return float(np.sum(w * visible * g_r))
-    F, cos_t = _fresnel_dielectric(np.clip(wim, 0.0, 1.0), rel)
+    cos_i = np.clip(wim, 0.0, 1.0)
+    cos_t = _refracted_cos(cos_i, rel)
+    F = np.where(cos_t > 0, fresnel_reflectance(cos_i, 1.0, rel).unpolarised, 1.0)  # checked against tmm
     wt = (wim / rel - cos_t)[..., None] * m - up / rel
     g_t = np.where(cos_t > 0, _g1(dist, alpha, wt, m), 0.0)
     return float(np.sum(w * visible * (F * g_r + (1.0 - F) * g_t)))
