@@ -74,6 +74,15 @@ lint_imports_command.main([sys.argv[1], "--no-cache"], prog_name="lint-imports")
     return $rc
 }
 
+# Lint, format and layer checks (configs: [tool.ruff] and [tool.importlinter] in pyproject.toml,
+# .clang-format): fail
+# before the tests run. `ruff check --fix .` and `clang-format -i` fix most findings.
+lint() {
+    "$VENV/bin/ruff" check .
+    find core \( -name '*.h' -o -name '*.cpp' \) -print0 | xargs -0 "$VENV/bin/clang-format" --dry-run --Werror
+    lint_imports
+}
+
 cmd=${1:-demo}
 shift || true
 case "$cmd" in
@@ -87,7 +96,7 @@ case "$cmd" in
         ;;
     test)
         setup
-        lint_imports
+        lint
         "$VENV/bin/python" -m pytest -m "not slow" "$@"
         ;;
     *) echo "usage: ./dev.sh [demo|test|setup|lint] [args...]" >&2; exit 2 ;;

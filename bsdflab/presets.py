@@ -1,8 +1,9 @@
 """Ready-made materials for the sunbeam snake, *Xenopeltis unicolor*, with their sources.
 
-The model (seed document, appendix B; Padron-Griffe et al., CEIG 2023): iridophores in the
-outer epidermis act as a thin film at the top interface; below it a dark pigment layer
-absorbs light on the way down and back up; a diffuse base gives the natural dark colour.
+The model (Padrón-Griffe et al., "A biologically-inspired appearance model for snake
+skin", CEIG 2023, doi:10.2312/CEIG.20231143): iridophores in the outer epidermis act as a
+thin film at the top interface; below it a dark pigment layer absorbs light on the way
+down and back up; a diffuse base gives the natural dark colour.
 
 Parameters and where they come from
 -----------------------------------
@@ -13,11 +14,11 @@ Parameters and where they come from
   700 nm) is not modelled, and the guanine film's index is constant too. The film's
   colours come from interference, whose phase 4 pi n d cos / lambda the ~1 % index change
   would shift by well under the spread of film thicknesses the paper sweeps.
-* Iridophore film: guanine crystals, n ~ 1.83 (same literature as the digest); no measured
+* Iridophore film: guanine crystals, n ~ 1.83 (the value Padrón-Griffe et al. 2023 use); no measured
   film thickness exists for Xenopeltis -- the paper sweeps 300-1200 nm; we default to the
-  seed implementation's 400 nm. The stack variant uses guanine platelets of 80 nm (within
+  400 nm of its public code. The stack variant uses guanine platelets of 80 nm (within
   the reported 50-100 nm) separated by 100 nm of cytoplasm (n 1.33).
-* Surface roughness: GGX alpha 0.08 (assumption: glossy scales, as in the seed's rough
+* Surface roughness: GGX alpha 0.08 (assumption: glossy scales, as in the paper's rough
   dielectric thin-film plugin; no measured value).
 * Pigment slab: eumelanin absorption follows mu_a ~ lambda^-3.33 (Jacques & McAuliffe 1991,
   as compiled by S. Jacques, "Optical properties of biological tissues", 2013); the

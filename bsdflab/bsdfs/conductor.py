@@ -1,4 +1,4 @@
-"""Smooth conductor (the seed's appendix A.2), optionally thin-film coated."""
+"""Smooth conductor (complex Fresnel mirror), optionally thin-film coated."""
 from __future__ import annotations
 
 import numpy as np
@@ -31,7 +31,8 @@ class Conductor(ConductorParams, BSDF):
         Reflect from both sides (default: the underside is black, as in Mitsuba).
     film : list of Layer or dicts, optional
         A thin-film coating (top first), e.g. ``[{"material": 1.5, "thickness_nm": 400}]``
-        (the seed's ``conductorThinFilm``). Its thickness can vary per query (``thickness=``).
+        (like the ``conductorThinFilm`` of Padrón-Griffe et al. 2023). Its thickness can vary
+        per query (``thickness=``).
     """
 
     type_name = "conductor"

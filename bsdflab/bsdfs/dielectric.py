@@ -1,4 +1,4 @@
-"""Smooth dielectric interface (the seed's appendix A.3, with energy-correct Fresnel),
+"""Smooth dielectric interface (Fresnel with energy-correct unpolarised averaging),
 optionally thin-film coated."""
 from __future__ import annotations
 

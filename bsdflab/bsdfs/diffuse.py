@@ -1,4 +1,4 @@
-"""Lambertian reflector (the seed's appendix A.1): f = reflectance / pi."""
+"""Lambertian reflector: f = reflectance / pi."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,7 +1,7 @@
 """Rough interfaces: GGX (Trowbridge-Reitz) or Beckmann microfacets with separable Smith
 shadowing and visible-normal sampling (Walter et al. 2007; Heitz & d'Eon 2014; Heitz
-2018), optionally thin-film coated -- the seed's `roughdielectricThinFilm` and a rough
-`conductorThinFilm`.
+2018), optionally thin-film coated -- like the `roughdielectricThinFilm` and `conductorThinFilm`
+plugins of Padrón-Griffe et al. 2023, and a rough conductor with a film.
 
 By default single scattering only (Mitsuba's model): light that would bounce between
 microfacets is lost, so the white-furnace albedo falls below 1 as roughness grows --

@@ -14,7 +14,7 @@ def register(sub) -> None:
     p = sub.add_parser(
         "thinfilm", help="plot a thin film's reflectance and colour (PNG)",
         description="Plot a thin film's reflectance spectra, its reflected sRGB colour over "
-                    "angle x thickness, and that colour next to the seed's three-wavelength "
+                    "angle x thickness, and that colour next to a three-wavelength "
                     "'RGB' (650/510/475 nm), which aliases. Defaults: the snake's guanine "
                     "film on keratin.")
     g = p.add_argument_group("film")

@@ -20,7 +20,7 @@ PHASE_KINDS = {"isotropic": 0, "hg": 1, "vmf": 2}
 @dataclass(frozen=True)
 class PhaseFunction:
     """Isotropic, Henyey-Greenstein (``g`` in (-1, 1)) or von Mises-Fisher (``kappa`` >= 0,
-    the seed's forward-peaked lobe)."""
+    a forward-peaked lobe)."""
 
     type: str = "isotropic"
     g: float = 0.0

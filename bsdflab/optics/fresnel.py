@@ -12,7 +12,7 @@ medium of index n_i into one of index n_t (indices n + i k, k >= 0 absorbing; n 
 cos_t follows from Snell's law with complex arithmetic, on the branch of a forward or
 decaying wave, so total internal reflection and absorbing media need no special cases.
 Energy goes with squared magnitudes: R = |r|^2 per polarisation, and the unpolarised
-reflectance is the mean of R_s and R_p (the seed averaged amplitudes; that is wrong).
+reflectance is the mean of R_s and R_p (averaging the amplitudes instead is not an energy).
 """
 from __future__ import annotations
 

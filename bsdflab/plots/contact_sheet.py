@@ -1,4 +1,4 @@
-"""A labelled grid of rendered images (the seed's appearance grid and ablation rows)."""
+"""A labelled grid of rendered images (the appearance grid and ablation rows of Padrón-Griffe et al. 2023)."""
 from __future__ import annotations
 
 import math

@@ -1,4 +1,4 @@
-"""The colour a thin film or stack reflects, spectrally and the seed's three-wavelength way.
+"""The colour a thin film or stack reflects, spectrally and the three-wavelength way.
 
 Everything is one vectorised call of `bsdflab.optics.film_reflectance` over
 (thickness, angle, wavelength); no Python loop touches pixels or wavelengths.
@@ -137,7 +137,8 @@ def spectral_rgb(film, theta, thickness_nm=None, wavelengths=None) -> np.ndarray
 
 
 def three_wavelength_colour(film, theta, thickness_nm=None) -> np.ndarray:
-    """The seed's "RGB": reflectance at 650, 510 and 475 nm, shape (..., 3)."""
+    """The three-wavelength "RGB" (`bsdflab.spectra.three_wavelength`): reflectance at 650, 510
+    and 475 nm, shape (..., 3)."""
     wl = np.asarray(THREE_WAVELENGTHS_NM)
     r = reflectance(film, wl, np.asarray(theta)[..., None],
                     None if thickness_nm is None else np.asarray(thickness_nm)[..., None])

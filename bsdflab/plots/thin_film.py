@@ -1,10 +1,10 @@
 """The thin-film figure: spectra, colour over (angle x thickness), and the aliasing of the
-seed's three-wavelength colour next to bsdflab's spectral colour.
+three-wavelength colour next to bsdflab's spectral colour.
 
 Panels
 ------
 (a) Unpolarised reflectance vs wavelength at 0, 30, 60 and 75 degrees, with the three
-    wavelengths the seed samples marked.
+    sample wavelengths of the three-wavelength colour marked.
 (b) The reflected colour over angle of incidence x thickness: each pixel is the linear
     sRGB (CIE 1931 2 degree, D65) of the reflectance spectrum, shown through
     `display_srgb` with one gain k >= 1 for the whole figure (the 99th percentile of
@@ -109,7 +109,7 @@ def _spectra_panel(ax, film) -> None:
     ax.set_ylim(0, 1.2 * float(r.max()))  # headroom for the legend
     ax.set_xlabel("wavelength [nm]")
     ax.set_ylabel("reflectance R (unpolarised)")
-    ax.set_title("(a) reflectance spectrum; dotted: the seed's 3 wavelengths", fontsize=10,
+    ax.set_title("(a) reflectance spectrum; dotted: the 3 RGB wavelengths", fontsize=10,
                  pad=16)
     ax.grid(alpha=0.3)
     ax.legend(title="angle of incidence", fontsize=8, title_fontsize=8, loc="upper center",

@@ -1,4 +1,4 @@
-"""The appearance range of thin-film interference (the seed paper's grid): film thickness
+"""The appearance range of thin-film interference (the grid of Padrón-Griffe et al. 2023): film thickness
 300 / 600 / 1200 nm x interior index 1.0 / 2.0, on a sphere under the studio lights.
 
 Interpretation. In the paper's layered model the film sits on the skin's interior medium;

@@ -1,4 +1,4 @@
-"""The ablation on simple objects (the seed paper's figure): a sphere or a torus on the
+"""The ablation on simple objects (the figure of Padrón-Griffe et al. 2023): a sphere or a torus on the
 ground under the snake scene's studio lights, in four variants --
 
 - "diffuse": the snake's base colour alone (preset "xenopeltis-diffuse");

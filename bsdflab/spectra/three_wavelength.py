@@ -1,10 +1,10 @@
-"""The seed's three-wavelength "RGB": kept only to show why bsdflab does not use it.
+"""A three-wavelength "RGB": kept only to show why bsdflab does not use it.
 
-The seed document (appendix C) computes a thin film's colour by evaluating its
-reflectance at one wavelength per RGB channel and using the three numbers directly as
-R, G and B. Its public implementation (Mitsuba 0.6 plugins of Padron-Griffe et al.,
-CEIG 2023, ``dielectricThinFilm.cpp``) uses 650 nm, 510 nm and 475 nm; the seed text
-itself names no values, so `THREE_WAVELENGTHS_NM` copies the implementation's.
+The snake-skin model of Padrón-Griffe et al. ("A biologically-inspired appearance model
+for snake skin", CEIG 2023) computes a thin film's colour by evaluating its reflectance
+at one wavelength per RGB channel and using the three numbers directly as R, G and B. Its
+public implementation (Mitsuba 0.6 plugins, ``dielectricThinFilm.cpp``) uses 650 nm,
+510 nm and 475 nm, which `THREE_WAVELENGTHS_NM` copies.
 
 Why it aliases
 --------------
@@ -29,12 +29,12 @@ import numpy as np
 
 from bsdflab.util.args import real_array
 
-# (R, G, B) sample wavelengths in nm, as in the seed's public implementation.
+# (R, G, B) sample wavelengths in nm, as in Padrón-Griffe et al. 2023's public code.
 THREE_WAVELENGTHS_NM = (650.0, 510.0, 475.0)
 
 
 def three_wavelength_rgb(values_at_three) -> np.ndarray:
-    """The naive "linear RGB" of the seed: the spectrum's values at three wavelengths.
+    """The naive "linear RGB": the spectrum's values at three wavelengths.
 
     Parameters
     ----------
@@ -45,7 +45,7 @@ def three_wavelength_rgb(values_at_three) -> np.ndarray:
     Returns
     -------
     ndarray, shape (..., 3)
-        The same numbers taken as R, G, B -- what the seed renders. For comparison with
+        The same numbers taken as R, G, B -- what the three-wavelength renderer shows. For comparison with
         `spectrum_to_rgb` only; see the module docstring for why it aliases.
 
     Raises

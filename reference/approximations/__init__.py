@@ -18,9 +18,10 @@ each is from the exact spectral Airy reflectance (`bsdflab.optics.thin_film`):
 ``gltf``            glTF ``KHR_materials_iridescence`` (Khronos, 2022, appendix "Implementation"):
                     the same series with Schlick's Fresnel approximation, phases 0 or pi, two
                     terms, the base index recovered from F0, negative colours clamped.
-``seed_film``       The snake paper's public code (Padron-Griffe et al. 2023, Mitsuba 0.6
-                    ``dielectricThinFilm``): the Airy sum with an extra reflection phase on top
-                    of signed amplitudes (counted twice) at three wavelengths taken as RGB.
+``double_phase_film``  The snake-skin paper's public code (Padrón-Griffe et al., CEIG 2023,
+                    Mitsuba 0.6 ``dielectricThinFilm``): the Airy sum with an extra reflection
+                    phase on top of signed amplitudes (counted twice) at three wavelengths
+                    taken as RGB.
 
 Every function returns linear sRGB (D65) reflectance, shape (..., 3), for unpolarised light,
 so the colour-difference study (``study.py``) compares them all in the same space.
@@ -29,7 +30,7 @@ from bsdflab.reference.approximations._optics import XYZ_TO_SRGB  # the shared s
 from bsdflab.reference.approximations.belcour_barla import belcour_barla_rgb, belcour_barla_xyz, xyz_sensitivity_exact, xyz_sensitivity_gaussian
 from bsdflab.reference.approximations.cycles import cycles_thin_film_rgb
 from bsdflab.reference.approximations.gltf import gltf_iridescence_rgb
-from bsdflab.reference.approximations.seed_film import seed_reflectance, seed_rgb
+from bsdflab.reference.approximations.double_phase_film import double_phase_reflectance, double_phase_rgb
 
 MATERIALX = "Belcour-Barla as MaterialX computes it (MaterialX, OpenPBR, Standard Surface)"
 CYCLES = "Cycles thin film (Blender >= 4.2: CIE tables, 3 terms)"
@@ -39,8 +40,9 @@ MODELS = {
     "Belcour-Barla fit alone (XYZ to sRGB with E to D65)":
         lambda *a: belcour_barla_rgb(*a, sensitivity="gaussian-srgb"),
     "glTF KHR_materials_iridescence": gltf_iridescence_rgb,
-    "seed code (double phase, 3 wavelengths)": seed_rgb,
+    "Padrón-Griffe et al. 2023 code (double phase, 3 wavelengths)": double_phase_rgb,
 }
 
-__all__ = ["CYCLES", "MATERIALX", "MODELS", "XYZ_TO_SRGB", "belcour_barla_rgb", "cycles_thin_film_rgb", "belcour_barla_xyz", "gltf_iridescence_rgb", "seed_reflectance", "seed_rgb",
-           "xyz_sensitivity_exact", "xyz_sensitivity_gaussian"]
+__all__ = ["CYCLES", "MATERIALX", "MODELS", "XYZ_TO_SRGB", "belcour_barla_rgb", "belcour_barla_xyz", "cycles_thin_film_rgb",
+           "double_phase_reflectance", "double_phase_rgb", "gltf_iridescence_rgb", "xyz_sensitivity_exact",
+           "xyz_sensitivity_gaussian"]

@@ -108,7 +108,7 @@ def test_07_stack_thickness_sweep_equals_scaled_layers():
     wl, theta = np.linspace(380.0, 780.0, 41), np.radians(35.0)
     totals = np.array([0.0, 130.0, 260.0, 520.0])
     swept = reflectance(stack, wl[None, :], theta, totals[:, None])
-    for total, row in zip(totals, swept):
+    for total, row in zip(totals, swept, strict=True):
         s = total / 260.0
         scaled = FilmStack(AIR_IOR, [Layer(n, s * d) for n, d in layers], KERATIN_IOR_550)
-        np.testing.assert_allclose(row, film_reflectance(scaled, wl, theta), atol=1e-12)
+        np.testing.assert_allclose(row, film_reflectance(scaled, wl, theta), atol=1e-12, rtol=0)

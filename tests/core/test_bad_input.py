@@ -1,11 +1,10 @@
 """Bad input: Python raises a ValueError naming the parameter; the core never crashes."""
-import json
-
 import numpy as np
 import pytest
 
 import bsdflab as bl
-from bsdflab import _core
+from bsdflab import _core, optics, presets
+from bsdflab.tables import TableBSDF, TableGrid
 
 UP = np.array([0.0, 0.0, 1.0])
 
@@ -81,19 +80,48 @@ def test_04_core_tolerates_degenerate_directions(core):
     wo, weight, pdf, lobe, eta = core.sample(bad, np.full(len(bad), 0.5), np.full((len(bad), 2), 0.5))
     assert np.all(lobe == 0) and np.all(weight == 0) and np.all(np.isfinite(wo))
     # out-of-range uniforms (the core's callers may pass anything) never produce NaN
-    u1 = np.array([np.nan, -1.0, 2.0]); u2 = np.array([[np.nan, 0.5], [-3, 7], [0.5, np.inf]])
+    u1 = np.array([np.nan, -1.0, 2.0])
+    u2 = np.array([[np.nan, 0.5], [-3, 7], [0.5, np.inf]])
     wo, weight, pdf, lobe, eta = core.sample(good[:3], u1, u2)
     assert np.all(np.isfinite(weight)) and np.all(np.isfinite(pdf))
 
 
-def test_05_models_round_trip_through_json():
-    models = [bl.Diffuse(0.3), bl.Diffuse([0.1, 0.2, 0.3], two_sided=True),
-              bl.Diffuse({"type": "tabulated", "wavelengths": [400, 700], "values": [0.2, 0.9]}),
-              bl.Conductor(material="Au"), bl.Conductor(eta=0.2, k=3.0), bl.Conductor(),
-              bl.Dielectric(1.33, 1.0)]
-    wi, wo = np.array([[0.0, 0.6, 0.8]]), np.array([[0.3, 0.0, np.sqrt(1 - 0.09)]])
-    for m in models:
-        d = json.loads(json.dumps(m.to_dict()))
-        back = bl.from_dict(d)
-        assert back == m
-        assert np.array_equal(back.eval(wi, wo), m.eval(wi, wo))
+# Python ints beyond float range, wrong types and unbounded counts (old: TypeError, OverflowError
+# or silently accepted; noted beside each).
+HUGE = 10**400
+
+
+@pytest.mark.parametrize("call", [
+    lambda: bl.Diffuse(HUGE), lambda: bl.Dielectric(HUGE), lambda: bl.RoughDielectric(HUGE),
+    lambda: bl.Conductor(eta=HUGE), lambda: bl.Slab(HUGE), lambda: bl.PhaseFunction("hg", g=HUGE),
+    lambda: bl.Diffuse(0.5).eval([HUGE, 0, 1], UP), lambda: bl.Diffuse(0.5).eval(UP, UP, wavelengths=[HUGE]),
+    lambda: bl.Diffuse(0.5).eval(UP, UP, lobes=HUGE), lambda: bl.Diffuse(0.5).eval(UP, UP, lobes=float("inf")),
+    lambda: bl.Dielectric(film=[{"material": 1.5, "thickness_nm": 100}]).eval(UP, UP, thickness=HUGE),
+    lambda: optics.film_reflectance((1.0, 1.5, HUGE, 1.5), 550.0, 0.3),
+    lambda: optics.fresnel_reflectance(0.5, HUGE, 1.5),
+    lambda: bl.Diffuse(0.5).sample(UP, seed=2**64),                       # old: pybind TypeError
+    lambda: bl.Layered([bl.Dielectric()], [bl.Slab()], bl.Diffuse(), samples=2**31),  # old: accepted
+    lambda: bl.Layered([bl.Dielectric()], [bl.Slab()], bl.Diffuse(), max_depth=2**40),
+    lambda: bl.from_dict({"type": []}),                                   # old: TypeError
+    lambda: bl.from_dict({"type": "diffuse", 3: 1}),
+    lambda: bl.Conductor(material=["Au"]),
+    lambda: bl.Diffuse(0.5, two_sided="no"),
+    lambda: presets.iridophore_stack(float("nan")),                       # old: TypeError
+    lambda: presets.iridophore_stack(-5),                                 # old: silently no film
+    lambda: presets.iridophore_stack(10**7),                              # old: a 20-million list first
+    lambda: presets.melanin_absorption({}),                               # old: TypeError
+    lambda: presets.melanin_absorption(1.2, HUGE),
+    lambda: presets.preset("xenopeltis", colour=1),
+    lambda: TableBSDF(4.0),                                               # old: TypeError
+    lambda: TableGrid(3, 5, 4, "abc"),
+    lambda: TableGrid.from_dict([1, 2]),
+])
+def test_05_bad_input_of_the_wrong_kind_is_a_one_line_value_error(call):
+    with pytest.raises(ValueError) as info:
+        call()
+    assert "\n" not in str(info.value) and len(str(info.value)) < 400
+
+
+def test_06_layered_samples_bound_is_the_core_s():
+    walks = bl.Layered([bl.Dielectric()], [bl.Slab()], bl.Diffuse(), samples=1 << 24)  # the top is fine
+    assert walks.samples == 1 << 24

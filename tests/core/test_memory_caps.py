@@ -40,12 +40,14 @@ RUNNER = textwrap.dedent("""
 CASES = {
     "table grid 512^3": "bsdflab.tables.TableGrid(512, 512, 512)",
     "table grid with thickness nodes": "bsdflab.tables.TableGrid(128, 256, 256, tuple(range(100, 300)))",
-    "table from a cache request": ("bsdflab.tables.cached_table({'type': 'diffuse'}, bsdflab.tables.TableGrid(256, 256, 256), "
-                                   "0.1, [400 + i for i in range(40)], lambda: None, directory='/tmp')"),
+    "table from a cache request": ("bsdflab.tables.cached_table({'type': 'diffuse'}, "
+                                   "bsdflab.tables.TableGrid(256, 256, 256), 0.1, [400 + i for i in range(40)], "
+                                   "lambda: None, directory='/tmp')"),
     "tabulate on a grid at the cell cap": ("bsdflab.tables.tabulate(bsdflab.Diffuse(), "
                                            "bsdflab.tables.TableGrid(256, 256, 512), progress=False)"),
     "snake_body at its maxima": "build_mesh({'type': 'snake_body', 'segments': 200000, 'sides': 4096})",
-    "snake_head at its maxima": "build_mesh({'type': 'snake_head', 'segments': 16, 'head_segments': 20000, 'sides': 4096})",
+    "snake_head at its maxima": ("build_mesh({'type': 'snake_head', 'segments': 16, 'head_segments': 20000, "
+                                 "'sides': 4096})"),
     "torus 4096 x 4096": "build_mesh({'type': 'torus', 'resolution': 4096, 'minor_resolution': 4096})",
     "sphere 4096": "build_mesh({'type': 'sphere', 'subdivisions': 4096})",
     "iridophore_stack(10**7)": "bsdflab.presets.iridophore_stack(10**7)",

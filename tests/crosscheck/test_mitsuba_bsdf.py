@@ -14,14 +14,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-pytest.importorskip("mitsuba")
 
-from bsdflab.bsdfs import Conductor, Dielectric, Diffuse  # noqa: E402
-from bsdflab.lobes import Lobe  # noqa: E402
-from bsdflab.reference import mitsuba_bsdf as mb  # noqa: E402
-from bsdflab.reference.comparison import TARGET, assert_agrees  # noqa: E402
-from bsdflab.reference.mitsuba_env import VARIANTS, mitsuba, variant  # noqa: E402
-from bsdflab.reference.query_sets import draw_queries  # noqa: E402
+from bsdflab.bsdfs import Conductor, Dielectric, Diffuse
+from bsdflab.lobes import Lobe
+from bsdflab.reference import mitsuba_bsdf as mb
+from bsdflab.reference.comparison import TARGET, assert_agrees
+from bsdflab.reference.mitsuba_env import VARIANTS, mitsuba, variant
+from bsdflab.reference.query_sets import draw_queries
 
 pytestmark = pytest.mark.mitsuba
 

@@ -20,13 +20,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("mitsuba")
-pytestmark = pytest.mark.mitsuba
+from bsdflab.render import Camera, Environment, Material, Scene, Shape, render
+from bsdflab.testing import image_z_test
+from bsdflab.validation.checks.renderer import sphere_on_floor
+from support.render_scenes import scaled_diffuse
 
-from bsdflab.render import Camera, Environment, Material, Scene, Shape  # noqa: E402
-from bsdflab.testing import image_z_test  # noqa: E402
-from bsdflab.validation.checks.renderer import sphere_on_floor  # noqa: E402
-from support.render_scenes import scaled_diffuse  # noqa: E402
+pytestmark = pytest.mark.mitsuba
 
 ALPHA = 1e-3
 WIDTH, HEIGHT = 48, 36
@@ -40,8 +39,7 @@ def _scenes():
 
 
 def _render_ours(scene: Scene, spp: int, seed: int, **kwargs):
-    render_module = pytest.importorskip("bsdflab.render.render")
-    result = render_module.render(scene, spp=spp, seed=seed, progress=False, **kwargs)
+    result = render(scene, spp=spp, seed=seed, progress=False, **kwargs)
     return result.mean, result.variance
 
 

@@ -16,17 +16,16 @@ import dataclasses
 import numpy as np
 import pytest
 
-pytest.importorskip("mitsuba")
 
-from bsdflab.bsdfs import Dielectric, RoughConductor, RoughDielectric  # noqa: E402
-from bsdflab.lobes import Lobe  # noqa: E402
-from bsdflab.reference import mitsuba_bsdf as mb  # noqa: E402
-from bsdflab.reference import mitsuba_rough as mr  # noqa: E402
-from bsdflab.reference.comparison import TARGET, assert_agrees  # noqa: E402
-from bsdflab.reference.mitsuba_calls import mitsuba_answers  # noqa: E402
-from bsdflab.reference.mitsuba_env import mitsuba  # noqa: E402
-from bsdflab.reference.query_sets import Queries, bsdflab_answers, draw_queries  # noqa: E402
-from bsdflab.reference.visible_normals import bsdflab_uniforms  # noqa: E402
+from bsdflab.bsdfs import Dielectric, RoughConductor, RoughDielectric
+from bsdflab.lobes import Lobe
+from bsdflab.reference import mitsuba_bsdf as mb
+from bsdflab.reference import mitsuba_rough as mr
+from bsdflab.reference.comparison import TARGET, assert_agrees
+from bsdflab.reference.mitsuba_calls import mitsuba_answers
+from bsdflab.reference.mitsuba_env import mitsuba
+from bsdflab.reference.query_sets import Queries, bsdflab_answers, draw_queries
+from bsdflab.reference.visible_normals import bsdflab_uniforms
 
 pytestmark = pytest.mark.mitsuba
 
@@ -200,7 +199,9 @@ def _scaled_sample(cls, monkeypatch, weight_of=None, pdf_scale=1.0):
 def test_09_the_harness_catches_bsdflab_sampling_errors(monkeypatch):
     """Errors in bsdflab's sample (consistent eval / pdf) are caught by the cross-check
     with Mitsuba's eval / pdf -- the float32 bounds never compare a sample with itself."""
-    transmitted = lambda s: (s.lobe == int(Lobe.GLOSSY_TRANSMISSION))[:, None]
+    def transmitted(s):
+        return (s.lobe == int(Lobe.GLOSSY_TRANSMISSION))[:, None]
+
     # a transmission weight without the radiance scaling (n_i / n_t)^2
     _scaled_sample(RoughDielectric, monkeypatch,
                    weight_of=lambda s: np.where(transmitted(s), s.weight * s.eta[:, None] ** 2, s.weight))

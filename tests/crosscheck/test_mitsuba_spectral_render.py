@@ -26,14 +26,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("mitsuba")
-pytestmark = pytest.mark.mitsuba
+from bsdflab.render import Camera, Environment, Material, Scene, Shape, render
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, rgb_to_spectrum, srgb_weights
+from bsdflab.testing import image_z_test, sidak_z_limit
+from bsdflab.validation.checks.renderer import sphere_on_floor
+from support.render_scenes import scaled_diffuse
 
-from bsdflab.render import Camera, Environment, Material, Scene, Shape, render  # noqa: E402
-from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, rgb_to_spectrum, srgb_weights  # noqa: E402
-from bsdflab.testing import image_z_test, sidak_z_limit  # noqa: E402
-from bsdflab.validation.checks.renderer import sphere_on_floor  # noqa: E402
-from support.render_scenes import scaled_diffuse  # noqa: E402
+pytestmark = pytest.mark.mitsuba
 
 ALPHA = 1e-3
 WIDTH, HEIGHT = 48, 36
@@ -171,8 +170,9 @@ def test_residual_of_the_mapping_is_far_below_the_noise():
     """What Mitsuba's estimator converges to differs from our value by the ramps at the band
     edges only: <= 1e-4 relative (6e-5 measured, in the weak blue of two red bounces) on
     this test's spectra (one to three bounces on the diffuse colours, copper at two
-    angles), against per-pixel noise of 1-7 % (a bias of 1e-4 moves z by < 0.01). Linear spectra through Mitsuba's own CIE film would leave up
-    to 1e-2 (printed in docs/spectral_rendering.md), the reason for the step mapping."""
+    angles), against per-pixel noise of 1-7 % (a bias of 1e-4 moves z by < 0.01). Linear spectra
+    through Mitsuba's own CIE film would leave up to 1e-2 (printed in docs/spectral_rendering.md), the
+    reason for the step mapping."""
     from bsdflab import Conductor
     from bsdflab.reference.mitsuba_spectral import residual
 

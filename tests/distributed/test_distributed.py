@@ -16,6 +16,7 @@ import time
 
 import numpy as np
 import pytest
+from distributed import get_task_stream
 
 
 
@@ -62,10 +63,24 @@ def test_render_equals_the_local_render_bit_for_bit(client):
     assert local.invalid_samples == remote.invalid_samples
 
 
+def remote_tasks(client, run):
+    """``run()``'s result and the tasks the cluster's workers computed meanwhile (Dask's
+    task stream: one record per task, with the worker that ran it)."""
+    with get_task_stream(client) as stream:
+        result = run()
+    workers = set(client.scheduler_info()["workers"])
+    tasks = [t for t in stream.data if t.get("status") == "OK"]
+    assert all(t["worker"] in workers for t in tasks), tasks
+    return result, tasks
+
+
 def test_render_api_takes_a_client(client):
+    """render(client=...) gives the local image, computed on the workers: as many tasks ran
+    there as the render had units (a render that ignored the client would run none)."""
     s = scene("furnace", width=16, height=12)
     a = render(s, spp=4, seed=1, progress=False)
-    b = render(s, spp=4, seed=1, progress=False, client=client)
+    b, tasks = remote_tasks(client, lambda: render(s, spp=4, seed=1, progress=False, client=client))
+    assert len(tasks) == b.settings["units"] >= 1
     assert np.array_equal(a.mean, b.mean) and np.array_equal(a.variance, b.variance)
 
 
@@ -76,10 +91,12 @@ def test_spectral_render_of_a_table_equals_the_local_one(client, tmp_path):
 
     s = tabulated_film_mirror_scene(size=8)
     local = render(s, spp=4, seed=2, progress=False, spectral=True, cache_dir=tmp_path)
-    remote = render(s, spp=4, seed=2, progress=False, spectral=True, cache_dir=tmp_path, client=client)
+    remote, tasks = remote_tasks(client, lambda: render(s, spp=4, seed=2, progress=False, spectral=True,
+                                                        cache_dir=tmp_path, client=client))
+    assert len(tasks) == remote.settings["units"] >= 1  # the units ran on the workers
     assert np.array_equal(local.mean, remote.mean) and np.array_equal(local.variance, remote.variance)
     rgb = render(s, spp=4, seed=2, progress=False, cache_dir=tmp_path, client=client)
-    assert not np.allclose(rgb.mean, remote.mean, atol=1e-3)  # the RGB table gives another image
+    assert not np.allclose(rgb.mean, remote.mean, atol=1e-3, rtol=0)  # the RGB table gives another image
 
 
 def test_a_worker_killed_mid_render_changes_nothing(client):

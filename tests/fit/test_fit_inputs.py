@@ -100,7 +100,8 @@ def test_simulation_noise_model():
 
     cfg = SimulationConfig.parse(tomllib.loads(
         "[truth]\nfilm_thickness_nm = 400.0\n[noise]\nrelative = 0.03\nabsolute = 0.001\nseed = 5\n"
-        "[[measurement]]\ngeometry = 'specular'\nangles_deg = [10, 40]\nwavelengths_nm = {start = 400, stop = 700, step = 5}\n"))
+        "[[measurement]]\ngeometry = 'specular'\nangles_deg = [10, 40]\n"
+        "wavelengths_nm = {start = 400, stop = 700, step = 5}\n"))
     ds, y = simulate(cfg)
     np.testing.assert_allclose(ds.sigma, np.sqrt(0.001**2 + (0.03 * y) ** 2))
     z = (ds.reflectance - y) / ds.sigma

@@ -81,46 +81,101 @@ def test_recovery_and_narrowing():
 
 def sbc(datasets: int, seed: int, ranks_from: int = 19):
     """Talts et al. 2018: truth ~ prior, data ~ model(truth), rank of truth among posterior
-    draws. Returns (ranks (datasets, 2) in 0..ranks_from, covered (datasets, 2) by the 90 % CI)."""
+    draws. Returns (truths (datasets, 2), draws: one (n, 2) array per dataset)."""
     rng = np.random.default_rng(seed)
-    ranks, covered = [], []
+    truths, posteriors = [], []
     for i in range(datasets):
         d, A = rng.normal(430.0, 10.0), rng.normal(1.83, 0.02)
         data = simulated(d, A, rel=0.02, seed=1000 + i, step=40)
         config = fit_config(walkers=8, steps=500, seed=i)
         run = run_sampler(LogPosterior(data, config), config.sampler, progress=False)
-        draws = run.draws()
-        pick = draws[rng.choice(len(draws), ranks_from, replace=False)]
-        truth = np.array([d, A])
-        ranks.append(np.sum(pick < truth, axis=0))
-        lo, hi = np.quantile(draws, [0.05, 0.95], axis=0)
-        covered.append((lo < truth) & (truth < hi))
-    return np.array(ranks), np.array(covered)
+        truths.append([d, A])
+        posteriors.append(run.draws())
+    return np.array(truths), posteriors
 
 
-def check_calibration(ranks, covered, bins, alpha=0.001):
-    n = len(ranks)
-    # coverage: Binomial(n, 0.9); two-sided acceptance band at level alpha (Sidak over 2 parameters)
-    a = 1 - (1 - alpha) ** 0.5
-    lo, hi = stats.binom.ppf(a / 2, n, 0.9), stats.binom.ppf(1 - a / 2, n, 0.9)
-    counts = covered.sum(axis=0)
-    assert np.all((lo <= counts) & (counts <= hi)), (counts, lo, hi)
-    # ranks uniform on 0..L: chi^2 over equal-width bins, Sidak-corrected
-    for j in range(ranks.shape[1]):
-        hist = np.histogram(ranks[:, j], bins=bins, range=(0, ranks.max() + 1 if ranks.max() >= 19 else 20))[0]
+def narrowed(draws, factor):
+    """The same posterior draws, their spread about the mean scaled by ``factor`` (a sampler
+    or likelihood that reports too narrow a posterior, for the power check)."""
+    mean = draws.mean(axis=0)
+    return mean + factor * (draws - mean)
+
+
+# Calibration statistics, each Sidak-corrected within a family at ALPHA_SBC (so a correctly
+# calibrated fit fails the family 1 time in 1000): coverage of the 90 % intervals (one test
+# per parameter), rank uniformity (one chi-square per parameter) and the sum of squared
+# posterior z-scores (one test). The last one carries the power: for a calibrated posterior
+# E[z^2] = 1 exactly (z = (truth - posterior mean) / posterior sd, any posterior shape), and
+# sum z^2 over the datasets and both parameters is close to chi^2 with 2 n degrees of
+# freedom; a posterior whose sd is r times the true one gives z^2 / r^2 instead.
+ALPHA_SBC = 0.001
+SBC_TESTS = 5
+NARROW = 0.7  # the mis-calibration the check must catch: posterior sd 0.7 x the true one
+
+
+def z_sum_limits(n_datasets: int, alpha: float = ALPHA_SBC, tests: int = SBC_TESTS):
+    """Two-sided acceptance interval of sum z^2 (chi^2, 2 n degrees of freedom)."""
+    a = 1 - (1 - alpha) ** (1 / tests)
+    k = 2 * n_datasets
+    return stats.chi2.ppf(a / 2, k), stats.chi2.ppf(1 - a / 2, k)
+
+
+def z_sum_power(n_datasets: int, narrow: float = NARROW) -> float:
+    """Probability that sum z^2 leaves its acceptance interval when every posterior sd is
+    ``narrow`` times the true one (sum z^2 is then chi^2(2 n) / narrow^2)."""
+    lo, hi = z_sum_limits(n_datasets)
+    k = 2 * n_datasets
+    return stats.chi2.sf(hi * narrow ** 2, k) + stats.chi2.cdf(lo * narrow ** 2, k)
+
+
+def calibration_failures(truths, posteriors, bins, seed=0, ranks_from=19):
+    """The calibration tests that reject (an empty list when the posteriors are calibrated)."""
+    rng = np.random.default_rng(seed)
+    n = len(truths)
+    a = 1 - (1 - ALPHA_SBC) ** (1 / SBC_TESTS)
+    failed = []
+    draws_mean = np.array([d.mean(axis=0) for d in posteriors])
+    draws_sd = np.array([d.std(axis=0, ddof=1) for d in posteriors])
+    z = (truths - draws_mean) / draws_sd
+    lo, hi = z_sum_limits(n)
+    if not lo <= np.sum(z ** 2) <= hi:
+        failed.append(("sum z^2", float(np.sum(z ** 2)), (lo, hi)))
+    # coverage of the central 90 % interval: Binomial(n, 0.9), two-sided band at level a
+    bounds = np.array([np.quantile(d, [0.05, 0.95], axis=0) for d in posteriors])
+    counts = ((bounds[:, 0] < truths) & (truths < bounds[:, 1])).sum(axis=0)
+    c_lo, c_hi = stats.binom.ppf(a / 2, n, 0.9), stats.binom.ppf(1 - a / 2, n, 0.9)
+    for j in range(2):
+        if not c_lo <= counts[j] <= c_hi:
+            failed.append((f"coverage {j}", int(counts[j]), (c_lo, c_hi)))
+    # ranks of the truth among ranks_from draws: uniform on 0..ranks_from
+    ranks = np.array([np.sum(d[rng.choice(len(d), ranks_from, replace=False)] < t, axis=0)
+                      for d, t in zip(posteriors, truths, strict=True)])
+    for j in range(2):
+        hist = np.histogram(ranks[:, j], bins=bins, range=(0, ranks_from + 1))[0]
         p = stats.chisquare(hist).pvalue
-        assert p > a, (j, hist, p)
+        if not p > a:
+            failed.append((f"ranks {j}", hist.tolist(), p))
+    return failed
+
+
+SBC_DATASETS = 48
 
 
 def test_simulation_based_calibration_small():
-    ranks, covered = sbc(datasets=16, seed=11)
-    check_calibration(ranks, covered, bins=4)
+    """SBC on SBC_DATASETS datasets, with its power stated and checked: sum z^2 rejects
+    posteriors 0.7x too narrow with probability >= 0.9 (computed), and rejects these very
+    posteriors narrowed by 0.7 (the coverage and rank tests alone had ~3 % power here)."""
+    assert z_sum_power(SBC_DATASETS) >= 0.9, z_sum_power(SBC_DATASETS)
+    truths, posteriors = sbc(datasets=SBC_DATASETS, seed=11)
+    assert calibration_failures(truths, posteriors, bins=4) == []
+    failed = calibration_failures(truths, [narrowed(d, NARROW) for d in posteriors], bins=4)
+    assert any(name == "sum z^2" for name, *_ in failed), failed
 
 
 @pytest.mark.slow
 def test_simulation_based_calibration_100_datasets():
-    ranks, covered = sbc(datasets=120, seed=12)
-    check_calibration(ranks, covered, bins=5)
+    truths, posteriors = sbc(datasets=120, seed=12)
+    assert calibration_failures(truths, posteriors, bins=5) == []
 
 
 STUDY_EXTRA = """
@@ -216,7 +271,8 @@ def test_free_noise_scale_finds_understated_sigmas():
     data = simulate(cfg)[0]
     config = fit_config(steps=600, seed=3).__class__.parse(tomllib.loads(
         FIT_TOML.format(walkers=8, steps=600, seed=3).replace(
-            "base_albedo = 0.3", 'base_albedo = 0.3\nnoise_scale = { prior = "lognormal", median = 1.0, sigma = 1.0 }')))
+            "base_albedo = 0.3",
+            'base_albedo = 0.3\nnoise_scale = { prior = "lognormal", median = 1.0, sigma = 1.0 }')))
     run = run_sampler(LogPosterior(data, config), config.sampler, progress=False)
     lo, hi = np.quantile(run.draws()[:, run.names.index("noise_scale")], [0.05, 0.95])
     # 70 rows: the scale's posterior sd is ~2/sqrt(2*70) = 0.17, so [lo, hi] spans ~1.6-2.4
@@ -234,7 +290,7 @@ def test_appearance_colour_against_colour_science():
 
     full = np.append(default_theta(film_thickness_nm=430.0), 1.0)
     spectrum = specular_spectra(full, [30.0], 1, 8)[0, 0]
-    sd = colour.SpectralDistribution(dict(zip(DEFAULT_WAVELENGTHS, spectrum)))
+    sd = colour.SpectralDistribution(dict(zip(DEFAULT_WAVELENGTHS, spectrum, strict=True)))
     xyz = colour.sd_to_XYZ(sd, colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"],
                            colour.SDS_ILLUMINANTS["D65"], method="Integration") / 100.0
     white = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
@@ -245,5 +301,5 @@ def test_appearance_colour_against_colour_science():
     assert colour.delta_E(ours, ref, method="CIE 2000") < 0.05
     other = np.append(default_theta(film_thickness_nm=450.0), 1.0)
     app = appearance_posterior(np.vstack([full, other]), full, [0.0, 30.0, 60.0], 1, 8)
-    np.testing.assert_allclose(app.delta_e[0], 0.0, atol=1e-9)
+    np.testing.assert_allclose(app.delta_e[0], 0.0, atol=1e-9, rtol=0)
     assert np.all(app.delta_e[1] > 1.0)   # 20 nm thicker is a visible change

@@ -12,7 +12,7 @@ import pytest
 import bsdflab as bl
 from bsdflab import Lobe
 from bsdflab.reference.mitsuba_calls import query
-from bsdflab.testing import albedo_uniform, random_unit_vectors, sidak_z_limit
+from bsdflab.testing import random_unit_vectors, sidak_z_limit
 from support.directions import directions_at
 from support.statistics import assert_agrees, z_limit
 
@@ -110,17 +110,43 @@ def test_06_energy_lossless_stack_is_one(cos_theta):
     assert np.mean(s.lobe == Lobe.DELTA_REFLECTION) == pytest.approx(delta, abs=4 * np.sqrt(delta / 2e5))
 
 
+def albedo_by_mixture(m, wi, n, seed, wavelengths):
+    """Albedo from ``eval`` alone, independent of the layered sampler: wo from an equal
+    mixture of cosine-weighted directions and the top interface's own sampler (which the
+    interface tests check by chi^2), weighted by 1 / the mixture's density. The top's glossy
+    film reflection is the sharp part of the lobe that uniform directions rarely hit (a
+    +-50 % band before). Returns (mean, standard error) per channel."""
+    rng = np.random.default_rng(seed)
+    r, phi = np.sqrt(rng.random(n)), 2 * np.pi * rng.random(n)
+    cosine = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.maximum(0.0, 1 - r * r))], axis=1)
+    top = m.interfaces[0]
+    wis = np.tile(wi, (n, 1))
+    wo = np.concatenate([cosine, top.sample(wis, seed=seed + 1, wavelengths=wavelengths).wo])
+    ok = np.linalg.norm(wo, axis=1) > 0.5  # a failed top sample is a zero vector: it adds 0
+    wis = np.tile(wi, (2 * n, 1))
+    density = 0.5 * np.maximum(wo[:, 2], 0) / np.pi
+    density[ok] += 0.5 * top.pdf(wis[ok], wo[ok], wavelengths=wavelengths)
+    values = np.zeros((2 * n, len(wavelengths)))
+    values[ok] = m.eval(wis[ok], wo[ok], wavelengths=wavelengths) / density[ok, None]
+    return values.mean(axis=0), values.std(axis=0, ddof=1) / np.sqrt(2 * n)
+
+
 @pytest.mark.parametrize("make", [lambda: bl.presets.xenopeltis(samples=64),
                                   lambda: bl.presets.xenopeltis_iridophore_stack(samples=64)])
-def test_07_sampling_consistency_and_albedo_at_most_one(make):
-    """The mean sample weight (importance-sampled albedo) equals the uniform-direction
-    integral of eval, and both are <= 1."""
+def test_07_sampling_consistency_and_albedo_below_one(make):
+    """The mean sample weight (importance-sampled albedo) equals the integral of eval over
+    directions drawn independently of the layered sampler (`albedo_by_mixture`), within
+    4.5 joint standard errors, and both are < 1. The band is 20 % (xenopeltis) and 9 % (the
+    iridophore stack) of the albedo, from +-50 % with uniform directions; PFMC eval noise
+    (64 walks per direction) dominates what is left."""
     m = make()
     wi = directions_at(0.7)
-    s = m.sample(np.tile(wi, (100_000, 1)), seed=8, wavelengths=[450.0, 600.0])
+    wl = [450.0, 600.0]
+    s = m.sample(np.tile(wi, (100_000, 1)), seed=8, wavelengths=wl)
     sampled, s_err = s.weight.mean(axis=0), s.weight.std(axis=0) / np.sqrt(len(s.weight))
-    u = albedo_uniform(m, wi, n=6000, seed=9, wavelengths=[450.0, 600.0])
-    assert np.all(np.abs(sampled - u.mean) < 4.5 * np.hypot(s_err, u.stderr)), (sampled, u)
+    mixed, m_err = albedo_by_mixture(m, np.reshape(wi, 3), 3000, seed=9, wavelengths=wl)
+    band = 4.5 * np.hypot(s_err, m_err)
+    assert np.all(np.abs(sampled - mixed) < band), (sampled, mixed, band)
     assert np.all(sampled < 1)
 
 

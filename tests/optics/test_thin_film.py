@@ -67,9 +67,9 @@ def max_errors_vs_tmm(stack, rng, reverse):
     media, thicknesses = media_of(stack.reversed() if reverse else stack)
     err = np.zeros(4)
     for pol in "sp":
-        for i, (wl, th) in enumerate(zip(wavelengths, thetas)):
+        for i, (wl, th) in enumerate(zip(wavelengths, thetas, strict=True)):
             ref = tmm_reference(pol, media, thicknesses, th, wl)
-            err = np.maximum(err, [abs(g[i] - x) for g, x in zip(got[pol], ref)])
+            err = np.maximum(err, [abs(g[i] - x) for g, x in zip(got[pol], ref, strict=True)])
     return err
 
 
@@ -113,7 +113,7 @@ def test_03_single_film_path_equals_stack_path():
     wl = rng.uniform(380, 780, n)
     one = _core.thin_film(idx[:, 0], idx[:, 1], idx[:, 2], d, cos0, wl)
     many = _core.film_stack(idx, d[:, None], cos0, wl)
-    for a, b in zip(one, many):  # the same sums, with the fractions cleared in `one`
+    for a, b in zip(one, many, strict=True):  # the same sums, with the fractions cleared in `one`
         assert np.max(np.abs(a - b) / (1 + np.abs(b))) < 1e-13
 
 
@@ -144,8 +144,8 @@ def test_04_lossless_stacks_match_colour_at_oblique_incidence():
     err = 0.0
     for _ in range(100):
         stack = random_stack(rng, False)
-        stack = FilmStack(stack.incident, [Layer(l.material.n, l.thickness_nm)
-                                           for l in stack.layers], stack.substrate)
+        stack = FilmStack(stack.incident, [Layer(layer.material.n, layer.thickness_nm)
+                                           for layer in stack.layers], stack.substrate)
         media, _ = media_of(stack)
         # keep every refraction angle real: n0 sin(theta) < min n_j
         ratio = min(m.real for m in media[1:]) / media[0].real
@@ -179,17 +179,18 @@ def test_06_thickness_sweep_matches_colour_thin_film():
         assert np.max(np.abs(got_T - T[..., i])) <= TOL
 
 
-# -- the seed's bug -------------------------------------------------------------------
+# -- the double-counted phase -------------------------------------------------------------------
 
-def test_07_seed_counter_example():
-    """The seed's double-counted phase (reference/approximations/seed_film.py) gives the
-    digest's 0.0854 where tmm and bsdflab give 0.0218: the registry's check, run here."""
+def test_07_double_phase_counter_example():
+    """The double-counted phase of Padrón-Griffe et al. 2023's code
+    (reference/approximations/double_phase_film.py) gives 0.0854 where tmm and bsdflab give
+    0.0218: the registry's check, run here."""
     from bsdflab.validation import REGISTRY, load_checks, run_check
 
     load_checks()
-    result = run_check(REGISTRY["films/seed-counter-example"], "quick")
+    result = run_check(REGISTRY["films/double-phase-counter-example"], "quick")
     assert result.status == "pass", result.message
-    assert abs(result.details["bsdflab"] - result.details["seed"]) > 0.06
+    assert abs(result.details["bsdflab"] - result.details["double_phase"]) > 0.06
 
 
 # -- physics checks -------------------------------------------------------------------
@@ -198,8 +199,8 @@ def test_08_lossless_energy_conservation_both_sides():
     rng = np.random.default_rng(5)
     for _ in range(50):
         stack = random_stack(rng, False)
-        stack = FilmStack(stack.incident, [Layer(l.material.n, l.thickness_nm)
-                                           for l in stack.layers], stack.substrate)
+        stack = FilmStack(stack.incident, [Layer(layer.material.n, layer.thickness_nm)
+                                           for layer in stack.layers], stack.substrate)
         wl, th = rng.uniform(380, 780, 50), rng.uniform(0, np.pi / 2, 50)
         for reverse in (False, True):
             for pol in "sp":

@@ -199,7 +199,6 @@ FLOAT32_SLACK = 1e-5
 
 @pytest.fixture
 def scalar_mitsuba():
-    pytest.importorskip("mitsuba")
     from bsdflab.reference.mitsuba_env import mitsuba
 
     mi = mitsuba()  # sets up Dr.Jit's LLVM path first, as the other reference checks expect

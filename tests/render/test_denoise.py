@@ -10,7 +10,6 @@ from bsdflab.cli.main import main
 from bsdflab.render import read_exr, render
 from bsdflab.scenes import scene
 
-pytest.importorskip("pyoidn")
 ARGS = ["render", "basic-materials", "--width", "48", "--height", "36", "--spp", "4", "--quiet"]
 
 

@@ -14,6 +14,7 @@ import pytest
 from bsdflab import _core
 from bsdflab.render import Camera, Environment, Material, Scene, Shape, render
 from bsdflab.render.build import build_render_scene
+from bsdflab.scenes import scene
 from bsdflab.testing import ChiSquareTest, sidak_z_limit
 from support.environment_integral import estimate_z, sphere_integral
 from support.render_scenes import light_over_plane
@@ -146,7 +147,8 @@ def test_08_same_seed_same_image_other_seed_other_image():
 
 
 def test_09_image_does_not_depend_on_thread_count(tmp_path):
-    out = images_per_thread_count(tmp_path, "from support.render_scenes import light_over_plane; from bsdflab.render import render",
+    out = images_per_thread_count(tmp_path, "from support.render_scenes import light_over_plane; "
+                                  "from bsdflab.render import render",
                                   "render(light_over_plane(size=20), spp=6, seed=2, progress=False).mean")
     assert np.array_equal(out["1"], out["2"])
 
@@ -220,3 +222,11 @@ def test_15_light_seen_at_a_grazing_angle_is_not_self_shadowed(strategy):
     mean, err = image_mean(result)
     assert np.all(np.abs(mean - expected) < Z * err + 2e-3 * expected), (mean, expected)
 
+
+def test_one_sample_render_says_its_variance_is_undefined():
+    # old: variance was inf everywhere
+    result = render(scene("furnace", width=4, height=3), spp=1, progress=False)
+    assert not result.variance_defined and result.summary()["variance_defined"] is False
+    assert np.all(np.isfinite(result.variance)) and np.all(result.variance == 0)
+    two = render(scene("furnace", width=4, height=3), spp=2, progress=False)
+    assert two.variance_defined and np.all(np.isfinite(two.variance))

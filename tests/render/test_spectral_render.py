@@ -63,8 +63,12 @@ def test_02_grey_world_spectral_equals_rgb_to_round_off():
 
 
 def test_03_spectral_image_does_not_depend_on_thread_count(tmp_path):
-    out = images_per_thread_count(tmp_path, "from support.render_scenes import grey_world; from bsdflab.render import render",
-                                  "render(grey_world(size=8), spp=2, seed=2, progress=False, spectral=True).mean")
+    """A 40 x 40 image is 9 tiles of 16 x 16 (the renderer's tile), handed to whichever thread
+    is free, so the 2-thread run really splits every pass (one tile would run on one thread
+    whatever the setting)."""
+    out = images_per_thread_count(tmp_path, "from support.render_scenes import grey_world; "
+                                  "from bsdflab.render import render",
+                                  "render(grey_world(size=40), spp=2, seed=2, progress=False, spectral=True).mean")
     assert np.array_equal(out["1"], out["2"])
 
 

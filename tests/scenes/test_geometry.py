@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+import trimesh
 
 from bsdflab.render.curves import SNAKE_DEFAULTS
 from bsdflab.render.geometry import GEOMETRY_TYPES, Mesh, build_mesh, mesh_area, triangle_normals, validate_mesh
@@ -46,7 +47,7 @@ def test_sphere_normals_outward_and_uvs():
     # u = phi / 2 pi away from the poles (and the seam column, where u = 1)
     body = (np.abs(d[:, 1]) < 1.99) & (m.uvs[:, 0] < 1)
     phi = np.mod(np.arctan2(-d[body, 2], d[body, 0]), 2 * np.pi)
-    assert np.allclose(phi / (2 * np.pi), m.uvs[body, 0], atol=1e-9)
+    assert np.allclose(phi / (2 * np.pi), m.uvs[body, 0], atol=1e-9, rtol=0)
     # every triangle faces outward
     centroids = m.positions[m.indices].mean(axis=1)
     assert np.all(np.einsum("ij,ij->i", triangle_normals(m), centroids - c) > 0)
@@ -58,7 +59,7 @@ def test_torus_normals_point_away_from_the_core_circle():
     p = m.positions
     radial = p * [1, 0, 1]
     core = 3.0 * radial / np.linalg.norm(radial, axis=1, keepdims=True)
-    assert np.allclose(m.normals, p - core, atol=1e-9)
+    assert np.allclose(m.normals, p - core, atol=1e-9, rtol=0)
     assert m.uvs.min() >= 0 and m.uvs.max() <= 1
 
 
@@ -106,12 +107,12 @@ def test_snake_body_is_well_formed_and_rests_on_the_ground():
     assert np.all(np.diff(u) > 0) and u[0] == 0 and u[-1] == pytest.approx(spec["length"])
     # u is arc length: the belly line (v = 0) runs right under the centreline
     belly = rows[:, 0]
-    assert np.allclose(belly[:, 1], 0, atol=1e-9)
+    assert np.allclose(belly[:, 1], 0, atol=1e-9, rtol=0)
     arc = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(belly, axis=0), axis=1))])
-    assert np.allclose(arc, u, atol=2e-3 * spec["length"])
+    assert np.allclose(arc, u, atol=2e-3 * spec["length"], rtol=0)
     # no twist: the top of every ring (v = 0.5) lies straight above its belly point
     top = rows[:, 12]
-    assert np.allclose(top[:, [0, 2]], belly[:, [0, 2]], atol=1e-9)
+    assert np.allclose(top[:, [0, 2]], belly[:, [0, 2]], atol=1e-9, rtol=0)
 
 
 def test_snake_radius_profile_tail_to_neck():
@@ -143,7 +144,7 @@ def test_snake_heading_and_center_place_the_body():
     a = build_mesh(_snake(segments=200, sides=12, center=[0, 0]))
     b = build_mesh(_snake(segments=200, sides=12, center=[10, -5], heading_deg=90))
     rot = np.array([[0, 0, 1], [0, 1, 0], [-1, 0, 0]])   # +90 degrees about +Y: +X -> -Z
-    assert np.allclose(a.positions @ rot.T + [10, 0, -5], b.positions, atol=1e-9)
+    assert np.allclose(a.positions @ rot.T + [10, 0, -5], b.positions, atol=1e-9, rtol=0)
 
 
 def _rotation_scale_translation():
@@ -163,7 +164,7 @@ def test_to_world_moves_positions_and_normals():
     validate_mesh(moved)
     assert mesh_area(moved) == pytest.approx(abs(np.linalg.det(m[:3, :3])) ** (2 / 3) * mesh_area(base))
     centre = np.array([1, 2, 3])
-    assert np.allclose(moved.normals, (moved.positions - centre) / 2.0, atol=1e-12)
+    assert np.allclose(moved.normals, (moved.positions - centre) / 2.0, atol=1e-12, rtol=0)
 
 
 def test_to_world_area_scales_with_the_in_plane_determinant_and_mirroring_keeps_the_front():
@@ -178,7 +179,6 @@ def test_to_world_area_scales_with_the_in_plane_determinant_and_mirroring_keeps_
 
 
 def test_mesh_file_round_trip(tmp_path):
-    trimesh = pytest.importorskip("trimesh")
     ico = trimesh.creation.icosphere(subdivisions=2, radius=1.5)
     ico.export(tmp_path / "ico.obj")
     m = build_mesh({"type": "mesh", "path": "ico.obj"}, base_dir=str(tmp_path))

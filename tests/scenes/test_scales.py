@@ -119,12 +119,12 @@ def test_01_nearest_centre_and_gap_partition(params):
     clear = separation > 1e-9  # not on a boundary, where rounding may pick either side
     assert clear.mean() > 0.999
     np.testing.assert_array_equal(r["id"][clear], ref_id[clear])
-    np.testing.assert_allclose(r["edge_distance"], ref_edge, atol=1e-9)
+    np.testing.assert_allclose(r["edge_distance"], ref_edge, atol=1e-9, rtol=0)
     # exactly one of {scale, gap}, and the gap is where the edge is closer than gap / 2
     np.testing.assert_array_equal(r["gap"], r["edge_distance"] < t.gap / 2)
     scale = ~r["gap"] & clear
-    np.testing.assert_allclose(r["slope_u"][scale], ref_slopes[scale, 0], atol=1e-9)
-    np.testing.assert_allclose(r["slope_v"][scale], ref_slopes[scale, 1], atol=1e-9)
+    np.testing.assert_allclose(r["slope_u"][scale], ref_slopes[scale, 0], atol=1e-9, rtol=0)
+    np.testing.assert_allclose(r["slope_v"][scale], ref_slopes[scale, 1], atol=1e-9, rtol=0)
     assert not np.any(r["gap"] & (r["thickness_factor"] != 1))
     assert not np.any(r["gap"] & ((r["slope_u"] != 0) | (r["slope_v"] != 0)))
 
@@ -143,7 +143,8 @@ def test_02_search_neighbourhood_at_maximum_jitter():
         clear = (separation > 1e-9) & (np.abs(ref_edge - t.gap / 2) > 1e-9)
         scale = clear & ~r["gap"]
         mismatches += np.sum(clear & ((r["id"] != ref_id) | (np.abs(r["edge_distance"] - ref_edge) > 1e-9)))
-        mismatches += np.sum(scale & (np.hypot(r["slope_u"] - ref_slopes[:, 0], r["slope_v"] - ref_slopes[:, 1]) > 1e-9))
+        slope_error = np.hypot(r["slope_u"] - ref_slopes[:, 0], r["slope_v"] - ref_slopes[:, 1])
+        mismatches += np.sum(scale & (slope_error > 1e-9))
     assert mismatches == 0
 
 
@@ -197,13 +198,13 @@ def test_06_periodic_in_v_and_seamless():
         np.testing.assert_array_equal(s["id"][clear], r["id"][clear])
         np.testing.assert_array_equal(s["gap"][clear], r["gap"][clear])
         for key in ("slope_u", "slope_v", "thickness_factor", "edge_distance"):
-            np.testing.assert_allclose(s[key], r[key], atol=1e-9)
+            np.testing.assert_allclose(s[key], r[key], atol=1e-9, rtol=0)
     # across the seam: v just below 1 and just above 0 lie in the same scale
     uu = np.linspace(0, 1, 2001)
     below, above = t.lookup(uu, 1 - 1e-9), t.lookup(uu, 1e-9)
     clear = below["edge_distance"] > 1e-6
     np.testing.assert_array_equal(below["id"][clear], above["id"][clear])
-    np.testing.assert_allclose(below["edge_distance"], above["edge_distance"], atol=1e-6)
+    np.testing.assert_allclose(below["edge_distance"], above["edge_distance"], atol=1e-6, rtol=0)
 
 
 def test_07_non_periodic_v_does_not_wrap():
@@ -223,8 +224,9 @@ def test_08_thickness_and_slope_variation():
     thickness = r["thickness_factor"][inside][first]
     assert len(ids) > 900
     # constant within a scale: every point carries its scale's first value
-    per_scale = dict(zip(ids.tolist(), thickness.tolist()))
-    assert all(per_scale[i] == x for i, x in zip(r["id"][inside].tolist(), r["thickness_factor"][inside].tolist()))
+    per_scale = dict(zip(ids.tolist(), thickness.tolist(), strict=True))
+    pairs = zip(r["id"][inside].tolist(), r["thickness_factor"][inside].tolist(), strict=True)
+    assert all(per_scale[i] == x for i, x in pairs)
     assert abs(thickness.mean() - 1) < 0.02
     assert thickness.min() >= 0.8 and thickness.max() <= 1.2
     assert thickness.min() < 0.81 and thickness.max() > 1.19
@@ -250,7 +252,7 @@ def test_09_dome_is_convex():
     # the height falls away from the centre: the gradient points back to it
     cross = outward[:, 0] * slope[:, 1] - outward[:, 1] * slope[:, 0]
     assert np.all((outward * slope).sum(axis=1) <= 1e-12)
-    np.testing.assert_allclose(cross, 0, atol=1e-9)
+    np.testing.assert_allclose(cross, 0, atol=1e-9, rtol=0)
     magnitude = np.hypot(slope[:, 0], slope[:, 1])
     assert magnitude.max() <= t.dome + 1e-12 and magnitude.max() > 0.95 * t.dome
     near_centre = np.linalg.norm(outward, axis=1) < 0.05
@@ -274,8 +276,8 @@ def test_10_scale_count_and_six_neighbours():
     pairs = set()
     for a, b in ((grid_ids[:-1, :], grid_ids[1:, :]), (grid_ids, np.roll(grid_ids, -1, axis=1))):
         differ = a != b
-        pairs |= set(zip(a[differ].tolist(), b[differ].tolist()))
-        pairs |= set(zip(b[differ].tolist(), a[differ].tolist()))
+        pairs |= set(zip(a[differ].tolist(), b[differ].tolist(), strict=True))
+        pairs |= set(zip(b[differ].tolist(), a[differ].tolist(), strict=True))
     inner = set(ref_ids[(i >= 2) & (i <= 7)].tolist())  # whose neighbours are all in the window
     neighbours = {k: 0 for k in inner}
     for a, _ in pairs:

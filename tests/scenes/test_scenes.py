@@ -4,9 +4,11 @@ import math
 
 import numpy as np
 import pytest
+import trimesh
 
 from bsdflab.bsdfs import from_dict
 from bsdflab.presets import FILM_THICKNESS_NM
+from bsdflab.reference.mitsuba_bsdf import to_mitsuba
 from bsdflab.render import Scene
 from bsdflab.render.textures import ScaleTexture
 from bsdflab.scenes import SCENES, build_mesh, load_scene, save_scene, scene, validate_mesh
@@ -159,9 +161,6 @@ def test_furnace_and_basic_materials():
 
 
 def test_basic_materials_have_mitsuba_counterparts():
-    pytest.importorskip("mitsuba")
-    from bsdflab.reference.mitsuba_bsdf import to_mitsuba
-
     for name, material in scene("basic-materials").materials.items():
         assert to_mitsuba(material.bsdf)["type"] in {"diffuse", "conductor", "roughconductor", "dielectric",
                                                      "roughdielectric"}, name
@@ -214,7 +213,6 @@ def test_unknown_geometry_type_in_a_file(tmp_path):
 
 
 def test_relative_paths_resolve_against_the_file(tmp_path):
-    trimesh = pytest.importorskip("trimesh")
     folder = tmp_path / "scenes"
     folder.mkdir()
     trimesh.creation.icosphere(subdivisions=1).export(folder / "blob.obj")

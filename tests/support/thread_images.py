@@ -11,7 +11,8 @@ import numpy as np
 
 
 def images_per_thread_count(tmp_path, imports: str, expr: str, threads=("1", "2")) -> dict[str, np.ndarray]:
-    code = (f"import numpy as np, sys; sys.path.insert(0, {os.path.dirname(os.path.dirname(os.path.abspath(__file__)))!r}); {imports}; "
+    tests = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    code = (f"import numpy as np, sys; sys.path.insert(0, {tests!r}); {imports}; "
             f"np.save(sys.argv[1], {expr})")
     out = {}
     for n in threads:

@@ -70,11 +70,11 @@ def axis_weights(x, nodes):
 
 def corners(grid: TableGrid, wi, wo):
     """The 8 corner nodes (N, 8, 3) of each query's cell and their weights (N, 8)."""
-    ax = [axis_weights(x, n) for x, n in zip(angles(wi, wo), (grid.theta_i, grid.theta_o, grid.phi))]
+    ax = [axis_weights(x, n) for x, n in zip(angles(wi, wo), (grid.theta_i, grid.theta_o, grid.phi), strict=True)]
     idx, w = [], []
     for bits in itertools.product((0, 1), repeat=3):
-        idx.append(np.stack([i0 + b for (i0, _), b in zip(ax, bits)], -1))
-        w.append(np.prod([t if b else 1 - t for (_, t), b in zip(ax, bits)], axis=0))
+        idx.append(np.stack([i0 + b for (i0, _), b in zip(ax, bits, strict=True)], -1))
+        w.append(np.prod([t if b else 1 - t for (_, t), b in zip(ax, bits, strict=True)], axis=0))
     return np.stack(idx, 1), np.stack(w, 1)
 
 
@@ -102,7 +102,7 @@ def table_interpolation_bound(grid, D2, wi, wo, idx):
     differences: sum_k t_k (1 - t_k) / 2 * max over the cell's corners of |D2_k|
     (= (x - a)(b - x)/2 |f''| with f'' ~ D2 / h^2; at most max|D2_k| / 8)."""
     bound = 0.0
-    for k, (x, nodes) in enumerate(zip(angles(wi, wo), (grid.theta_i, grid.theta_o, grid.phi))):
+    for k, (x, nodes) in enumerate(zip(angles(wi, wo), (grid.theta_i, grid.theta_o, grid.phi), strict=True)):
         _, t = axis_weights(x, nodes)
         bound = bound + (t * (1 - t) / 2)[:, None] * at(D2[k], idx).max(axis=1)
     return bound

@@ -42,23 +42,37 @@ def table_mean(table):
     return v.mean(), np.sqrt((e ** 2).sum()) / v.size
 
 
-def assert_production_table_unbiased(model, grid, ref_rel_error, ref_min_samples):
+def assert_production_table_unbiased(model, grid, ref_rel_error, ref_min_samples, seeds=(1,)):
     """min_samples 512 and 2 % (the production settings) against a high-effort table:
-    table-wide mean luminance by a two-sided z-test at ALPHA."""
-    prod = tabulate(model, grid, rel_error=0.02, min_samples=512, wavelengths=WL, seed=1, progress=False)
+    table-wide mean luminance, averaged over production tables of several seeds (a bias of
+    the production settings is the same in each, their noise averages out), by a two-sided
+    z-test at ALPHA."""
+    prods = [tabulate(model, grid, rel_error=0.02, min_samples=512, wavelengths=WL, seed=s, progress=False)
+             for s in seeds]
     ref = tabulate(model, grid, rel_error=ref_rel_error, min_samples=ref_min_samples, wavelengths=WL,
                    seed=2, progress=False)
-    (a, sa), (b, sb) = table_mean(prod), table_mean(ref)
+    means = np.array([table_mean(p) for p in prods])
+    a, sa = means[:, 0].mean(), np.sqrt((means[:, 1] ** 2).sum()) / len(prods)
+    b, sb = table_mean(ref)
     z = (a - b) / np.hypot(sa, sb)
     assert abs(z) < sidak_z_limit(ALPHA, 1), (a, sa, b, sb, z)
-    assert prod.meta["nonfinite_walks"] == 0 and prod.meta["estimator_version"] == 5
-    assert np.all(prod.samples >= 512)
+    for prod in prods:
+        assert prod.meta["nonfinite_walks"] == 0 and prod.meta["estimator_version"] == 5
+        assert np.all(prod.samples >= 512)
+
+
+# Production tables averaged in the fast test. Version 1 of the tabulator (pilot pooled into
+# the value) read z = -2.46 here with one production table: a bias of about -0.42 % of the
+# mean (-3.5e-4 on 0.0838) against a noise of 1.43e-4. Four tables halve their part of the
+# noise (1.28e-4 -> 0.64e-4; the reference's is 0.64e-4): that bias is then 3.8 standard
+# errors, beyond the 2.58 limit with probability 0.90 (at one table: 0.44).
+PRODUCTION_SEEDS = (1, 3, 4, 5)
 
 
 def test_01_production_settings_are_unbiased():
     """Fast sample of the study below on a moderately heavy-tailed model (4 x 8 x 5 cells;
-    reference at 1 %, 1024-walk pilots). Version 1 measured z = -2.46 here."""
-    assert_production_table_unbiased(moderate_model(), TableGrid(4, 8, 5), 0.01, 1024)
+    reference at 1 %, 1024-walk pilots), with the power stated above PRODUCTION_SEEDS."""
+    assert_production_table_unbiased(moderate_model(), TableGrid(4, 8, 5), 0.01, 1024, seeds=PRODUCTION_SEEDS)
 
 
 @pytest.mark.slow

@@ -37,7 +37,8 @@ def test_false_alarm_rate_is_alpha_with_known_variances():
     mu, var = _truth(rng)
     failures = sum(not image_z_test(_draw(rng, mu, var), var, _draw(rng, mu, var), var, alpha=alpha).passed
                    for _ in range(trials))
-    assert _binomial_ok(failures, trials, alpha), f"{failures} false alarms in {trials} (expected ~{alpha * trials:.0f})"
+    assert _binomial_ok(failures, trials, alpha), (
+        f"{failures} false alarms in {trials} (expected ~{alpha * trials:.0f})")
 
 
 def test_false_alarm_rate_with_variances_estimated_from_samples():
@@ -52,7 +53,8 @@ def test_false_alarm_rate_with_variances_estimated_from_samples():
         return _draw(rng, mu, var), var * rng.chisquare(n - 1, SHAPE) / (n - 1)
 
     failures = sum(not image_z_test(*estimated(), *estimated(), alpha=alpha).passed for _ in range(trials))
-    assert _binomial_ok(failures, trials, alpha), f"{failures} false alarms in {trials} (expected ~{alpha * trials:.0f})"
+    assert _binomial_ok(failures, trials, alpha), (
+        f"{failures} false alarms in {trials} (expected ~{alpha * trials:.0f})")
 
 
 def test_single_pixel_five_sigma_shift_is_detected():
@@ -104,7 +106,7 @@ def test_block_average_of_means_and_variances():
     m, v = block_average(mean, var, 2)
     assert m.shape == v.shape == (2, 3, 3)  # the last row and column are dropped
     assert m[1, 2, 0] == pytest.approx(mean[2:4, 4:6, 0].mean())
-    assert np.allclose(v, 1 / 4)
+    assert np.allclose(v, 1 / 4, rtol=1e-14, atol=0)
     with pytest.raises(ValueError, match="larger than the image"):
         block_average(mean, var, 8)
 

@@ -120,8 +120,8 @@ def test_report_opens_in_headless_chromium_without_console_errors(quick_report, 
 
 
 def test_broken_models_injected_through_the_registry_turn_rows_red(tmp_path):
-    """Diffuse 3 % high (furnace, Mitsuba), a skewed sampler (chi-square), the seed's
-    double-counted phase (tmm): each row fails, and the exit status is 1."""
+    """Diffuse 3 % high (furnace, Mitsuba), a skewed sampler (chi-square), the double-counted
+    film phase (tmm): each row fails, and the exit status is 1."""
     out = tmp_path / "report"
     proc = _run(["--plugin", str(PLUGIN), "--only", "broken", "--out", str(out), "--quiet"], tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr

@@ -3,7 +3,7 @@
 Two checks that the comparison models reproduce their specifications' own behaviour, then
 two studies (kind "study": numbers, no pass/fail limit) of their CIEDE2000 error against
 bsdflab's exact spectral film: the snake's film (guanine 1.83 on keratin 1.5515, outside
-air) over angle x thickness, and the seed paper's appearance grid (guanine on interior
+air) over angle x thickness, and the appearance grid of Padrón-Griffe et al. 2023 (guanine on interior
 index 1.0 or 2.0, thicknesses 300 / 600 / 1200 nm).
 """
 from __future__ import annotations
@@ -22,7 +22,7 @@ STUDY_EFFORT = effort({"angles": 19, "thicknesses": 61}, {"angles": 46, "thickne
 
 @REGISTRY.check(name="films/approximations/specifications", family="films",
                 title="The comparison models reproduce their specifications' stated behaviour",
-                model="reference.approximations: Belcour-Barla (MaterialX), Cycles, glTF iridescence, seed code",
+                model="reference.approximations: Belcour-Barla (MaterialX), Cycles, glTF iridescence, Padrón-Griffe et al. 2023's double-phase film",
                 reference="the specifications: no film effect when film index = outer index; "
                           "Belcour-Barla's series is the exact Airy sum (exact sensitivities); "
                           "the paper's Gaussian fit reproduces exact colour at normal incidence",
@@ -110,21 +110,21 @@ def _swatch_figure(ctx, study, title):
 
 def _spectra_figure(ctx, n_outer, n_film, n_base, points, title):
     from bsdflab.reference.approximations.study import SPECTRAL_GRID_NM, exact_spectrum
-    from bsdflab.reference.approximations import seed_reflectance
+    from bsdflab.reference.approximations import double_phase_reflectance
 
     fig, axes = new_figure(4.0 * len(points), 3.0, cols=len(points))
     for ax, (d, angle) in zip(axes, points):
         c = np.cos(np.radians(angle))
         ax.plot(SPECTRAL_GRID_NM, exact_spectrum(n_outer, n_film, n_base, d, c), "k", lw=1, label="exact")
-        ax.plot(SPECTRAL_GRID_NM, seed_reflectance(n_outer, n_film, n_base, d, SPECTRAL_GRID_NM, c),
-                "r", lw=0.8, alpha=0.7, label="seed formula")
-        ax.plot([650, 510, 475], seed_reflectance(n_outer, n_film, n_base, d, np.array([650, 510, 475.0]), c),
-                "ro", ms=4, label="seed's 3 samples")
+        ax.plot(SPECTRAL_GRID_NM, double_phase_reflectance(n_outer, n_film, n_base, d, SPECTRAL_GRID_NM, c),
+                "r", lw=0.8, alpha=0.7, label="double-phase formula")
+        ax.plot([650, 510, 475], double_phase_reflectance(n_outer, n_film, n_base, d, np.array([650, 510, 475.0]), c),
+                "ro", ms=4, label="its 3 samples")
         ax.set_title(f"{d:g} nm, {angle:g} deg", fontsize=8)
         ax.set_xlabel("wavelength (nm)")
         ax.legend(fontsize=6)
     axes[0].set_ylabel("reflectance")
-    ctx.figure(fig, f"{title}: spectra at a few points (the RGB models have no spectrum; the seed "
+    ctx.figure(fig, f"{title}: spectra at a few points (the RGB models have no spectrum; the double-phase "
                     "formula's is shown with its three samples)")
 
 
@@ -141,7 +141,7 @@ def _study_outcome(studies) -> Outcome:
                 title="Thin-film approximations on the snake's film",
                 model="Belcour-Barla as MaterialX computes it (MaterialX / OpenPBR / Standard Surface), "
                       "Cycles' thin film (Blender >= 4.2, from its source, held to bpy renders), glTF "
-                      "KHR_materials_iridescence, the seed code",
+                      "KHR_materials_iridescence, the Padrón-Griffe et al. 2023's double-phase film",
                 reference="bsdflab's exact spectral film (guanine 1.83 on keratin 1.5515, air outside), "
                           "D65, CIE 1931 2 deg, linear sRGB, CIEDE2000 (colour-science)",
                 statistic="largest fraction of the angle x thickness map with dE00 > 2",

@@ -1,5 +1,5 @@
 """Thin films: bsdflab's exact Airy / recursive-Airy optics against tmm and colour-science,
-and the seed's published counter-example. (The approximations study: approximations.py.)"""
+and the double-phase formula's counter-example. (The approximations study: approximations.py.)"""
 from __future__ import annotations
 
 import warnings
@@ -127,24 +127,25 @@ def _colour_sweep(ctx):
     return Outcome(worst <= ROUND_OFF, worst, ROUND_OFF, "<=", f"max |dR| {worst:.2e}")
 
 
-@REGISTRY.check(name="films/seed-counter-example", family="films",
-                title="The seed's double-counted phase, reproduced and corrected",
-                model="bsdflab.optics.film_reflectance and the seed's formula (reference/approximations)",
-                reference="tmm; DIGEST.md's numbers (exact 0.0218, seed 0.0854)",
+@REGISTRY.check(name="films/double-phase-counter-example", family="films",
+                title="The double-counted reflection phase (Padrón-Griffe et al. 2023's code), "
+                      "reproduced and corrected",
+                model="bsdflab.optics.film_reflectance and the double-phase formula (reference/approximations)",
+                reference="tmm (exact 0.0218; the double-phase formula gives 0.0854)",
                 statistic="|R_bsdflab - R_tmm| at n = 1 / 1.56 / 1.83, 400 nm, 475 nm, 0.4 rad",
-                tolerance="1e-14 (round-off); the seed's value must round to 0.0854 and tmm's to 0.0218",
+                tolerance="1e-14 (round-off); the double-phase value must round to 0.0854 and tmm's to 0.0218",
                 effort=effort({}, {}), seed=0, requires=("tmm",))
-def _seed_counter_example(ctx):
+def _double_phase_counter_example(ctx):
     import tmm
 
     from bsdflab.optics import film_reflectance
-    from bsdflab.reference.approximations import seed_reflectance
+    from bsdflab.reference.approximations import double_phase_reflectance
 
     n0, n1, n2, d, wl, theta = 1.0, 1.56, 1.83, 400.0, 475.0, 0.4
     exact = tmm.unpolarized_RT([n0, n1, n2], [np.inf, d, np.inf], theta, wl)["R"]
-    seed = float(seed_reflectance(n0, n1, n2, d, wl, np.cos(theta)))
+    doubled = float(double_phase_reflectance(n0, n1, n2, d, wl, np.cos(theta)))
     ours = float(film_reflectance((n0, n1, d, n2), wl, theta))
     err = abs(ours - exact)
-    ok = err < 1e-14 and round(exact, 4) == 0.0218 and round(seed, 4) == 0.0854
-    return Outcome(ok, err, 1e-14, "<", f"tmm {exact:.4f}, seed {seed:.4f}, bsdflab {ours:.4f}",
-                   {"tmm": exact, "seed": seed, "bsdflab": ours})
+    ok = err < 1e-14 and round(exact, 4) == 0.0218 and round(doubled, 4) == 0.0854
+    return Outcome(ok, err, 1e-14, "<", f"tmm {exact:.4f}, double phase {doubled:.4f}, bsdflab {ours:.4f}",
+                   {"tmm": exact, "double_phase": doubled, "bsdflab": ours})

@@ -1,5 +1,5 @@
-// The Lambertian reflector of the seed's appendix A. Its smooth conductor and dielectric
-// are SmoothInterface objects with a ConductorTerm / DielectricTerm (interfaces.h).
+// The Lambertian reflector. The smooth conductor and dielectric are SmoothInterface
+// objects with a ConductorTerm / DielectricTerm (interfaces.h).
 #pragma once
 #include "bsdf.h"
 

@@ -5,7 +5,7 @@
 //   t_s = 2 n_i cos_i / (n_i cos_i + n_t cos_t)
 //   t_p = 2 n_i cos_i / (n_t cos_i + n_i cos_t)
 // Indices are n + i k with k >= 0 for absorption. The sign of r already carries the
-// reflection phase; adding a separate pi shift double-counts it (the seed's bug).
+// reflection phase; adding a separate pi shift double-counts it (docs/validation.md).
 #pragma once
 #include <complex>
 

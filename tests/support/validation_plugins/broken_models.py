@@ -60,10 +60,11 @@ class SkewedSampler(ScaledBSDF):
 
 
 def double_counted_film(n0, n1, n2, d_nm, wavelength_nm, theta):
-    """The seed's film formula (an extra pi on top of the signed amplitudes)."""
-    from bsdflab.reference.approximations import seed_reflectance
+    """The double-phase film formula of Padrón-Griffe et al. 2023's code (an extra pi on top of
+    the signed amplitudes)."""
+    from bsdflab.reference.approximations import double_phase_reflectance
 
-    return seed_reflectance(n0, n1, n2, d_nm, wavelength_nm, np.cos(theta))
+    return double_phase_reflectance(n0, n1, n2, d_nm, wavelength_nm, np.cos(theta))
 
 
 def checks():
@@ -79,7 +80,7 @@ def checks():
             "Diffuse(0.5) sampling cos^0.9 (broken on purpose)"),
         REGISTRY["films/tmm/single-film"].with_model(
             lambda: double_counted_film, "films/tmm/single-film [broken: double-counted phase]",
-            "the seed's double-counted phase (broken on purpose)"),
+            "the double-counted phase (broken on purpose)"),
     ]
     if importlib.util.find_spec("mitsuba") is None:
         return out
