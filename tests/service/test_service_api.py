@@ -248,4 +248,5 @@ def test_api_key_guards_work_and_deletes(tmp_path):
         assert c.post("/v1/bsdf/eval", json=body, headers={"Authorization": "Bearer s3cret"}).status_code == 200
         assert c.post("/v1/tables", json=TINY_TABLE).status_code == 401
         assert c.delete(f"/v1/jobs/{'0' * 32}").status_code == 401
-        assert c.get("/v1/presets").status_code == 200 and c.get("/v1/version").json()["api_key_required"]
+        assert c.get("/v1/presets").status_code == 401 and c.get("/healthz").status_code == 200
+        assert c.get("/v1/version", headers={"X-API-Key": "s3cret"}).json()["api_key_required"]

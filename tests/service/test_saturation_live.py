@@ -1,0 +1,106 @@
+"""A real ``bsdflab serve`` under more heavy requests than its heavy pool: health answers at
+once throughout, the excess gets 429 with Retry-After, nothing 5xx, memory stays bounded;
+a request past its compute deadline, or whose client leaves, stops computing.
+Loopback only, bounded loops (docs/service.md, "Bounded work")."""
+from __future__ import annotations
+
+import os
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import httpx2 as httpx
+import pytest
+from support.service_process import ServiceProcess
+
+HEAVY = 2
+# one pair of the layered preset at 16 384 walks: about a CPU-second, within every limit
+HEAVY_EVAL = {"preset": "xenopeltis", "theta_i": [30], "theta_o": [40], "samples": 16_384}
+# 16 pairs: about 16 CPU-seconds, past a 1 s deadline
+LONG_EVAL = {"preset": "xenopeltis", "theta_i": [30], "theta_o": [float(x) for x in range(5, 85, 5)],
+             "samples": 16_384}
+
+
+def rss_mib(pid: int) -> float:
+    with open(f"/proc/{pid}/status") as f:
+        return next(int(line.split()[1]) for line in f if line.startswith("VmRSS:")) / 1024
+
+
+def cpu_s(pid: int) -> float:
+    fields = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    s = ServiceProcess(tmp_path_factory.mktemp("saturation"), env={
+        "BSDFLAB_HEAVY_CONCURRENCY": str(HEAVY), "BSDFLAB_COMPUTE_DEADLINE_S": "1", "BSDFLAB_THREADS": "1"})
+    yield s
+    s.stop()
+
+
+def test_health_never_starves_and_the_excess_gets_429(server):
+    """Before: /healthz shared the request thread pool with evaluations (48 heavy requests
+    delayed it 10-17 s), and every heavy request queued instead of being refused."""
+    pid = server.process.pid
+    httpx.post(f"{server.url}/v1/bsdf/eval", json=HEAVY_EVAL, timeout=60)   # warm the model cache
+    rss_before = rss_mib(pid)
+    health, stop = [], threading.Event()
+
+    def probe():
+        with httpx.Client(timeout=10) as c:
+            while not stop.is_set():
+                t = time.perf_counter()
+                status = c.get(f"{server.url}/healthz").status_code
+                health.append((status, time.perf_counter() - t))
+                time.sleep(0.02)
+
+    def heavy(_):
+        r = httpx.post(f"{server.url}/v1/bsdf/eval", json=HEAVY_EVAL, timeout=60)
+        return r.status_code, r.headers.get("retry-after")
+
+    prober = threading.Thread(target=probe)
+    prober.start()
+    try:
+        with ThreadPoolExecutor(16) as pool:
+            answers = [a for _ in range(3) for a in pool.map(heavy, range(16))]   # three bursts of 16
+    finally:
+        stop.set()
+        prober.join()
+    codes = [code for code, _ in answers]
+    worst = max(t for _, t in health)
+    rss_after = rss_mib(pid)
+    print(f"\nheavy requests {len(codes)}: 200 x{codes.count(200)}, 429 x{codes.count(429)}; "
+          f"/healthz {len(health)} probes, max {worst * 1000:.0f} ms; RSS {rss_before:.0f} -> {rss_after:.0f} MiB")
+    assert set(codes) <= {200, 429} and codes.count(429) > 0 and codes.count(200) >= HEAVY
+    assert all(retry is not None and int(retry) >= 1 for code, retry in answers if code == 429)
+    assert all(status == 200 for status, _ in health) and worst < 1.0
+    assert rss_after - rss_before < 300
+
+
+def test_a_request_past_its_deadline_stops(server):
+    """Before: no deadline (2^24 walks of xenopeltis, allowed, were 15 CPU-minutes)."""
+    t = time.perf_counter()
+    r = httpx.post(f"{server.url}/v1/bsdf/eval", json=LONG_EVAL, timeout=60)
+    assert r.status_code == 422 and "BSDFLAB_COMPUTE_DEADLINE_S" in r.text
+    assert time.perf_counter() - t < 6
+
+
+def test_a_client_that_leaves_cancels_its_computation(tmp_path):
+    """Before: 8 clients that timed out left 9.5 CPU-seconds of work running."""
+    server = ServiceProcess(tmp_path, env={"BSDFLAB_HEAVY_CONCURRENCY": str(HEAVY),
+                                           "BSDFLAB_COMPUTE_DEADLINE_S": "120", "BSDFLAB_THREADS": "1"})
+    try:
+        pid = server.process.pid
+        for seed in range(HEAVY):
+            with pytest.raises(httpx.TimeoutException):
+                httpx.post(f"{server.url}/v1/bsdf/eval", json={**LONG_EVAL, "seed": seed}, timeout=0.5)
+        time.sleep(2.5)          # the C++ call in progress ends (about a CPU-second); no next one starts
+        before = cpu_s(pid)
+        time.sleep(2.0)
+        used = cpu_s(pid) - before
+        print(f"\nCPU-seconds used in the 2 s after the clients left: {used:.2f}")
+        assert used < 0.5
+        assert httpx.get(f"{server.url}/healthz", timeout=2).status_code == 200
+    finally:
+        server.stop()
