@@ -115,6 +115,5 @@ def evaluate_in_chunks(bsdf, wi: np.ndarray, wo: np.ndarray, wavelengths, sample
         part = slices.evaluate(bsdf, wi[start:start + step], wo[start:start + step], wavelengths, samples, seed)
         values.append(part.values)
         errors.append(part.stderr)
-    check_cancelled()
     stderr = None if errors[0] is None else np.concatenate(errors)
     return slices.Values(np.concatenate(values), stderr)

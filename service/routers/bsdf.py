@@ -180,7 +180,6 @@ async def lobe(body: LobeRequest, request: Request, settings: SettingsDep, jobs:
             _check_walks(settings, bsdf, body.resolution**2, body.samples)
             x, inside, v = lobe_views.hemisphere(bsdf, body.theta_i, body.resolution, body.samples, body.seed)
             out.hemisphere = _hemisphere_view(x, inside, v)
-        check_cancelled()
         return _json_answer(out)
 
     return await heavy.run(request, compute)

@@ -1,6 +1,6 @@
 """A real ``bsdflab serve`` under more heavy requests than its heavy pool: health answers at
 once throughout, the excess gets 429 with Retry-After, nothing 5xx, memory stays bounded;
-a request past its compute deadline, or whose client leaves, stops computing.
+a request whose client leaves stops computing (the deadline: test_heavy_pool.py).
 Loopback only, bounded loops (docs/service.md, "Bounded work")."""
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from support.service_process import ServiceProcess
 HEAVY = 2
 # one pair of the layered preset at 16 384 walks: about a CPU-second, within every limit
 HEAVY_EVAL = {"preset": "xenopeltis", "theta_i": [30], "theta_o": [40], "samples": 16_384}
-# 16 pairs: about 16 CPU-seconds, past a 1 s deadline
+# 16 pairs: about 16 CPU-seconds
 LONG_EVAL = {"preset": "xenopeltis", "theta_i": [30], "theta_o": [float(x) for x in range(5, 85, 5)],
              "samples": 16_384}
 
@@ -34,7 +34,7 @@ def cpu_s(pid: int) -> float:
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     s = ServiceProcess(tmp_path_factory.mktemp("saturation"), env={
-        "BSDFLAB_HEAVY_CONCURRENCY": str(HEAVY), "BSDFLAB_COMPUTE_DEADLINE_S": "1", "BSDFLAB_THREADS": "1"})
+        "BSDFLAB_HEAVY_CONCURRENCY": str(HEAVY), "BSDFLAB_COMPUTE_DEADLINE_S": "60", "BSDFLAB_THREADS": "1"})
     yield s
     s.stop()
 
@@ -76,14 +76,6 @@ def test_health_never_starves_and_the_excess_gets_429(server):
     assert all(retry is not None and int(retry) >= 1 for code, retry in answers if code == 429)
     assert all(status == 200 for status, _ in health) and worst < 1.0
     assert rss_after - rss_before < 300
-
-
-def test_a_request_past_its_deadline_stops(server):
-    """Before: no deadline (2^24 walks of xenopeltis, allowed, were 15 CPU-minutes)."""
-    t = time.perf_counter()
-    r = httpx.post(f"{server.url}/v1/bsdf/eval", json=LONG_EVAL, timeout=60)
-    assert r.status_code == 422 and "BSDFLAB_COMPUTE_DEADLINE_S" in r.text
-    assert time.perf_counter() - t < 6
 
 
 def test_a_client_that_leaves_cancels_its_computation(tmp_path):
