@@ -29,8 +29,8 @@ def _default_data_dir() -> Path:
 class Settings(LibrarySettings):
     model_config = SettingsConfigDict(env_prefix="BSDFLAB_", extra="ignore", env_ignore_empty=True)
 
-    host: str = "127.0.0.1"
-    port: int = Field(8000, ge=0, le=65535)
+    host: str = Field("127.0.0.1", description="address to listen on (0.0.0.0: every interface)")
+    port: int = Field(8000, ge=0, le=65535, description="port to listen on (0: a free one)")
     data_dir: Path = Field(default_factory=_default_data_dir,
                            description="SQLite job store and the content-addressed artefacts")
     workers: int | None = Field(None, ge=1, le=1024,
@@ -103,7 +103,7 @@ def markdown_table() -> str:
     rows = ["| variable | default | meaning |", "|---|---|---|"]
     for name, field in Settings.model_fields.items():
         if field.default_factory is not None:
-            default = {"data_dir": "user data folder /service", "heavy_concurrency": "the cores"}.get(name, "")
+            default = {"data_dir": "user data folder /service", "heavy_concurrency": "the cores"}.get(name, "unset")
         else:
             default = "unset" if field.default is None else f"`{field.default}`"
             if isinstance(field.default, int) and not isinstance(field.default, bool) and field.default >= 1 << 16:
