@@ -16,9 +16,12 @@ from typing import Any
 
 from fastapi import HTTPException
 
+from bsdflab.util import args as check
+
 # Keys that carry a file name anywhere in the Python API's dicts (models, scene options).
 PATH_FIELDS = frozenset({"path", "table", "file", "filename", "scene_file", "mesh", "mesh_file",
-                         "environment_map", "envmap", "env_map", "texture", "image"})
+                         "environment_map", "envmap", "env_map", "texture", "image", "directory", "folder",
+                         "dir", "url", "uri", "measured_file", "data_file"})
 REFUSED = ("server paths are not accepted over HTTP: name a table by its content hash, "
            '{"type": "table", "hash": "<64 hex digits>"} (GET /v1/tables lists them)')
 TABLE_FIELDS = frozenset({"type", "hash", "film_lookup"})
@@ -33,8 +36,13 @@ def resolve(value: Any, table_file) -> Any:
     """``value`` (a request's JSON) with every ``{"type": "table", "hash": h}`` replaced by
     the store's table file ``table_file(h)`` (a Path, or None when the store has no such
     table); any other path-bearing field is refused (422, one message)."""
+    check.nesting("the request", value)   # without recursion: the walk below recurses
+    return _resolve(value, table_file)
+
+
+def _resolve(value: Any, table_file) -> Any:
     if isinstance(value, list):
-        return [resolve(v, table_file) for v in value]
+        return [_resolve(v, table_file) for v in value]
     if not isinstance(value, dict):
         return value
     if value.get("type") == "table":
@@ -43,7 +51,7 @@ def resolve(value: Any, table_file) -> Any:
     for k, v in value.items():
         if k in PATH_FIELDS and v is not None and not isinstance(v, (bool, int, float)):
             refuse()
-        out[k] = resolve(v, table_file)
+        out[k] = _resolve(v, table_file)
     return out
 
 

@@ -85,3 +85,13 @@ def test_a_table_is_named_by_its_hash(served):
     for bad in ("0" * 64, key.upper(), key[:-1], "../" + key, key + "\x00"):
         r = client.post("/v1/bsdf/eval", json={"model": {"type": "table", "hash": bad}, **ANGLES})
         assert r.status_code == 422 and "/" not in r.json()["detail"].replace("/v1/tables", ""), r.text
+
+
+def test_hostile_nesting_is_a_clean_422(served):
+    """The walk that looks for paths must not be a way to exhaust the stack (a 500)."""
+    client, _, _ = served
+    deep: object = 0.5
+    for _ in range(900):
+        deep = [deep]
+    r = client.post("/v1/bsdf/eval", json={"model": {"type": "diffuse", "reflectance": deep}, **ANGLES})
+    assert r.status_code == 422 and "nest" in r.text
