@@ -5,9 +5,15 @@ second process that sends, with ``--concurrency`` connections, at most ``--reque
 requests per scenario (and stops after ``--seconds``):
   healthz   GET /healthz (the app's floor: routing, JSON, uvicorn)
   eval/M    POST /v1/bsdf/eval with 1000 direction pairs of model M
+  big/json, big/npy   POST /v1/bsdf/eval with 100 000 pairs of a diffuse model, answered
+                      as JSON and as .npy (Accept: application/x-npy)
+  saturated           /healthz while 2 x the heavy pool's size of clients post layered
+                      evaluations without pause (the excess gets 429)
 and, in this process, the same evaluation through the Python API (``lobe_views.evaluate``
 on the same arrays). Printed: throughput and p50/p99 latency per scenario, and the ratios
-HTTP p50 / direct p50 (goal: < 2 for a 1000-pair request) and eval p50 / healthz p50.
+HTTP p50 / direct p50 (goal: < 2 for a 1000-pair request), eval p50 / healthz p50,
+JSON / .npy for 100 000 pairs, /healthz p99 saturated / idle, and the heavy evaluations'
+throughput at the concurrency cap with the share answered 429.
 Models: "diffuse" (the cheapest evaluation: the HTTP cost at its most visible) and
 "thinfilm" (a rough dielectric with the guanine film, spectral: a realistic query).
 
@@ -30,6 +36,9 @@ from pathlib import Path
 import numpy as np
 
 PAIRS = 1000
+BIG_PAIRS = 100_000
+HEAVY = 2   # the server's heavy pool (BSDFLAB_HEAVY_CONCURRENCY) in this run
+HEAVY_EVAL = {"preset": "xenopeltis", "theta_i": [30], "theta_o": [40], "samples": 4096}
 MODELS = {
     "diffuse": {"type": "diffuse", "reflectance": [0.5, 0.4, 0.3]},
     "thinfilm": {"type": "roughdielectric", "alpha": 0.08, "int_ior": 1.5515, "ext_ior": 1.000277,
@@ -78,7 +87,59 @@ def load(url: str, requests: int, concurrency: int, seconds: float) -> dict:
             with ThreadPoolExecutor(concurrency) as pool:
                 latencies = [x for x in pool.map(one, range(requests)) if x is not None]
             results[name] = stats(latencies, time.perf_counter() - start)
+        results.update(big(client, min(requests, 10)))
+        results.update(saturated(url, client, seconds))
     return results
+
+
+def big(client, requests: int) -> dict:
+    """100 000 pairs answered as JSON and as .npy, one request at a time."""
+    body = json.dumps({"model": MODELS["diffuse"], "theta_i": [30.0],
+                       "theta_o": np.linspace(0.0, 80.0, BIG_PAIRS).tolist()})
+    out = {}
+    for name, accept in (("big/json", "application/json"), ("big/npy", "application/x-npy")):
+        latencies, size = [], 0
+        start = time.perf_counter()
+        for _ in range(requests):
+            t = time.perf_counter()
+            r = client.post("/v1/bsdf/eval", content=body, headers={"content-type": "application/json",
+                                                                     "accept": accept})
+            r.raise_for_status()
+            latencies.append(time.perf_counter() - t)
+            size = len(r.content)
+        out[name] = {**stats(latencies, time.perf_counter() - start), "bytes": size}
+    return out
+
+
+def saturated(url: str, client, seconds: float) -> dict:
+    """/healthz latency while 2 x HEAVY clients keep the heavy pool full."""
+    import threading
+
+    import httpx2 as httpx
+
+    stop, codes, lock = threading.Event(), {"200": 0, "429": 0, "other": 0}, threading.Lock()
+
+    def heavy():
+        with httpx.Client(base_url=url, timeout=120) as c:
+            while not stop.is_set():
+                code = c.post("/v1/bsdf/eval", json=HEAVY_EVAL).status_code
+                with lock:
+                    codes[str(code) if code in (200, 429) else "other"] += 1
+
+    workers = [threading.Thread(target=heavy) for _ in range(2 * HEAVY)]
+    for w in workers:
+        w.start()
+    latencies, start = [], time.perf_counter()
+    while time.perf_counter() - start < seconds:
+        t = time.perf_counter()
+        client.get("/healthz").raise_for_status()
+        latencies.append(time.perf_counter() - t)
+        time.sleep(0.01)
+    wall = time.perf_counter() - start
+    stop.set()
+    for w in workers:
+        w.join()
+    return {"saturated": {**stats(latencies, wall), "heavy_ok_per_s": codes["200"] / wall, **codes}}
 
 
 # -- the direct calls (this process) ----------------------------------------------------------
@@ -113,10 +174,11 @@ def main() -> int:
         return 0
 
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
-    from service_process import ServiceProcess
+    from support.service_process import ServiceProcess
 
     with tempfile.TemporaryDirectory() as data:
-        server = ServiceProcess(Path(data), workers=1)
+        server = ServiceProcess(Path(data), workers=1, env={"BSDFLAB_HEAVY_CONCURRENCY": str(HEAVY),
+                                                            "BSDFLAB_COMPUTE_DEADLINE_S": "60"})
         try:
             http = {c: json.loads(subprocess.run(
                 [sys.executable, __file__, "--load", server.url, "--requests", str(args.requests),
@@ -131,6 +193,13 @@ def main() -> int:
     for c, results in http.items():
         for name, s in results.items():
             print(f"{name:<16} {f'http, {c} in flight':<18} {s['per_s']:9.1f} {s['p50_ms']:9.2f} {s['p99_ms']:9.2f}")
+    one = http[1]
+    print(f"100 000 pairs: JSON {one['big/json']['bytes'] / 2**20:.1f} MiB, .npy {one['big/npy']['bytes'] / 2**20:.1f} "
+          f"MiB; p50 JSON / .npy = {one['big/json']['p50_ms'] / one['big/npy']['p50_ms']:.2f}")
+    sat = one["saturated"]
+    print(f"saturated ({2 * HEAVY} clients on {HEAVY} heavy slots): /healthz p99 {sat['p99_ms']:.2f} ms = "
+          f"{sat['p99_ms'] / one['healthz']['p99_ms']:.2f} x idle; heavy evals {sat['heavy_ok_per_s']:.2f}/s at the cap, "
+          f"{sat['429']} answered 429, {sat['200']} 200, {sat['other']} other")
     for name, s in here.items():
         print(f"{name:<16} {'direct':<18} {s['per_s']:9.1f} {s['p50_ms']:9.2f} {s['p99_ms']:9.2f}")
     print("ratios, one request in flight (p50 latency):")

@@ -88,12 +88,16 @@ def fuzz(url: str, examples_per_operation: int) -> dict:
 def stateful(url: str, steps: int) -> list[str]:
     """schemathesis' state machine over the schema's links (bounded)."""
     schema = schemathesis.openapi.from_url(f"{url}/openapi.json")
-    machine = schema.as_state_machine()
+
+    class Machine(schema.as_state_machine()):
+        def validate_response(self, response, case, additional_checks=None, **kwargs):
+            case.validate_response(response, additional_checks=additional_checks, excluded_checks=EXCLUDED,
+                                   transport_kwargs=kwargs)
+
     failures: list[str] = []
-    machine.TestCase.settings = settings(max_examples=steps, stateful_step_count=5, deadline=None, database=None,
-                                         derandomize=True, suppress_health_check=list(HealthCheck))
     try:
-        machine.run(settings=machine.TestCase.settings)
+        Machine.run(settings=settings(max_examples=steps, stateful_step_count=5, deadline=None, database=None,
+                                      derandomize=True, suppress_health_check=list(HealthCheck)))
     except Exception as e:   # noqa: BLE001
         failures.append(str(e)[:2000])
     return failures
