@@ -4,13 +4,21 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, Strict
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict
 from pydantic.json_schema import SkipJsonSchema
 
-# Integers are strict: JSON true/false or 3.0 are not integers (a seed of false was 0).
-Int = Annotated[int, Strict()]
-Seed = Annotated[int, Strict(), Field(ge=0, lt=1 << 64, description="random seed (uint64)")]
-Count = Annotated[int, Strict(), Field(ge=1, le=1 << 24)]
+
+
+def _integral(value):
+    """JSON Schema counts 3.0 as an integer; a bool or a string is not one."""
+    return int(value) if isinstance(value, float) and value.is_integer() else value
+
+
+# Integers are strict (true/false and "3" are refused: a seed of false was 0), except that
+# an integral number such as 3.0 is one, as JSON Schema says.
+Int = Annotated[int, BeforeValidator(_integral), Strict()]
+Seed = Annotated[Int, Field(ge=0, lt=1 << 64, description="random seed (uint64)")]
+Count = Annotated[Int, Field(ge=1, le=1 << 24)]
 Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 Floats = Annotated[list[float], Field(min_length=1)]
 HASH_PATTERN = r"^[0-9a-f]{64}$"

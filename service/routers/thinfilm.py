@@ -36,6 +36,10 @@ async def spectrum(body: ThinFilmRequest, request: Request, settings: SettingsDe
     substrate (real indices): unpolarised R and T at each angle and wavelength, and the
     reflected colour (CIE 1931 2 deg, D65, linear sRGB) at each angle, integrated on a grid
     fine enough for the film's fringes."""
+    return await heavy.run(request, _spectrum, body, settings)
+
+
+def _spectrum(body: ThinFilmRequest, settings: Settings) -> Response:
     angles = DEFAULT_ANGLES if body.angles is None else np.asarray(body.angles, dtype=float)
     wavelengths = DEFAULT_WAVELENGTHS if body.wavelengths is None else np.asarray(body.wavelengths, dtype=float)
     over_limit(settings, "limit_angles", len(angles), "angles")

@@ -54,7 +54,8 @@ def test_the_schema_says_model_and_preset_exclude_each_other(client):
     ("/v1/renders", {"scene": ""}),
     ("/v1/bsdf/eval", {"model": DIFFUSE, **ANGLES, "seed": False}),
     ("/v1/bsdf/eval", {"model": DIFFUSE, **ANGLES, "samples": True}),
-    ("/v1/bsdf/eval", {"model": DIFFUSE, **ANGLES, "seed": 1.0}),
+    ("/v1/bsdf/eval", {"model": DIFFUSE, **ANGLES, "seed": "1"}),
+    ("/v1/bsdf/eval", {"model": DIFFUSE, **ANGLES, "seed": 1.5}),
     ("/v1/bsdf/lobe", {"model": DIFFUSE, "points": True}),
     ("/v1/renders", {"scene": "furnace", "width": True}),
     ("/v1/tables", {"model": DIFFUSE, "seed": False}),
@@ -64,6 +65,12 @@ def test_empty_and_non_integer_values_are_refused_by_the_schema(client, route, b
     r = client.post(route, json=body)
     assert r.status_code == 422, r.text
     assert isinstance(r.json()["detail"], list)     # pydantic's, naming the field
+
+
+def test_an_integral_number_is_an_integer(client):
+    """JSON Schema's "integer" includes 3.0: a schema-valid request must not be refused for it."""
+    r = client.post("/v1/bsdf/eval", json={"model": DIFFUSE, **ANGLES, "seed": 3.0})
+    assert r.status_code == 200, r.text
 
 
 def test_empty_query_values_are_refused(client):
