@@ -6,6 +6,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, HTTPException, Path
 from fastapi.responses import FileResponse, JSONResponse
 
+from bsdflab.service import render_checks
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
 from bsdflab.service.job_service import JobService
@@ -44,6 +45,7 @@ def create_render(body: RenderRequest, jobs: JobsDep, settings: SettingsDep, cli
     found = jobs.cached(KIND, key) or jobs.adopt(KIND, key, request)
     if found is not None:
         return render_info(jobs, key, request, found)
+    render_checks.check(request)   # what the worker would refuse, refused now (422)
     row, _ = jobs.submit(KIND, request, key, client)
     info = job_info(jobs.job(row["id"]))
     return JSONResponse(info.model_dump(mode="json"), status_code=202, headers={"Location": info.links["self"]})
