@@ -11,7 +11,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import httpx2 as httpx
 import pytest
-from support.service_process import ServiceProcess
+from support.service_process import ServiceProcess, wait_state
 
 HEAVY = 2
 # one pair of the layered preset at 16 384 walks: about a CPU-second, within every limit
@@ -33,7 +33,7 @@ def cpu_s(pid: int) -> float:
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
-    s = ServiceProcess(tmp_path_factory.mktemp("saturation"), env={
+    s = ServiceProcess(tmp_path_factory.mktemp("saturation"), log_level="info", env={
         "BSDFLAB_HEAVY_CONCURRENCY": str(HEAVY), "BSDFLAB_COMPUTE_DEADLINE_S": "60", "BSDFLAB_THREADS": "1"})
     yield s
     s.stop()
@@ -76,6 +76,31 @@ def test_health_never_starves_and_the_excess_gets_429(server):
     assert all(retry is not None and int(retry) >= 1 for code, retry in answers if code == 429)
     assert all(status == 200 for status, _ in health) and worst < 1.0
     assert rss_after - rss_before < 300
+
+
+def test_log_lines_survive_concurrent_table_requests(server):
+    """Before: 32 concurrent table-model requests left the server's stdout and stderr on a
+    deleted temporary file (process-wide dup2 from many threads): later lines were lost."""
+    table = {"model": {"type": "diffuse", "reflectance": 0.5}, "grid": {"n_theta_i": 2, "n_theta_o": 4, "n_phi": 3}}
+    job = httpx.post(f"{server.url}/v1/tables", json=table, timeout=60).json()
+    wait_state(server.url, job["id"], ("done",))
+    fd_targets = [os.readlink(f"/proc/{server.process.pid}/fd/{fd}") for fd in (1, 2)]
+
+    def table_eval(i):
+        body = {"model": {"type": "table", "hash": job["hash"], "film_lookup": bool(i % 2)},
+                "theta_i": [10], "theta_o": [20 + i % 7]}
+        return httpx.post(f"{server.url}/v1/bsdf/eval", json=body, timeout=60).status_code
+
+    with ThreadPoolExecutor(32) as pool:
+        codes = list(pool.map(table_eval, range(32)))
+    assert set(codes) <= {200, 429}
+    assert [os.readlink(f"/proc/{server.process.pid}/fd/{fd}") for fd in (1, 2)] == fd_targets
+    marker = f"after-{job['id'][:8]}"
+    httpx.get(f"{server.url}/healthz", headers={"X-Request-ID": marker})
+    end = time.monotonic() + 10
+    while marker not in server.output():
+        assert time.monotonic() < end, server.output()[-2000:]
+        time.sleep(0.1)
 
 
 def test_a_client_that_leaves_cancels_its_computation(tmp_path):
