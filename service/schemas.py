@@ -26,7 +26,8 @@ JOB_ID_PATTERN = r"^[0-9a-f]{32}$"
 
 
 class Request(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    # strict: a bool is neither a number nor an integer ([false] was the angle 0)
+    model_config = ConfigDict(extra="forbid", strict=True)
 
 
 class ModelSpec(Request):
@@ -34,7 +35,7 @@ class ModelSpec(Request):
     ``model`` and ``preset``, as the schema's ``oneOf`` says). A table is named by its hash,
     ``{"type": "table", "hash": ...}``: no request names a server path."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={
+    model_config = ConfigDict(extra="forbid", strict=True, json_schema_extra={
         "oneOf": [{"required": ["model"], "not": {"required": ["preset"]}},
                   {"required": ["preset"], "not": {"required": ["model"]}}]})
 

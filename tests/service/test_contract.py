@@ -48,6 +48,9 @@ def test_the_schema_says_model_and_preset_exclude_each_other(client):
 @pytest.mark.parametrize("route, body", [
     ("/v1/thinfilm/spectrum", {"angles": []}),
     ("/v1/thinfilm/spectrum", {"wavelengths": []}),
+    ("/v1/thinfilm/spectrum", {"angles": [False]}),
+    ("/v1/thinfilm/spectrum", {"film_ior": True}),
+    ("/v1/bsdf/eval", {"model": DIFFUSE, "wi": [[0, 0, True]], "wo": [[0, 0, 1]]}),
     ("/v1/bsdf/eval", {"model": DIFFUSE, "theta_i": [], "theta_o": [0]}),
     ("/v1/bsdf/eval", {"model": DIFFUSE, "wi": [], "wo": [[0, 0, 1]]}),
     ("/v1/bsdf/eval", {"preset": "", **ANGLES}),
