@@ -37,7 +37,6 @@ import numpy as np
 
 PAIRS = 1000
 BIG_PAIRS = 100_000
-HEAVY = 2   # the server's heavy pool (BSDFLAB_HEAVY_CONCURRENCY) in this run
 HEAVY_EVAL = {"preset": "xenopeltis", "theta_i": [30], "theta_o": [40], "samples": 4096}
 MODELS = {
     "diffuse": {"type": "diffuse", "reflectance": [0.5, 0.4, 0.3]},
@@ -61,7 +60,7 @@ def stats(latencies: list[float], wall: float) -> dict:
 
 
 # -- the load generator (second process) ------------------------------------------------------
-def load(url: str, requests: int, concurrency: int, seconds: float) -> dict:
+def load(url: str, requests: int, concurrency: int, seconds: float, heavy: int) -> dict:
     import httpx2 as httpx
 
     wi, wo = directions()
@@ -88,7 +87,7 @@ def load(url: str, requests: int, concurrency: int, seconds: float) -> dict:
                 latencies = [x for x in pool.map(one, range(requests)) if x is not None]
             results[name] = stats(latencies, time.perf_counter() - start)
         results.update(big(client, min(requests, 10)))
-        results.update(saturated(url, client, seconds))
+        results.update(saturated(url, client, seconds, heavy))
     return results
 
 
@@ -111,8 +110,8 @@ def big(client, requests: int) -> dict:
     return out
 
 
-def saturated(url: str, client, seconds: float) -> dict:
-    """/healthz latency while 2 x HEAVY clients keep the heavy pool full."""
+def saturated(url: str, client, seconds: float, heavy_slots: int) -> dict:
+    """/healthz latency while 2 x the heavy pool's size of clients keep it full."""
     import threading
 
     import httpx2 as httpx
@@ -126,7 +125,7 @@ def saturated(url: str, client, seconds: float) -> dict:
                 with lock:
                     codes[str(code) if code in (200, 429) else "other"] += 1
 
-    workers = [threading.Thread(target=heavy) for _ in range(2 * HEAVY)]
+    workers = [threading.Thread(target=heavy) for _ in range(2 * heavy_slots)]
     for w in workers:
         w.start()
     latencies, start = [], time.perf_counter()
@@ -168,21 +167,23 @@ def main() -> int:
     p.add_argument("--concurrency", type=int, default=4, help="connections in flight (default 4)")
     p.add_argument("--seconds", type=float, default=20.0, help="time cap per scenario (default 20)")
     p.add_argument("--load", metavar="URL", help=argparse.SUPPRESS)   # the load-generator process
+    p.add_argument("--heavy", type=int, default=None, help=argparse.SUPPRESS)
     args = p.parse_args()
+    heavy = args.heavy or args.concurrency   # the server's heavy pool: the eval scenarios' clients all fit
     if args.load:
-        print(json.dumps(load(args.load, args.requests, args.concurrency, args.seconds)))
+        print(json.dumps(load(args.load, args.requests, args.concurrency, args.seconds, heavy)))
         return 0
 
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
     from support.service_process import ServiceProcess
 
     with tempfile.TemporaryDirectory() as data:
-        server = ServiceProcess(Path(data), workers=1, env={"BSDFLAB_HEAVY_CONCURRENCY": str(HEAVY),
+        server = ServiceProcess(Path(data), workers=1, env={"BSDFLAB_HEAVY_CONCURRENCY": str(heavy),
                                                             "BSDFLAB_COMPUTE_DEADLINE_S": "60"})
         try:
             http = {c: json.loads(subprocess.run(
                 [sys.executable, __file__, "--load", server.url, "--requests", str(args.requests),
-                 "--concurrency", str(c), "--seconds", str(args.seconds)],
+                 "--concurrency", str(c), "--seconds", str(args.seconds), "--heavy", str(heavy)],
                 capture_output=True, text=True, check=True).stdout) for c in (1, args.concurrency)}
         finally:
             server.stop()
@@ -197,7 +198,7 @@ def main() -> int:
     print(f"100 000 pairs: JSON {one['big/json']['bytes'] / 2**20:.1f} MiB, .npy {one['big/npy']['bytes'] / 2**20:.1f} "
           f"MiB; p50 JSON / .npy = {one['big/json']['p50_ms'] / one['big/npy']['p50_ms']:.2f}")
     sat = one["saturated"]
-    print(f"saturated ({2 * HEAVY} clients on {HEAVY} heavy slots): /healthz p99 {sat['p99_ms']:.2f} ms = "
+    print(f"saturated ({2 * heavy} clients on {heavy} heavy slots): /healthz p99 {sat['p99_ms']:.2f} ms = "
           f"{sat['p99_ms'] / one['healthz']['p99_ms']:.2f} x idle; heavy evals {sat['heavy_ok_per_s']:.2f}/s at the cap, "
           f"{sat['429']} answered 429, {sat['200']} 200, {sat['other']} other")
     for name, s in here.items():
