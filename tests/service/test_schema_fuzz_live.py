@@ -22,6 +22,8 @@ from schemathesis.specs.openapi.checks import positive_data_acceptance
 from support.service_process import ServiceProcess
 
 EXCLUDED = [positive_data_acceptance]
+COMPUTING = ("POST /v1/bsdf/eval", "POST /v1/bsdf/lobe", "POST /v1/thinfilm/spectrum")
+MIN_OK_SHARE = 0.05
 
 
 @pytest.fixture(scope="module")
@@ -57,6 +59,7 @@ def fuzz(url: str, examples_per_operation: int) -> dict:
     """Counts (cases, 2xx with finite numbers, 5xx) and the failures, for every operation."""
     schema = schemathesis.openapi.from_url(f"{url}/openapi.json")
     counts = {"cases": 0, "ok": 0, "5xx": 0}
+    ok_by_operation: dict[str, int] = {}
     failures: list[str] = []
     for result in schema.get_all_operations():
         operation = result.ok()
@@ -70,7 +73,9 @@ def fuzz(url: str, examples_per_operation: int) -> dict:
         def check(case):
             counts["cases"] += 1
             response = case.call(timeout=120)
-            counts["ok"] += finite_json(response)
+            ok = finite_json(response)
+            counts["ok"] += ok
+            ok_by_operation[operation.label] = ok_by_operation.get(operation.label, 0) + ok
             counts["5xx"] += response.status_code >= 500
             try:
                 case.validate_response(response, excluded_checks=EXCLUDED)
@@ -82,7 +87,16 @@ def fuzz(url: str, examples_per_operation: int) -> dict:
             check()
         except Exception:   # noqa: BLE001 -- already recorded
             pass
-    return {**counts, "failures": failures}
+    return {**counts, "ok_by_operation": ok_by_operation, "failures": failures}
+
+
+def answers_something(result: dict) -> None:
+    """An API that refused everything would pass the checks: the computing operations must
+    each have answered some cases with finite numbers, and a share of all cases succeed
+    (most cases of the id- and hash-taking routes are 404 by design)."""
+    for label in COMPUTING:
+        assert result["ok_by_operation"].get(label, 0) > 0, f"{label} never answered"
+    assert result["ok"] >= MIN_OK_SHARE * result["cases"]
 
 
 def stateful(url: str, steps: int) -> list[str]:
@@ -113,7 +127,8 @@ def test_schema_no_server_errors(server):
     result = fuzz(server.url, 12)
     report(result)
     assert not result["failures"], "\n\n".join(result["failures"])
-    assert result["5xx"] == 0 and result["ok"] >= 0.1 * result["cases"]
+    assert result["5xx"] == 0
+    answers_something(result)
     failures = stateful(server.url, 10)
     assert not failures, "\n\n".join(failures)
 
@@ -124,5 +139,6 @@ def test_schema_no_server_errors_long(server):
     result = fuzz(server.url, 120)
     report(result)
     assert result["cases"] >= 2000 and not result["failures"], "\n\n".join(result["failures"])
-    assert result["5xx"] == 0 and result["ok"] >= 0.1 * result["cases"]
+    assert result["5xx"] == 0
+    answers_something(result)
     assert not stateful(server.url, 100)
