@@ -30,14 +30,23 @@ class Request(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True)
 
 
+ONE_OF = [{"required": ["model"], "not": {"required": ["preset"]}},
+          {"required": ["preset"], "not": {"required": ["model"]}}]
+
+
+def whole(example: dict[str, Any], exclusive: bool = True) -> ConfigDict:
+    """A request's config with a complete example (a client, or schemathesis, can send it as
+    is; field examples alone combine into requests that name both a model and a preset)."""
+    extra = {"examples": [example], **({"oneOf": ONE_OF} if exclusive else {})}
+    return ConfigDict(extra="forbid", strict=True, json_schema_extra=extra)
+
+
 class ModelSpec(Request):
     """A model: its ``to_dict`` form, or a preset name and keyword overrides (exactly one of
     ``model`` and ``preset``, as the schema's ``oneOf`` says). A table is named by its hash,
     ``{"type": "table", "hash": ...}``: no request names a server path."""
 
-    model_config = ConfigDict(extra="forbid", strict=True, json_schema_extra={
-        "oneOf": [{"required": ["model"], "not": {"required": ["preset"]}},
-                  {"required": ["preset"], "not": {"required": ["model"]}}]})
+    model_config = ConfigDict(extra="forbid", strict=True, json_schema_extra={"oneOf": ONE_OF})
 
     model: dict[str, Any] | SkipJsonSchema[None] = Field(None, description="a BSDF dict (BSDF.to_dict form)",
                                                          examples=[{"type": "diffuse", "reflectance": 0.5}])
@@ -56,6 +65,7 @@ class Error(BaseModel):
 
 # -- BSDF queries ----------------------------------------------------------------------------
 class EvalRequest(ModelSpec):
+    model_config = whole({"preset": "xenopeltis", "theta_i": [30.0], "theta_o": [20.0, 45.0], "samples": 16})
     wi: Annotated[list[Vector3], Field(min_length=1)] | None = Field(None, description="incident unit vectors (N, 3) or one")
     wo: Annotated[list[Vector3], Field(min_length=1)] | None = Field(None, description="outgoing unit vectors (N, 3) or one")
     theta_i: Floats | None = Field(None, description="incidence angles in degrees [0, 90]")
@@ -76,6 +86,8 @@ class EvalResponse(BaseModel):
 
 
 class LobeRequest(ModelSpec):
+    model_config = whole({"model": {"type": "diffuse", "reflectance": 0.5}, "theta_i": 30.0, "points": 9,
+                          "resolution": 9})
     theta_i: float = Field(30.0, description="incidence angle in degrees [0, 90)")
     view: Literal["plane", "hemisphere", "both"] = "both"
     points: Int = Field(91, ge=3, description="points along the plane of incidence")
@@ -108,6 +120,8 @@ class LobeResponse(BaseModel):
 
 
 class ThinFilmRequest(Request):
+    model_config = whole({"thickness_nm": 400.0, "angles": [0.0, 45.0], "wavelengths": [450.0, 550.0, 650.0]},
+                         exclusive=False)
     ext_ior: float = Field(1.000277, description="index of the medium light comes from (default air)")
     film_ior: float = Field(1.83, description="film index (default guanine)")
     thickness_nm: float = Field(400.0, description="film thickness in nm")
@@ -164,6 +178,8 @@ class JobList(BaseModel):
 
 
 class TableRequest(ModelSpec):
+    model_config = whole({"model": {"type": "diffuse", "reflectance": 0.5},
+                          "grid": {"n_theta_i": 2, "n_theta_o": 4, "n_phi": 3}})
     grid: dict[str, Any] | None = Field(None, description="n_theta_i, n_theta_o, n_phi, thickness_nm",
                                         examples=[{"n_theta_i": 4, "n_theta_o": 8, "n_phi": 5}])
     rel_error: float = Field(0.01, description="target relative standard error per cell")
@@ -194,6 +210,7 @@ class TableList(BaseModel):
 
 
 class RenderRequest(Request):
+    model_config = whole({"scene": "furnace", "width": 8, "height": 8, "spp": 1}, exclusive=False)
     scene: str = Field(min_length=1, description="a scene name (GET /v1/scenes)", examples=["sphere"])
     options: dict[str, Any] = Field(default_factory=dict, description="the scene's own keywords",
                                     examples=[{"variant": "diffuse"}])
