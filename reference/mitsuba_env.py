@@ -69,7 +69,9 @@ def _llvm_usable() -> bool:
 
 
 def _choose() -> str:
-    forced = os.environ.get("BSDFLAB_MITSUBA_VARIANT")
+    from bsdflab.util.settings import library_settings
+
+    forced = library_settings().mitsuba_variant   # BSDFLAB_MITSUBA_VARIANT
     if forced is not None:
         if forced not in VARIANTS:
             raise ValueError(f"BSDFLAB_MITSUBA_VARIANT must be one of {', '.join(VARIANTS)}; "

@@ -7,8 +7,12 @@ from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
 
 import bsdflab
+from bsdflab.util import native_output
 
-from bsdflab.service import errors
+from bsdflab.service import auth, errors, logs, metrics
+from bsdflab.service.deps import KEY
+from bsdflab.service.errors import KEY_ERRORS
+from bsdflab.service.heavy import HeavyPool
 from bsdflab.service.job_service import JobService
 from bsdflab.service.routers import bsdf, catalog, jobs, meta, page, renders, tables, thinfilm
 from bsdflab.service.settings import Settings
@@ -25,22 +29,38 @@ Every request a client can send gets a 2xx or a 4xx with a message."""
 def create_app(settings: Settings | None = None) -> FastAPI:
     settings = settings or Settings()
 
+    clients = auth.load_clients(settings)
+
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI):
+        # threads serve requests: no process-wide descriptor swapping (it lost the logs)
+        capturing = native_output.capture_descriptors(False)
         app.state.jobs = JobService(settings)
         try:
             yield
         finally:
             app.state.jobs.close()
+            app.state.heavy.close()
+            native_output.capture_descriptors(capturing)
 
     app = FastAPI(title="bsdflab", version=bsdflab.__version__, description=DESCRIPTION, lifespan=lifespan)
     app.state.settings = settings
+    app.state.heavy = HeavyPool(settings.heavy_concurrency, settings.compute_deadline_s)
+    app.state.metrics = metrics.Metrics()
+    app.state.metrics.bind(app)
     errors.install(app)
     app.add_middleware(errors.BodyLimit, limit=settings.limit_body_bytes)
-    for module in (meta, catalog, bsdf, thinfilm, tables, renders, jobs, page):
-        app.include_router(module.router)
+    app.add_middleware(errors.HeadAsGet)
+    app.add_middleware(auth.KeyCheck, clients=clients, reply=errors.reply)   # before any body is read
+    app.add_middleware(metrics.Timing, metrics=app.state.metrics)
+    app.add_middleware(logs.RequestLog)                                      # outermost: every request logged
+    app.include_router(meta.router)
+    app.include_router(metrics.router)
+    app.include_router(page.router)
+    for module in (catalog, bsdf, thinfilm, tables, renders, jobs):
+        app.include_router(module.router, dependencies=[KEY], responses=KEY_ERRORS)
     app.mount("/static", StaticFiles(directory=page.STATIC_DIR), name="static")
-    if settings.api_key is None:
+    if not clients:
         app.openapi = lambda: _without_security(app)
     return app
 

@@ -1,17 +1,20 @@
-"""Dependencies as ``Annotated`` aliases: the settings, the job service, the API key."""
+"""Dependencies as ``Annotated`` aliases: the settings, the job service, the heavy pool, the
+client (identified by `bsdflab.service.auth.KeyCheck` before the route runs)."""
 from __future__ import annotations
 
-import hmac
-from typing import Annotated
+from typing import Annotated, Any
 
-from fastapi import Depends, HTTPException, Request, Security
+from fastapi import Depends, Request, Security
 from fastapi.security import APIKeyHeader, HTTPAuthorizationCredentials, HTTPBearer
 
+from bsdflab.service import artefact_refs
+from bsdflab.service.auth import ANONYMOUS, Client
+from bsdflab.service.heavy import HeavyPool
 from bsdflab.service.job_service import JobService
 from bsdflab.service.settings import Settings
 
-_key_header = APIKeyHeader(name="X-API-Key", auto_error=False, description="the service's API key")
-_bearer = HTTPBearer(auto_error=False, description="the service's API key as a bearer token")
+_key_header = APIKeyHeader(name="X-API-Key", auto_error=False, description="a client's API key")
+_bearer = HTTPBearer(auto_error=False, description="a client's API key as a bearer token")
 
 
 def get_settings(request: Request) -> Settings:
@@ -22,21 +25,28 @@ def get_jobs(request: Request) -> JobService:
     return request.app.state.jobs
 
 
+def get_heavy(request: Request) -> HeavyPool:
+    return request.app.state.heavy
+
+
 SettingsDep = Annotated[Settings, Depends(get_settings)]
 JobsDep = Annotated[JobService, Depends(get_jobs)]
+HeavyDep = Annotated[HeavyPool, Depends(get_heavy)]
 
 
-def require_key(settings: SettingsDep,
+def require_key(request: Request,
                 header: Annotated[str | None, Security(_key_header)] = None,
-                bearer: Annotated[HTTPAuthorizationCredentials | None, Security(_bearer)] = None) -> None:
-    """When an API key is configured, the request must carry it (compared in constant time)."""
-    if settings.api_key is None:
-        return
-    given = header if header is not None else (bearer.credentials if bearer is not None else None)
-    expected = settings.api_key.get_secret_value().encode("utf-8")
-    if given is None or not hmac.compare_digest(given.encode("utf-8", "surrogateescape"), expected):
-        raise HTTPException(401, "a valid API key is required (X-API-Key header or Bearer token)",
-                            headers={"WWW-Authenticate": "Bearer"})
+                bearer: Annotated[HTTPAuthorizationCredentials | None, Security(_bearer)] = None) -> Client:
+    """The client the middleware identified (the key itself was checked there, before the
+    body was read; the parameters only document the scheme in the OpenAPI schema)."""
+    return request.scope.get("state", {}).get("client", ANONYMOUS)
 
 
 KEY = Depends(require_key)
+ClientDep = Annotated[Client, Depends(require_key)]
+
+
+def model_spec(spec: dict[str, Any], jobs: JobService) -> dict[str, Any]:
+    """A request's model spec with tables named by hash resolved in the store; any server
+    path refused (bsdflab.service.artefact_refs)."""
+    return artefact_refs.resolve(spec, jobs.table_file)

@@ -1,18 +1,23 @@
 """Client errors as 4xx: the Python API's ValueError (and its TypeError / OverflowError on
 values pydantic let through) become 422 with the message; a full queue is 429; a body over
-the size limit is 413 (uvicorn has no limit of its own, so an ASGI middleware counts)."""
+the size limit is 413 (uvicorn has no limit of its own, so an ASGI middleware counts); a 405
+names every method of the path in ``Allow``, and HEAD answers wherever GET does."""
 from __future__ import annotations
 
 import json
 
 from fastapi import FastAPI, HTTPException, Request
-from fastapi.responses import JSONResponse
+from fastapi.exception_handlers import http_exception_handler
+from fastapi.responses import JSONResponse, Response
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.routing import Match
 
 from bsdflab.service.schemas import Error
 from bsdflab.service.settings import limit_variable
 from bsdflab.service.store import QueueFull
 
 CLIENT_ERRORS = (ValueError, TypeError, OverflowError)
+METHODS = ("GET", "POST", "PUT", "PATCH", "DELETE")
 # Documented on every route that takes a body or parameters (FastAPI adds 422's schema).
 ERRORS = {400: {"description": "malformed request"},
           413: {"description": "request body over the size limit"},
@@ -34,21 +39,25 @@ def install(app: FastAPI) -> None:
         return JSONResponse({"detail": str(exc) or type(exc).__name__}, status_code=422)
 
     async def queue_full(request: Request, exc: QueueFull) -> JSONResponse:
-        return JSONResponse({"detail": f"{exc} ({limit_variable('limit_queue')}); retry later"},
+        return JSONResponse({"detail": f"{exc} ({limit_variable(exc.setting)}); retry later"},
                             status_code=429, headers={"Retry-After": "5"})
+
+    async def http_error(request: Request, exc: StarletteHTTPException) -> Response:
+        if exc.status_code == 405:   # Starlette names only the first matching route's methods
+            return JSONResponse({"detail": exc.detail}, status_code=405,
+                                headers={"Allow": ", ".join(allowed_methods(request.app, request.scope))})
+        return await http_exception_handler(request, exc)
 
     for cls in CLIENT_ERRORS:
         app.add_exception_handler(cls, client_error)
     app.add_exception_handler(QueueFull, queue_full)
-
-
-class _TooLarge(Exception):
-    pass
+    app.add_exception_handler(StarletteHTTPException, http_error)
 
 
 class BodyLimit:
-    """Refuse request bodies over ``limit`` bytes with 413, by Content-Length when given and
-    by counting the streamed body otherwise."""
+    """Refuse request bodies over ``limit`` bytes with 413: by Content-Length when given;
+    a body without one (chunked) is read here, up to the limit, before the route sees it
+    (so a chunked body over the limit is a 413 too, not a parse error)."""
 
     def __init__(self, app, limit: int):
         self.app, self.limit = app, limit
@@ -61,38 +70,71 @@ class BodyLimit:
             try:
                 declared = int(length)
             except ValueError:
-                return await _reply(send, 400, "Content-Length is not an integer")
+                return await reply(send, 400, "Content-Length is not an integer")
             if declared > self.limit:
-                return await _reply(send, 413, self._message(declared))
-        received, started = 0, False
-
-        async def counted():
-            nonlocal received
+                return await reply(send, 413, self._message(declared))
+            return await self.app(scope, receive, send)   # the server holds the body to its length
+        chunks, received = [], 0
+        while True:
             message = await receive()
-            if message["type"] == "http.request":
-                received += len(message.get("body", b""))
-                if received > self.limit:
-                    raise _TooLarge
-            return message
+            if message["type"] != "http.request":   # the client left
+                return
+            chunks.append(message.get("body", b""))
+            received += len(chunks[-1])
+            if received > self.limit:
+                return await reply(send, 413, self._message(received, streamed=True))
+            if not message.get("more_body", False):
+                break
+        replayed = False
 
-        async def tracked(message):
-            nonlocal started
-            started = started or message["type"] == "http.response.start"
+        async def replay():
+            nonlocal replayed
+            if not replayed:
+                replayed = True
+                return {"type": "http.request", "body": b"".join(chunks), "more_body": False}
+            return await receive()   # then the disconnect, when it comes
+
+        await self.app(scope, replay, send)
+
+    def _message(self, size: int, streamed: bool = False) -> str:
+        return (f"request body of {'more than ' if streamed else ''}{size} bytes is over the limit of "
+                f"{self.limit} bytes ({limit_variable('limit_body_bytes')})")
+
+
+class HeadAsGet:
+    """HEAD on any GET route: the GET's status and headers, without the body."""
+
+    def __init__(self, app):
+        self.app = app
+
+    async def __call__(self, scope, receive, send):
+        if scope["type"] != "http" or scope["method"] != "HEAD":
+            return await self.app(scope, receive, send)
+
+        async def headers_only(message):
+            if message["type"] == "http.response.body":
+                if not message.get("more_body", False):
+                    await send({"type": "http.response.body", "body": b"", "more_body": False})
+                return
             await send(message)
 
-        try:
-            await self.app(scope, counted, tracked)
-        except _TooLarge:
-            if not started:
-                await _reply(send, 413, self._message(received))
-
-    def _message(self, size: int) -> str:
-        return (f"request body of {size} bytes is over the limit of {self.limit} bytes "
-                f"({limit_variable('limit_body_bytes')})")
+        await self.app({**scope, "method": "GET"}, receive, headers_only)
 
 
-async def _reply(send, status: int, detail: str) -> None:
+def allowed_methods(app, scope) -> list[str]:
+    """Every method some route answers at the request's path (HEAD wherever GET is)."""
+    methods = {m for m in METHODS if any(route.matches({**scope, "method": m})[0] == Match.FULL
+                                          for route in app.router.routes)}
+    if "GET" in methods:
+        methods.add("HEAD")
+    return sorted(methods)
+
+
+async def reply(send, status: int, detail: str, headers: dict[str, str] | None = None) -> None:
+    """A JSON error answered straight from a middleware (before any route runs)."""
     body = json.dumps({"detail": detail}).encode()
+    extra = [(k.lower().encode(), v.encode()) for k, v in (headers or {}).items()]
     await send({"type": "http.response.start", "status": status,
-                "headers": [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]})
+                "headers": [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode()),
+                            *extra]})
     await send({"type": "http.response.body", "body": body})

@@ -16,11 +16,14 @@ from pathlib import Path
 from typing import Any
 
 from bsdflab.jobs import JobHandle, get_kind, make_executor
+from bsdflab.jobs import tabulate as tabulate_kind
 
+from bsdflab.service.auth import ANONYMOUS, Client
 from bsdflab.service.settings import Settings
 from bsdflab.service.store import JobStore
 
 log = logging.getLogger("bsdflab.service")
+TABULATE = "tabulate"
 MAX_ATTEMPTS = 3   # a job that a restart finds unfinished this often has killed its server
 
 
@@ -54,6 +57,25 @@ class JobService:
             return row["result"]
         return None
 
+    def table(self, content_hash: str) -> dict[str, Any] | None:
+        """A table's result by its hash: the stored record, or a table file in the store that
+        another job made (a render's), described from its header; None otherwise."""
+        result = self.cached(TABULATE, content_hash)
+        if result is not None:
+            return result
+        path = self.artefact_dir / f"{content_hash}.exr"
+        if path.is_file():
+            try:
+                return {"hash": content_hash, "files": {"exr": path.name}, **tabulate_kind.describe(path)}
+            except ValueError:   # not a table (a render's image has the same naming)
+                return None
+        return None
+
+    def table_file(self, content_hash: str) -> Path | None:
+        """The store's file of the table ``content_hash`` (how HTTP requests name tables)."""
+        result = self.table(content_hash)
+        return None if result is None else self.artefact_dir / result["files"]["exr"]
+
     def adopt(self, kind: str, content_hash: str, request: dict[str, Any]) -> dict[str, Any] | None:
         """A result whose files exist without a stored record (built by another job, e.g. a
         render's table): record and return it."""
@@ -62,12 +84,23 @@ class JobService:
             self.store.put_artefact(content_hash, kind, request, result)
         return result
 
-    def submit(self, kind: str, request: dict[str, Any], content_hash: str) -> tuple[dict[str, Any], bool]:
-        """(job row, created). Joins an active job with the same hash; QueueFull when full."""
-        row, created = self.store.submit(kind, content_hash, request, self.settings.limit_queue)
+    def submit(self, kind: str, request: dict[str, Any], content_hash: str, client: Client = ANONYMOUS
+               ) -> tuple[dict[str, Any], bool]:
+        """(job row, created). Joins an active job with the same hash; QueueFull when the
+        queue, or the client's share of it, is full."""
+        row, created = self.store.submit(kind, content_hash, request, self.settings.limit_queue,
+                                         owner=client.name, owner_limit=client.max_jobs)
         if created:
+            log.info("job %s (%s) queued for client %s", row["id"], kind, client.name)
             self._start(row)
         return row, created
+
+    def visible(self, row: dict[str, Any] | None, client: Client) -> dict[str, Any] | None:
+        """The row when ``client`` may see it (an admin, or a client that created or joined
+        the job), else None: another client's job looks like no job at all."""
+        if row is None or client.admin or self.store.sees(row["id"], client.name):
+            return row
+        return None
 
     def _start(self, row: dict[str, Any]) -> None:
         handle = self.executor.submit(row["kind"], row["request"], self.artefact_dir)
@@ -80,8 +113,11 @@ class JobService:
                 self.store.finish(row["id"], "failed", row["elapsed"],
                                   error=f"gave up after {MAX_ATTEMPTS} starts: the server stopped during "
                                         "each of them", error_type="Interrupted")
+                log.warning("job %s (%s) failed after restart: given up after %d starts", row["id"], row["kind"],
+                            MAX_ATTEMPTS)
                 continue
-            log.info("re-queueing job %s (%s), left %s by the previous server", row["id"], row["kind"], row["state"])
+            log.info("job %s (%s) re-queued after restart (the previous server left it %s)",
+                     row["id"], row["kind"], row["state"])
             self.store.requeue(row["id"])
             self._start(row)
 
@@ -124,7 +160,8 @@ class JobService:
             state = handle.state
             fraction, elapsed, eta = handle.progress()
             if state == "running":
-                self.store.started(job_id)
+                if self.store.started(job_id):
+                    log.info("job %s (%s) started", job_id, handle.kind)
                 self.store.progress(job_id, fraction, elapsed, eta)
                 continue
             if state == "queued":
@@ -139,10 +176,12 @@ class JobService:
             result = handle.result()
             self.store.put_artefact(result["hash"], handle.kind, handle.request, result)
             self.store.finish(job_id, "done", elapsed, result=result)
+            log.info("job %s (%s) done in %.1f s", job_id, handle.kind, elapsed)
             return
         error = handle.error()
         self.store.finish(job_id, handle.state, elapsed, error=str(error),
                           error_type=getattr(error, "error_type", type(error).__name__))
+        log.info("job %s (%s) %s after %.1f s: %s", job_id, handle.kind, handle.state, elapsed, error)
 
     def close(self) -> None:
         """Stop monitoring first (a shutdown's interruptions are not outcomes), then the

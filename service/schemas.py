@@ -4,25 +4,54 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict
+from pydantic.json_schema import SkipJsonSchema
 
-Seed = Annotated[int, Field(ge=0, lt=1 << 64, description="random seed (uint64)")]
-Count = Annotated[int, Field(ge=1, le=1 << 24)]
+
+
+def _integral(value):
+    """JSON Schema counts 3.0 as an integer; a bool or a string is not one."""
+    return int(value) if isinstance(value, float) and value.is_integer() else value
+
+
+# Integers are strict (true/false and "3" are refused: a seed of false was 0), except that
+# an integral number such as 3.0 is one, as JSON Schema says.
+Int = Annotated[int, BeforeValidator(_integral), Strict()]
+Seed = Annotated[Int, Field(ge=0, lt=1 << 64, description="random seed (uint64)")]
+Count = Annotated[Int, Field(ge=1, le=1 << 24)]
 Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+Floats = Annotated[list[float], Field(min_length=1)]
 HASH_PATTERN = r"^[0-9a-f]{64}$"
 JOB_ID_PATTERN = r"^[0-9a-f]{32}$"
 
 
 class Request(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    # strict: a bool is neither a number nor an integer ([false] was the angle 0)
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+
+ONE_OF = [{"required": ["model"], "not": {"required": ["preset"]}},
+          {"required": ["preset"], "not": {"required": ["model"]}}]
+
+
+def whole(example: dict[str, Any], exclusive: bool = True) -> ConfigDict:
+    """A request's config with a complete example (a client, or schemathesis, can send it as
+    is; field examples alone combine into requests that name both a model and a preset)."""
+    extra = {"examples": [example], **({"oneOf": ONE_OF} if exclusive else {})}
+    return ConfigDict(extra="forbid", strict=True, json_schema_extra=extra)
 
 
 class ModelSpec(Request):
-    """A model: its ``to_dict`` form, or a preset name and keyword overrides."""
+    """A model: its ``to_dict`` form, or a preset name and keyword overrides (exactly one of
+    ``model`` and ``preset``, as the schema's ``oneOf`` says). A table is named by its hash,
+    ``{"type": "table", "hash": ...}``: no request names a server path."""
 
-    model: dict[str, Any] | None = Field(None, description="a BSDF dict (BSDF.to_dict form)",
-                                         examples=[{"type": "diffuse", "reflectance": 0.5}])
-    preset: str | None = Field(None, description="a preset name (GET /v1/presets)", examples=["xenopeltis"])
+    model_config = ConfigDict(extra="forbid", strict=True, json_schema_extra={"oneOf": ONE_OF})
+
+    model: dict[str, Any] | SkipJsonSchema[None] = Field(None, description="a BSDF dict (BSDF.to_dict form)",
+                                                         examples=[{"type": "diffuse", "reflectance": 0.5}])
+    preset: Annotated[str, Field(min_length=1)] | SkipJsonSchema[None] = Field(
+        None, description="a preset name (GET /v1/presets)", examples=["xenopeltis"])
     overrides: dict[str, Any] | None = Field(None, description="the preset's keyword parameters",
                                              examples=[{"film_thickness_nm": 450}])
 
@@ -36,12 +65,13 @@ class Error(BaseModel):
 
 # -- BSDF queries ----------------------------------------------------------------------------
 class EvalRequest(ModelSpec):
-    wi: list[Vector3] | None = Field(None, description="incident unit vectors (N, 3) or one")
-    wo: list[Vector3] | None = Field(None, description="outgoing unit vectors (N, 3) or one")
-    theta_i: list[float] | None = Field(None, description="incidence angles in degrees [0, 90]")
-    theta_o: list[float] | None = Field(None, description="outgoing angles in degrees [0, 180] (> 90: below)")
-    phi: list[float] | None = Field(None, description="azimuth phi_o - phi_i in degrees (mirror at 180)")
-    wavelengths: list[float] | None = Field(None, description="nm; omit for linear sRGB (D65)")
+    model_config = whole({"preset": "xenopeltis", "theta_i": [30.0], "theta_o": [20.0, 45.0], "samples": 16})
+    wi: Annotated[list[Vector3], Field(min_length=1)] | None = Field(None, description="incident unit vectors (N, 3) or one")
+    wo: Annotated[list[Vector3], Field(min_length=1)] | None = Field(None, description="outgoing unit vectors (N, 3) or one")
+    theta_i: Floats | None = Field(None, description="incidence angles in degrees [0, 90]")
+    theta_o: Floats | None = Field(None, description="outgoing angles in degrees [0, 180] (> 90: below)")
+    phi: Floats | None = Field(None, description="azimuth phi_o - phi_i in degrees (mirror at 180)")
+    wavelengths: Floats | None = Field(None, description="nm; omit for linear sRGB (D65)")
     samples: Count | None = Field(None, description="walks per pair for stochastic models (default: the model's)")
     seed: Seed | None = Field(None, description="seed of the walks (default: the model's)")
 
@@ -56,10 +86,12 @@ class EvalResponse(BaseModel):
 
 
 class LobeRequest(ModelSpec):
+    model_config = whole({"model": {"type": "diffuse", "reflectance": 0.5}, "theta_i": 30.0, "points": 9,
+                          "resolution": 9})
     theta_i: float = Field(30.0, description="incidence angle in degrees [0, 90)")
     view: Literal["plane", "hemisphere", "both"] = "both"
-    points: int = Field(91, ge=3, description="points along the plane of incidence")
-    resolution: int = Field(32, ge=3, description="side of the hemisphere grid")
+    points: Int = Field(91, ge=3, description="points along the plane of incidence")
+    resolution: Int = Field(32, ge=3, description="side of the hemisphere grid")
     samples: Count | None = Field(None, description="walks per direction for stochastic models")
     seed: Seed | None = None
 
@@ -88,12 +120,14 @@ class LobeResponse(BaseModel):
 
 
 class ThinFilmRequest(Request):
+    model_config = whole({"thickness_nm": 400.0, "angles": [0.0, 45.0], "wavelengths": [450.0, 550.0, 650.0]},
+                         exclusive=False)
     ext_ior: float = Field(1.000277, description="index of the medium light comes from (default air)")
     film_ior: float = Field(1.83, description="film index (default guanine)")
     thickness_nm: float = Field(400.0, description="film thickness in nm")
     substrate_ior: float = Field(1.5515, description="substrate index (default keratin at 550 nm)")
-    angles: list[float] | None = Field(None, description="incidence angles in degrees (default 0, 5, ... 85)")
-    wavelengths: list[float] | None = Field(None, description="nm (default 380, 385, ... 780)")
+    angles: Floats | None = Field(None, description="incidence angles in degrees (default 0, 5, ... 85)")
+    wavelengths: Floats | None = Field(None, description="nm (default 380, 385, ... 780)")
 
 
 class ThinFilmResponse(BaseModel):
@@ -144,10 +178,12 @@ class JobList(BaseModel):
 
 
 class TableRequest(ModelSpec):
+    model_config = whole({"model": {"type": "diffuse", "reflectance": 0.5},
+                          "grid": {"n_theta_i": 2, "n_theta_o": 4, "n_phi": 3}})
     grid: dict[str, Any] | None = Field(None, description="n_theta_i, n_theta_o, n_phi, thickness_nm",
                                         examples=[{"n_theta_i": 4, "n_theta_o": 8, "n_phi": 5}])
     rel_error: float = Field(0.01, description="target relative standard error per cell")
-    wavelengths: list[float] | None = None
+    wavelengths: Floats | None = None
     min_samples: Count = 512
     max_samples: Count = 65536
     seed: Seed = 0
@@ -174,14 +210,15 @@ class TableList(BaseModel):
 
 
 class RenderRequest(Request):
-    scene: str = Field(description="a scene name (GET /v1/scenes)", examples=["sphere"])
+    model_config = whole({"scene": "furnace", "width": 8, "height": 8, "spp": 1}, exclusive=False)
+    scene: str = Field(min_length=1, description="a scene name (GET /v1/scenes)", examples=["sphere"])
     options: dict[str, Any] = Field(default_factory=dict, description="the scene's own keywords",
                                     examples=[{"variant": "diffuse"}])
-    width: int = Field(320, ge=1, le=16384)
-    height: int = Field(180, ge=1, le=16384)
-    spp: int = Field(16, ge=1, le=1 << 20)
+    width: Int = Field(320, ge=1, le=16384)
+    height: Int = Field(180, ge=1, le=16384)
+    spp: Int = Field(16, ge=1, le=1 << 20)
     seed: Seed = 0
-    max_depth: int | None = Field(None, ge=1, le=1024)
+    max_depth: Int | None = Field(None, ge=1, le=1024)
 
 
 class RenderInfo(BaseModel):

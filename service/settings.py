@@ -1,40 +1,58 @@
-"""Service configuration: pydantic-settings, every field a ``BSDFLAB_*`` environment variable
-(``BSDFLAB_DATA_DIR``, ``BSDFLAB_WORKERS``, ``BSDFLAB_API_KEY``, ``BSDFLAB_LIMIT_QUEUE``...).
+"""Service configuration: the library's one settings model (bsdflab.util.settings) extended
+with the server's fields, every field a ``BSDFLAB_*`` environment variable
+(``BSDFLAB_DATA_DIR``, ``BSDFLAB_WORKERS``, ``BSDFLAB_API_KEYS``, ``BSDFLAB_LIMIT_QUEUE``...);
+docs/settings.md is the table of them all.
 
 Request caps are ``limit_*`` fields; a request beyond one is answered 4xx naming the cap
-and its variable. They bound the work one request can ask of the server, independently of
-the Python API's own resource caps (bsdflab.util.limits).
+and its variable. They bound the work one HTTP request can ask of the server and sit below
+the library's process-wide caps (``max_*``: ``limit_render_pixels`` <= ``max_pixels``,
+``limit_table_cells`` <= ``max_table_cells``, checked when the settings are made).
 """
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any, Literal
 
 import platformdirs
-from pydantic import Field, SecretStr
-from pydantic_settings import BaseSettings, SettingsConfigDict
+from pydantic import Field, SecretStr, model_validator
+from pydantic_settings import SettingsConfigDict
+
+from bsdflab.util.settings import LibrarySettings, variable
+
+from bsdflab.service.heavy import default_concurrency
 
 
 def _default_data_dir() -> Path:
     return Path(platformdirs.user_data_dir("bsdflab")) / "service"
 
 
-class Settings(BaseSettings):
-    model_config = SettingsConfigDict(env_prefix="BSDFLAB_", extra="ignore")
+class Settings(LibrarySettings):
+    model_config = SettingsConfigDict(env_prefix="BSDFLAB_", extra="ignore", env_ignore_empty=True)
 
-    host: str = "127.0.0.1"
-    port: int = Field(8000, ge=0, le=65535)
+    host: str = Field("127.0.0.1", description="address to listen on (0.0.0.0: every interface)")
+    port: int = Field(8000, ge=0, le=65535, description="port to listen on (0: a free one)")
     data_dir: Path = Field(default_factory=_default_data_dir,
                            description="SQLite job store and the content-addressed artefacts")
     workers: int | None = Field(None, ge=1, le=1024,
                                 description="job worker processes (default: cores - 1, at most 4)")
     executor: str = Field("processes", description="processes, threads, dask:<address> or dask:local:N")
-    api_key: SecretStr | None = Field(None, description="when set, required (X-API-Key or Bearer) "
-                                                        "by every endpoint that computes, starts or deletes")
+    api_key: SecretStr | None = Field(None, description="one admin key (X-API-Key or Bearer); with any key "
+                                                        "set, every route but health, the page and the docs needs one")
+    api_keys: dict[str, Any] = Field(default_factory=dict, description='named client keys as JSON: {"name": '
+                                     '{"key": "...", "admin": false, "max_jobs": 8, "rate_per_s": 20}}')
+    api_keys_file: Path | None = Field(None, description="a JSON file of named client keys (as api_keys)")
+    key_rate_per_s: float | None = Field(20.0, gt=0, description="requests per second of a client key "
+                                                                  "(bursts of twice that) unless its entry says")
+    heavy_concurrency: int = Field(default_factory=default_concurrency, ge=1, le=1024,
+                                   description="computing requests at once (429 beyond; default: the cores)")
+    compute_deadline_s: float = Field(10.0, gt=0, le=3600, description="seconds one computing request may take")
 
     limit_body_bytes: int = Field(4 << 20, ge=1024, description="request body size")
     limit_directions: int = Field(100_000, ge=1, description="direction pairs per eval request")
     limit_samples: int = Field(65_536, ge=1, description="walks per direction pair (stochastic models)")
-    limit_walks: int = Field(1 << 24, ge=1, description="direction pairs x walks per request")
+    limit_walks: int = Field(1 << 18, ge=1, description="direction pairs x walks per request "
+                                                         "(2^18 walks of xenopeltis: about 14 CPU-seconds)")
+    limit_response_bytes: int = Field(32 << 20, ge=1024, description="estimated size of one answer")
     limit_wavelengths: int = Field(1024, ge=1, description="wavelengths per request")
     limit_lobe_resolution: int = Field(181, ge=3, description="points of a lobe slice / side of a hemisphere grid")
     limit_angles: int = Field(256, ge=1, description="angles per thin-film request")
@@ -42,8 +60,30 @@ class Settings(BaseSettings):
     limit_render_pixels: int = Field(1 << 22, ge=1, description="width x height of one render")
     limit_render_samples: int = Field(1 << 28, ge=1, description="width x height x spp of one render")
     limit_queue: int = Field(64, ge=1, description="queued + running jobs")
+    limit_queue_per_key: int = Field(16, ge=1, description="queued + running jobs of one client key "
+                                                           "unless its entry says (max_jobs)")
+
+    log_level: Literal["critical", "error", "warning", "info", "debug"] = Field(
+        "info", description="the service's and uvicorn's log level")
+    log_format: Literal["text", "json"] = Field("text", description="text lines, or one JSON object a line")
+    server_timeout_keep_alive_s: float = Field(5.0, gt=0, le=600, description="idle keep-alive connections close "
+                                                                              "after this (uvicorn)")
+    server_limit_concurrency: int = Field(512, ge=1, description="open connections and tasks at once; 503 beyond "
+                                                                 "(uvicorn)")
+    server_max_header_bytes: int = Field(16 << 10, ge=1024, le=1 << 20, description="request line and headers "
+                                                                                   "(h11; larger: 431/400)")
+    server_backlog: int = Field(2048, ge=1, description="connections waiting to be accepted")
 
     progress_interval_s: float = Field(0.25, gt=0, le=10, description="how often job progress is stored and streamed")
+
+    @model_validator(mode="after")
+    def _below_library_caps(self):
+        for limit, cap in (("limit_render_pixels", "max_pixels"), ("limit_table_cells", "max_table_cells")):
+            if getattr(self, limit) > getattr(self, cap):
+                raise ValueError(f"{variable(limit)} ({getattr(self, limit)}) is above the library's cap "
+                                 f"{variable(cap)} ({getattr(self, cap)}): a request could pass the first and "
+                                 "fail in the worker")
+        return self
 
     @property
     def db_path(self) -> Path:
@@ -55,4 +95,24 @@ class Settings(BaseSettings):
 
 
 def limit_variable(field: str) -> str:
-    return f"BSDFLAB_{field.upper()}"
+    return variable(field)
+
+
+def markdown_table() -> str:
+    """The table of every ``BSDFLAB_*`` variable (docs/settings.md is this output)."""
+    rows = ["| variable | default | meaning |", "|---|---|---|"]
+    for name, field in Settings.model_fields.items():
+        if field.default_factory is not None:
+            default = {"data_dir": "user data folder /service", "heavy_concurrency": "the cores"}.get(name, "unset")
+        else:
+            default = "unset" if field.default is None else f"`{field.default}`"
+            if isinstance(field.default, int) and not isinstance(field.default, bool) and field.default >= 1 << 16:
+                power = field.default.bit_length() - 1
+                default = f"2^{power}" if field.default == 1 << power else default
+        description = (field.description or "").replace("|", "\\|")
+        rows.append(f"| `{variable(name)}` | {default} | {description} |")
+    return "\n".join(rows)
+
+
+if __name__ == "__main__":
+    print(markdown_table())

@@ -15,7 +15,7 @@ import uuid
 from pathlib import Path
 from typing import Any
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 ACTIVE = ("queued", "running")
 SCHEMA = """
 CREATE TABLE jobs (
@@ -33,7 +33,8 @@ CREATE TABLE jobs (
     created REAL NOT NULL,
     started REAL,
     finished REAL,
-    attempts INTEGER NOT NULL DEFAULT 0
+    attempts INTEGER NOT NULL DEFAULT 0,
+    owner TEXT
 );
 CREATE INDEX jobs_by_hash ON jobs (kind, hash, state);
 CREATE INDEX jobs_by_state ON jobs (state);
@@ -45,11 +46,28 @@ CREATE TABLE artefacts (
     result TEXT NOT NULL
 );
 CREATE INDEX artefacts_by_kind ON artefacts (kind, created);
+""" + """
+CREATE TABLE job_clients (
+    job_id TEXT NOT NULL,
+    client TEXT NOT NULL,
+    PRIMARY KEY (job_id, client)
+);
+CREATE INDEX jobs_by_owner ON jobs (owner, state);
+"""
+# Version 1 -> 2: jobs belong to clients (the creator owns, clients that joined see).
+MIGRATE_1_2 = """
+ALTER TABLE jobs ADD COLUMN owner TEXT;
+CREATE TABLE job_clients (job_id TEXT NOT NULL, client TEXT NOT NULL, PRIMARY KEY (job_id, client));
+CREATE INDEX jobs_by_owner ON jobs (owner, state);
 """
 
 
 class QueueFull(Exception):
-    """More active jobs than the queue limit allows."""
+    """More active jobs than the queue limit (or the client's share) allows."""
+
+    def __init__(self, message: str, setting: str = "limit_queue"):
+        super().__init__(message)
+        self.setting = setting
 
 
 class StoreError(Exception):
@@ -87,16 +105,19 @@ class JobStore:
             if tables:
                 raise StoreError(f"{path} is an SQLite file but not a bsdflab job store")
             self._db.executescript("BEGIN;" + SCHEMA + f"PRAGMA user_version={SCHEMA_VERSION}; COMMIT;")
+        elif version == 1:
+            self._db.executescript("BEGIN;" + MIGRATE_1_2 + "PRAGMA user_version=2; COMMIT;")
 
     def close(self) -> None:
         with self._lock:
             self._db.close()
 
     # -- jobs ------------------------------------------------------------------------------
-    def submit(self, kind: str, content_hash: str, request: dict[str, Any], queue_limit: int
-               ) -> tuple[dict[str, Any], bool]:
-        """(job, created): the active job with this kind and hash, or a new queued one.
-        Raises QueueFull when a new job would exceed ``queue_limit`` active jobs."""
+    def submit(self, kind: str, content_hash: str, request: dict[str, Any], queue_limit: int,
+               owner: str | None = None, owner_limit: int | None = None) -> tuple[dict[str, Any], bool]:
+        """(job, created): the active job with this kind and hash (which ``owner`` then sees
+        too), or a new queued one owned by ``owner``. Raises QueueFull when a new job would
+        exceed ``queue_limit`` active jobs, or ``owner_limit`` active jobs of its owner."""
         with self._lock:
             self._db.execute("BEGIN IMMEDIATE")
             try:
@@ -104,16 +125,26 @@ class JobStore:
                     "SELECT * FROM jobs WHERE kind = ? AND hash = ? AND state IN ('queued', 'running') "
                     "ORDER BY created LIMIT 1", (kind, content_hash)).fetchone()
                 if found is not None:
+                    self._db.execute("INSERT OR IGNORE INTO job_clients (job_id, client) VALUES (?, ?)",
+                                     (found["id"], owner))
                     self._db.execute("COMMIT")
                     return found, False
                 active = self._db.execute(
                     "SELECT count(*) AS n FROM jobs WHERE state IN ('queued', 'running')").fetchone()["n"]
                 if active >= queue_limit:
-                    raise QueueFull(f"{active} jobs are queued or running, the limit")
+                    raise QueueFull(f"{active} jobs are queued or running, the limit", "limit_queue")
+                if owner_limit is not None:
+                    mine = self._db.execute("SELECT count(*) AS n FROM jobs WHERE owner IS ? AND state IN "
+                                            "('queued', 'running')", (owner,)).fetchone()["n"]
+                    if mine >= owner_limit:
+                        raise QueueFull(f"client {owner!r} has {mine} jobs queued or running, its share",
+                                        "limit_queue_per_key")
                 job_id = uuid.uuid4().hex
                 self._db.execute(
-                    "INSERT INTO jobs (id, kind, hash, state, request, created) VALUES (?, ?, ?, 'queued', ?, ?)",
-                    (job_id, kind, content_hash, json.dumps(request), time.time()))
+                    "INSERT INTO jobs (id, kind, hash, state, request, created, owner) "
+                    "VALUES (?, ?, ?, 'queued', ?, ?, ?)",
+                    (job_id, kind, content_hash, json.dumps(request), time.time(), owner))
+                self._db.execute("INSERT INTO job_clients (job_id, client) VALUES (?, ?)", (job_id, owner))
                 self._db.execute("COMMIT")
             except BaseException:
                 self._db.execute("ROLLBACK")
@@ -127,12 +158,39 @@ class JobStore:
         with self._lock:
             return self._get(job_id)
 
-    def jobs(self, limit: int = 100, state: str | None = None) -> list[dict[str, Any]]:
+    def jobs(self, limit: int = 100, state: str | None = None, client: str | None = None) -> list[dict[str, Any]]:
+        """The latest jobs, of one state and/or that ``client`` sees (None: every job)."""
+        where, args = [], []
+        if state is not None:
+            where.append("state = ?")
+            args.append(state)
+        if client is not None:
+            where.append("id IN (SELECT job_id FROM job_clients WHERE client = ?)")
+            args.append(client)
+        clause = f"WHERE {' AND '.join(where)} " if where else ""
         with self._lock:
-            if state is None:
-                return self._db.execute("SELECT * FROM jobs ORDER BY created DESC LIMIT ?", (limit,)).fetchall()
-            return self._db.execute("SELECT * FROM jobs WHERE state = ? ORDER BY created DESC LIMIT ?",
-                                    (state, limit)).fetchall()
+            return self._db.execute(f"SELECT * FROM jobs {clause}ORDER BY created DESC LIMIT ?",
+                                    (*args, limit)).fetchall()
+
+    def counts(self) -> list[tuple[str, str, int]]:
+        """(kind, state, number of jobs) for every kind and state in the store."""
+        with self._lock:
+            rows = self._db.execute("SELECT kind, state, count(*) AS n FROM jobs GROUP BY kind, state").fetchall()
+        return [(r["kind"], r["state"], r["n"]) for r in rows]
+
+    def sees(self, job_id: str, client: str) -> bool:
+        """Whether ``client`` created or joined job ``job_id``."""
+        with self._lock:
+            return self._db.execute("SELECT 1 AS yes FROM job_clients WHERE job_id = ? AND client = ?",
+                                    (job_id, client)).fetchone() is not None
+
+    def artefacts_of(self, kind: str, client: str, limit: int = 1000) -> list[dict[str, Any]]:
+        """Artefacts made by jobs ``client`` sees, newest first."""
+        with self._lock:
+            return self._db.execute(
+                "SELECT * FROM artefacts WHERE kind = ? AND hash IN (SELECT j.hash FROM jobs j JOIN job_clients c "
+                "ON c.job_id = j.id WHERE c.client = ? AND j.kind = ?) ORDER BY created DESC LIMIT ?",
+                (kind, client, kind, limit)).fetchall()
 
     def active(self) -> list[dict[str, Any]]:
         """Queued and running jobs, oldest first (what a restart re-queues)."""
@@ -150,10 +208,11 @@ class JobStore:
             self._db.execute("UPDATE jobs SET state = 'queued', progress = 0, elapsed = 0, eta = NULL, "
                              "started = NULL, attempts = attempts + 1 WHERE id = ?", (job_id,))
 
-    def started(self, job_id: str) -> None:
+    def started(self, job_id: str) -> bool:
+        """Mark a queued job running; True when it was queued until now."""
         with self._lock:
-            self._db.execute("UPDATE jobs SET state = 'running', started = ? WHERE id = ? AND state = 'queued'",
-                             (time.time(), job_id))
+            return self._db.execute("UPDATE jobs SET state = 'running', started = ? WHERE id = ? AND state = 'queued'",
+                                    (time.time(), job_id)).rowcount > 0
 
     def progress(self, job_id: str, fraction: float, elapsed: float, eta: float | None) -> None:
         with self._lock:

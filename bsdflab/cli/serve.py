@@ -18,7 +18,8 @@ def register(sub) -> None:
     p.add_argument("--data-dir", default=None, help="job store and artefacts (default: the user data folder)")
     p.add_argument("--workers", type=int, default=None,
                    help="job worker processes (default: cores - 1, at most 4)")
-    p.add_argument("--log-level", default="info", choices=("critical", "error", "warning", "info", "debug"))
+    p.add_argument("--log-level", default=None, choices=("critical", "error", "warning", "info", "debug"),
+                   help="default $BSDFLAB_LOG_LEVEL or info")
     p.set_defaults(run=run)
 
 
@@ -27,14 +28,22 @@ def run(args: argparse.Namespace) -> int:
     from pydantic import ValidationError
 
     from bsdflab.service import Settings, create_app
+    from bsdflab.service.logs import log_config
 
     overrides = {k: v for k, v in (("host", args.host), ("port", args.port), ("data_dir", args.data_dir),
-                                   ("workers", args.workers)) if v is not None}
+                                   ("workers", args.workers), ("log_level", args.log_level)) if v is not None}
     try:
         settings = Settings(**overrides)
     except ValidationError as e:
         raise ValueError("; ".join(f"{'.'.join(map(str, err['loc']))}: {err['msg']}" for err in e.errors())) from None
-    config = uvicorn.Config(create_app(settings), host=settings.host, port=settings.port,
-                            log_level=args.log_level, timeout_graceful_shutdown=5)
+    # h11: its header-size limit holds (httptools accepted 1 MB of headers); slow clients
+    # beyond these are a reverse proxy's job (docs/service.md, "Behind a reverse proxy")
+    config = uvicorn.Config(create_app(settings), host=settings.host, port=settings.port, http="h11",
+                            log_config=log_config(settings.log_level, settings.log_format == "json"),
+                            log_level=settings.log_level, access_log=False, timeout_graceful_shutdown=5,
+                            timeout_keep_alive=settings.server_timeout_keep_alive_s,
+                            limit_concurrency=settings.server_limit_concurrency,
+                            h11_max_incomplete_event_size=settings.server_max_header_bytes,
+                            backlog=settings.server_backlog)
     uvicorn.Server(config).run()
     return 0

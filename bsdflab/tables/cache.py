@@ -24,6 +24,7 @@ from bsdflab.util import args as check
 from bsdflab.tables.data import FORMAT_VERSION, TableData, TableGrid, check_table_memory
 from bsdflab.tables.file_format import canonical_json, read_table, write_table
 from bsdflab.tables.tabulate import ERROR_FLOOR, tabulate
+from bsdflab.util.settings import library_settings
 
 ENV_VAR = "BSDFLAB_CACHE_DIR"
 RGB = ("R", "G", "B")
@@ -53,8 +54,9 @@ def cache_dir(directory: str | os.PathLike | None = None) -> Path:
     """
     if directory is not None:
         return Path(directory)
-    if os.environ.get(ENV_VAR):
-        return Path(os.environ[ENV_VAR])
+    folder = library_settings().cache_dir   # BSDFLAB_CACHE_DIR
+    if folder is not None:
+        return folder
     import platformdirs
 
     return Path(platformdirs.user_cache_dir("bsdflab")) / "tables"

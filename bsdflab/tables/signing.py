@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import hashlib
 import hmac
-import os
+
+from bsdflab.util.settings import library_settings
 
 ENV_VAR = "BSDFLAB_TABLE_KEY"
 MIN_KEY_BYTES = 16
@@ -23,9 +24,10 @@ _CONTEXT = b"bsdflab-table-signature-v1:"
 def resolve_key(key: bytes | str | None) -> bytes | None:
     """The key to use: ``key`` when given, else ``$BSDFLAB_TABLE_KEY``, else None."""
     if key is None:
-        key = os.environ.get(ENV_VAR) or None
-        if key is None:
+        secret = library_settings().table_key   # BSDFLAB_TABLE_KEY
+        if secret is None:
             return None
+        key = secret.get_secret_value()
     if isinstance(key, str):
         key = key.encode("utf-8")
     if not isinstance(key, (bytes, bytearray)):

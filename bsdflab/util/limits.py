@@ -2,41 +2,25 @@
 it is made when the estimate exceeds a cap. One module, so the CLI, the Python API and the
 HTTP service refuse the same requests with the same message (docs/limits.md).
 
-Each cap has a default and an environment override read at call time (so a service or a
-test can tighten it without re-importing):
-
-=========================  ==========  =========================================================
-variable                   default     what it bounds
-=========================  ==========  =========================================================
-``BSDFLAB_MAX_BYTES``      4 GiB       estimated peak memory of one request (table, meshes,
-                                       render buffers), in bytes
-``BSDFLAB_MAX_PIXELS``     2**26       width x height of one render
-``BSDFLAB_MAX_TRIANGLES``  2**25       triangles of one scene (all shapes together)
-``BSDFLAB_MAX_TABLE_CELLS`` 2**26      cells (lobes x thicknesses x theta_i x theta_o x phi)
-                                       of one table
-``BSDFLAB_MAX_SPP``        2**20       samples per pixel of one render
-=========================  ==========  =========================================================
-
-Values may be written as integers, with ``_`` separators, or with a binary suffix
-(``512M``, ``8G``). A bad value is itself a ``ValueError`` naming the variable.
+Each cap is a field of the one settings model (bsdflab.util.settings, docs/settings.md),
+read at call time (so a service or a test can tighten it without re-importing):
+``BSDFLAB_MAX_BYTES`` (4 GiB of estimated peak memory per request), ``BSDFLAB_MAX_PIXELS``
+(2**26), ``BSDFLAB_MAX_TRIANGLES`` (2**25), ``BSDFLAB_MAX_TABLE_CELLS`` (2**26) and
+``BSDFLAB_MAX_SPP`` (2**20). Values may be written as integers, with ``_`` separators, or
+with a binary suffix (``512M``, ``8G``); a bad value is itself a ``ValueError`` naming the
+variable. The HTTP service's per-request limits (``BSDFLAB_LIMIT_*``) sit below these.
 The estimates below are deliberately generous (they include the Python-side copies), so a
 request that passes its cap fits in about that much memory.
 """
 from __future__ import annotations
 
-import os
-import re
 from dataclasses import dataclass
 
-GIB = 1 << 30
-DEFAULTS = {
-    "BSDFLAB_MAX_BYTES": 4 * GIB,
-    "BSDFLAB_MAX_PIXELS": 1 << 26,
-    "BSDFLAB_MAX_TRIANGLES": 1 << 25,
-    "BSDFLAB_MAX_TABLE_CELLS": 1 << 26,
-    "BSDFLAB_MAX_SPP": 1 << 20,
-}
-_SUFFIX = {"": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}
+from bsdflab.util.settings import GIB, LibrarySettings, library_settings, variable
+
+CAPS = ("max_bytes", "max_pixels", "max_triangles", "max_table_cells", "max_spp")
+# the defaults by variable name (what callers quote as "the default")
+DEFAULTS = {variable(name): LibrarySettings.model_fields[name].default for name in CAPS}
 
 # Bytes per unit of work, counted from the code that allocates (see docs/limits.md):
 # render: 4 double accumulators x 3 channels in the core (96) + mean and variance handed to
@@ -60,17 +44,10 @@ MESH_FILE_EXPANSION = 24
 
 
 def _read(name: str) -> int:
-    text = os.environ.get(name, "").strip()
-    if not text:
-        return DEFAULTS[name]
-    m = re.fullmatch(r"([0-9][0-9_]*)\s*([KMGT]?)(?:i?B)?", text, flags=re.IGNORECASE)
-    if not m:
-        raise ValueError(f"environment variable {name} must be a positive integer "
-                         f"(optionally with K/M/G/T), got {text!r}")
-    value = int(m.group(1).replace("_", "")) * _SUFFIX[m.group(2).upper()]
-    if value < 1:
-        raise ValueError(f"environment variable {name} must be >= 1, got {text!r}")
-    return value
+    """The cap held in variable ``name`` (a DEFAULTS key), as set now."""
+    if name not in DEFAULTS:
+        raise KeyError(f"{name} is not one of the caps {', '.join(DEFAULTS)}")
+    return getattr(library_settings(), name[len("BSDFLAB_"):].lower())
 
 
 @dataclass(frozen=True)
@@ -86,7 +63,8 @@ class Limits:
 
 def current() -> Limits:
     """The caps as set now (defaults overridden by the environment)."""
-    return Limits(*(_read(name) for name in DEFAULTS))
+    settings = library_settings()
+    return Limits(*(getattr(settings, name) for name in CAPS))
 
 
 def _size(n: float) -> str:

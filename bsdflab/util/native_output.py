@@ -1,5 +1,12 @@
 """Capture what a native library prints while it runs (Python-level and file descriptors
-1 and 2), so a damaged file gives one clear error instead of a screenful of diagnostics."""
+1 and 2), so a damaged file gives one clear error instead of a screenful of diagnostics.
+
+Capturing swaps the process-wide descriptors 1 and 2 (``dup2``): two threads doing it at
+once could leave them pointing at a deleted temporary file, and while one thread holds
+them every other thread's output lands in its capture. So the swap is serialised by a
+lock, and a threaded server turns it off altogether (``capture_descriptors(False)``, as
+the HTTP service does while it runs): the block then captures nothing, and a native
+library's diagnostics reach the server's log like any other line."""
 from __future__ import annotations
 
 import contextlib
@@ -7,7 +14,18 @@ import io
 import os
 import sys
 import tempfile
+import threading
 from collections.abc import Iterator
+
+_SWAP = threading.Lock()
+_enabled = True
+
+
+def capture_descriptors(enabled: bool) -> bool:
+    """Turn descriptor capture on or off for the whole process; returns the previous state."""
+    global _enabled
+    previous, _enabled = _enabled, bool(enabled)
+    return previous
 
 
 class CapturedOutput:
@@ -31,8 +49,17 @@ def _flush_c_stdio() -> None:
 
 @contextlib.contextmanager
 def quiet_native_output() -> Iterator[CapturedOutput]:
-    """Silence stdout and stderr inside the block; the text lands in the yielded object."""
+    """Silence stdout and stderr inside the block; the text lands in the yielded object
+    (nothing is silenced, and nothing captured, while ``capture_descriptors`` is off)."""
     captured = CapturedOutput()
+    if not _enabled:
+        yield captured
+        return
+    with _SWAP:
+        yield from _swapped(captured)
+
+
+def _swapped(captured: CapturedOutput) -> Iterator[CapturedOutput]:
     python_text = io.StringIO()
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):

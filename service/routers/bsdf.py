@@ -1,29 +1,35 @@
 """/v1/bsdf: evaluate a model at direction pairs, and its lobe as data or as a picture.
 
-Synchronous routes (plain ``def``): FastAPI runs them on its thread pool, and the C++ core
-releases the GIL, so the event loop never waits on them."""
+Every route computes on the heavy pool (bsdflab.service.heavy): bounded concurrency, 429
+when full, a compute deadline, cancelled when the client leaves; the C++ core releases the
+GIL, so the event loop never waits on them. Answers are bounded before computing
+(``limit_response_bytes``); ``Accept: application/x-npy`` gives evaluations as a NumPy
+array."""
 from __future__ import annotations
 
+import io
 import json
 import os
 import tempfile
 from typing import Annotated
 
 import numpy as np
-from fastapi import APIRouter, Query
+from fastapi import APIRouter, HTTPException, Query, Request
 from fastapi.responses import Response
 
 from bsdflab import slices as lobe_views
 from bsdflab.requests import ModelCache
 from bsdflab.plots.lobe import lobe_figure
 
-from bsdflab.service.deps import KEY, SettingsDep
-from bsdflab.service.errors import ERRORS, KEY_ERRORS, over_limit
+from bsdflab.service import artefact_refs
+from bsdflab.service.deps import HeavyDep, JobsDep, SettingsDep, model_spec
+from bsdflab.service.errors import ERRORS, over_limit
+from bsdflab.service.heavy import check_cancelled, evaluate_in_chunks
 from bsdflab.service.schemas import (EvalRequest, EvalResponse, HemisphereView, LobeRequest, LobeResponse, PlaneView)
-from bsdflab.service.settings import Settings
+from bsdflab.service.settings import Settings, limit_variable
 
 MODELS = ModelCache(32)   # recently asked-for models, their core objects built
-router = APIRouter(prefix="/v1/bsdf", tags=["bsdf"], dependencies=[KEY], responses={**ERRORS, **KEY_ERRORS})
+router = APIRouter(prefix="/v1/bsdf", tags=["bsdf"], responses=ERRORS)
 
 
 def _rows(a: np.ndarray | None) -> list | None:
@@ -65,49 +71,118 @@ def _directions(body: EvalRequest, settings: Settings) -> tuple[np.ndarray, np.n
     return lobe_views.directions_from_angles(body.theta_i, body.theta_o, body.phi if body.phi is not None else [180.0])
 
 
-@router.post("/eval", response_model=EvalResponse, summary="Evaluate a BSDF at direction pairs")
-def evaluate(body: EvalRequest, settings: SettingsDep) -> EvalResponse:
+def _check_answer(settings: Settings, pairs: int, channels: int, stochastic: bool, binary: bool,
+                  extra_values: int = 0) -> None:
+    """Refuse, before computing, an answer whose estimated size is over the limit: pairs x
+    channels (twice with standard errors) at about 24 bytes a number in JSON, 8 in .npy."""
+    numbers = pairs * channels * (2 if stochastic else 1) + extra_values
+    if binary:
+        size = NPY_BYTES * numbers
+    else:
+        size = JSON_BYTES * (numbers + 6 * pairs)   # wi and wo are echoed in JSON
+    limit = settings.limit_response_bytes
+    if size > limit:
+        hint = "" if binary else "; the binary form (Accept: application/x-npy) is about 3x smaller"
+        raise HTTPException(422, f"the answer would be about {size >> 20} MiB ({pairs} pairs x {channels} channels"
+                                 f"{' x 2 with standard errors' if stochastic else ''}), more than the limit of "
+                                 f"{limit >> 20} MiB ({limit_variable('limit_response_bytes')}){hint}")
+
+
+def _json_answer(model) -> Response:
+    """The answer serialised here, on the heavy thread (an async route's return value would
+    be serialised on the event loop, where a large answer would hold up /healthz)."""
+    return Response(model.model_dump_json(), media_type="application/json")
+
+
+def wants_npy(request: Request) -> bool:
+    return NPY_TYPE in request.headers.get("accept", "")
+
+
+def _npy(values: np.ndarray, stderr: np.ndarray | None, channels: list[str]) -> Response:
+    array = np.asarray(values, dtype=np.float64) if stderr is None else np.stack([values, stderr]).astype(np.float64)
+    buffer = io.BytesIO()
+    np.save(buffer, array, allow_pickle=False)
+    return Response(buffer.getvalue(), media_type=NPY_TYPE,
+                    headers={"X-Shape": ",".join(map(str, array.shape)), "X-Channels": ",".join(channels),
+                             "X-Layout": "values" if stderr is None else "values,stderr"})
+
+
+NPY_TYPE = "application/x-npy"
+JSON_BYTES, NPY_BYTES = 24, 8
+EVAL_RESPONSES = {200: {"content": {NPY_TYPE: {"schema": {"type": "string", "format": "binary"}}},
+                        "description": "JSON, or with `Accept: application/x-npy` a NumPy .npy array of "
+                                       "float64: (pairs, channels), or (2, pairs, channels) = values and "
+                                       "standard errors for stochastic models; headers X-Shape, X-Channels, "
+                                       "X-Layout"}}
+
+
+@router.post("/eval", response_model=EvalResponse, responses=EVAL_RESPONSES, summary="Evaluate a BSDF at direction pairs")
+async def evaluate(body: EvalRequest, request: Request, settings: SettingsDep, jobs: JobsDep, heavy: HeavyDep):
     """f(wi, wo) |cos theta_o| (Mitsuba's convention) for every pair, in linear sRGB (D65) or
     at the given wavelengths, with standard errors for stochastic (layered) models. The
-    same request always gives the same answer (walks are seeded from seed, wi, wo)."""
-    bsdf = MODELS.get(body.spec())
-    wi, wo = _directions(body, settings)
-    if body.wavelengths is not None:
-        over_limit(settings, "limit_wavelengths", len(body.wavelengths), "wavelengths")
-    if len(wi) != len(wo) and 1 not in (len(wi), len(wo)):
-        raise ValueError(f"wi and wo must have one length (or length 1); got {len(wi)} and {len(wo)}")
-    pairs = max(len(wi), len(wo))
-    _check_walks(settings, bsdf, pairs, body.samples)
-    result = lobe_views.evaluate(bsdf, wi, wo, body.wavelengths, body.samples, body.seed)
-    channels = ["R", "G", "B"] if body.wavelengths is None else [f"{w:g}" for w in body.wavelengths]
-    wi, wo = np.broadcast_to(wi, (pairs, 3)), np.broadcast_to(wo, (pairs, 3))
-    # model_construct: the fields are built here from numpy arrays, validating them again
-    # would cost ten times the evaluation of a cheap model (bench/bench_service.py)
-    return EvalResponse.model_construct(channels=channels, wi=wi.tolist(), wo=wo.tolist(),
-                                        values=_rows(result.values), stderr=_rows(result.stderr),
-                                        stochastic=result.stderr is not None)
+    same request always gives the same answer (walks are seeded from seed, wi, wo).
+    ``Accept: application/x-npy`` answers a compact NumPy array instead of JSON."""
+    spec = model_spec(body.spec(), jobs)
+    binary = wants_npy(request)
+
+    def compute():
+        bsdf = MODELS.get(spec)
+        wi, wo = _directions(body, settings)
+        if body.wavelengths is not None:
+            over_limit(settings, "limit_wavelengths", len(body.wavelengths), "wavelengths")
+        if len(wi) != len(wo) and 1 not in (len(wi), len(wo)):
+            raise ValueError(f"wi and wo must have one length (or length 1); got {len(wi)} and {len(wo)}")
+        pairs = max(len(wi), len(wo))
+        channels = ["R", "G", "B"] if body.wavelengths is None else [f"{w:g}" for w in body.wavelengths]
+        _check_walks(settings, bsdf, pairs, body.samples)
+        _check_answer(settings, pairs, len(channels), lobe_views.is_stochastic(bsdf), binary)
+        result = evaluate_in_chunks(bsdf, wi, wo, body.wavelengths, body.samples, body.seed)
+        if result.stderr is not None:
+            request.app.state.metrics.walks.inc(pairs * (body.samples or bsdf.samples))
+        if binary:
+            return _npy(result.values, result.stderr, channels)
+        wi, wo = np.broadcast_to(wi, (pairs, 3)), np.broadcast_to(wo, (pairs, 3))
+        # model_construct: the fields are built here from numpy arrays, validating them again
+        # would cost ten times the evaluation of a cheap model (bench/bench_service.py)
+        return _json_answer(EvalResponse.model_construct(
+            channels=channels, wi=wi.tolist(), wo=wo.tolist(), values=_rows(result.values),
+            stderr=_rows(result.stderr), stochastic=result.stderr is not None))
+
+    return await heavy.run(request, compute)
 
 
 @router.post("/lobe", response_model=LobeResponse, summary="A lobe slice and a hemisphere grid as data")
-def lobe(body: LobeRequest, settings: SettingsDep) -> LobeResponse:
+async def lobe(body: LobeRequest, request: Request, settings: SettingsDep, jobs: JobsDep, heavy: HeavyDep):
     """The plane of incidence (signed outgoing angle, mirror direction at +theta_i) and the
     upper hemisphere seen from above (orthographic x, y), in linear sRGB, for one incidence."""
-    bsdf = MODELS.get(body.spec())
-    over_limit(settings, "limit_lobe_resolution", body.points, "points")
-    over_limit(settings, "limit_lobe_resolution", body.resolution, "resolution")
-    wi = lobe_views.incident(body.theta_i)
-    out = LobeResponse.model_construct(theta_i=body.theta_i, wi=wi.tolist(), model=bsdf.to_dict(),
-                                       stochastic=lobe_views.is_stochastic(bsdf), plane=None, hemisphere=None)
-    if body.view in ("plane", "both"):
-        _check_walks(settings, bsdf, body.points, body.samples)
-        angles, v = lobe_views.plane_of_incidence(bsdf, body.theta_i, body.points, body.samples, body.seed)
-        out.plane = PlaneView.model_construct(angle_deg=angles.tolist(), values=_rows(v.values),
-                                              stderr=_rows(v.stderr))
-    if body.view in ("hemisphere", "both"):
-        _check_walks(settings, bsdf, body.resolution**2, body.samples)
-        x, inside, v = lobe_views.hemisphere(bsdf, body.theta_i, body.resolution, body.samples, body.seed)
-        out.hemisphere = _hemisphere_view(x, inside, v)
-    return out
+    spec = model_spec(body.spec(), jobs)
+
+    def compute():
+        bsdf = MODELS.get(spec)
+        over_limit(settings, "limit_lobe_resolution", body.points, "points")
+        over_limit(settings, "limit_lobe_resolution", body.resolution, "resolution")
+        wi = lobe_views.incident(body.theta_i)
+        stochastic = lobe_views.is_stochastic(bsdf)
+        plane = body.points if body.view in ("plane", "both") else 0
+        grid = body.resolution**2 if body.view in ("hemisphere", "both") else 0
+        # plane values (+ errors), hemisphere rgb (+ luminance and its error)
+        _check_answer(settings, plane, 3, stochastic, False, extra_values=grid * (5 if stochastic else 4))
+        out = LobeResponse.model_construct(theta_i=body.theta_i, wi=wi.tolist(),
+                                           model=artefact_refs.public(bsdf.to_dict(), jobs.artefact_dir),
+                                           stochastic=stochastic, plane=None, hemisphere=None)
+        if plane:
+            _check_walks(settings, bsdf, body.points, body.samples)
+            angles, v = lobe_views.plane_of_incidence(bsdf, body.theta_i, body.points, body.samples, body.seed)
+            out.plane = PlaneView.model_construct(angle_deg=angles.tolist(), values=_rows(v.values),
+                                                  stderr=_rows(v.stderr))
+        check_cancelled()
+        if grid:
+            _check_walks(settings, bsdf, body.resolution**2, body.samples)
+            x, inside, v = lobe_views.hemisphere(bsdf, body.theta_i, body.resolution, body.samples, body.seed)
+            out.hemisphere = _hemisphere_view(x, inside, v)
+        return _json_answer(out)
+
+    return await heavy.run(request, compute)
 
 
 def _hemisphere_view(x: np.ndarray, inside: np.ndarray, v: lobe_views.Values) -> HemisphereView:
@@ -149,31 +224,36 @@ def _figure_checks(settings: Settings, bsdf, theta_i: float, samples: int) -> No
         over_limit(settings, "limit_walks", 48 * 48 * 64, "figure walks")
 
 
+def _checked_figure(settings: Settings, spec: dict, theta_i: float, samples: int, seed: int) -> Response:
+    bsdf = MODELS.get(spec)
+    _figure_checks(settings, bsdf, theta_i, samples)
+    return _figure(bsdf, theta_i, samples, seed)
+
+
 @router.post("/lobe.png", response_class=Response, responses=PNG, summary="The lobe figure (PNG)")
-def lobe_png(body: LobeRequest, settings: SettingsDep) -> Response:
+async def lobe_png(body: LobeRequest, request: Request, settings: SettingsDep, jobs: JobsDep,
+                   heavy: HeavyDep) -> Response:
     """The figure of ``bsdflab lobe``: lobe in the plane of incidence, the hemisphere, and
     albedo vs incidence angle with its colour. ``samples`` sets the albedo estimates'
     sample count (default 20000); ``points``, ``resolution`` and ``view`` do not apply."""
-    bsdf = MODELS.get(body.spec())
+    spec = model_spec(body.spec(), jobs)
     samples = body.samples or FIGURE_SAMPLES
-    _figure_checks(settings, bsdf, body.theta_i, samples)
-    return _figure(bsdf, body.theta_i, samples, body.seed or 0)
+    return await heavy.run(request, _checked_figure, settings, spec, body.theta_i, samples, body.seed or 0)
 
 
 @router.get("/lobe.png", response_class=Response, responses=PNG, summary="The lobe figure (PNG), by query")
-def lobe_png_query(settings: SettingsDep,
-                   preset: Annotated[str | None, Query(description="a preset name")] = None,
-                   overrides: Annotated[str | None, Query(description="the preset's overrides as JSON")] = None,
-                   model: Annotated[str | None, Query(description="a BSDF dict as JSON")] = None,
+async def lobe_png_query(request: Request, settings: SettingsDep, jobs: JobsDep, heavy: HeavyDep,
+                   preset: Annotated[str | None, Query(min_length=1, description="a preset name")] = None,
+                   overrides: Annotated[str | None, Query(min_length=1, description="the preset's overrides as JSON")] = None,
+                   model: Annotated[str | None, Query(min_length=1, description="a BSDF dict as JSON")] = None,
                    theta_i: Annotated[float, Query(description="incidence angle in degrees")] = 30.0,
                    samples: Annotated[int, Query(ge=1, le=1 << 24)] = FIGURE_SAMPLES,
                    seed: Annotated[int, Query(ge=0, lt=1 << 64)] = 0) -> Response:
     """As POST, with the model in the query: ``?preset=xenopeltis&theta_i=45`` or
     ``?model={"type":"diffuse","reflectance":0.5}`` (URL-encoded)."""
-    spec = {"preset": preset, "overrides": _json("overrides", overrides), "model": _json("model", model)}
-    bsdf = MODELS.get(spec)
-    _figure_checks(settings, bsdf, theta_i, samples)
-    return _figure(bsdf, theta_i, samples, seed)
+    spec = model_spec({"preset": preset, "overrides": _json("overrides", overrides),
+                       "model": _json("model", model)}, jobs)
+    return await heavy.run(request, _checked_figure, settings, spec, theta_i, samples, seed)
 
 
 def _json(name: str, text: str | None):

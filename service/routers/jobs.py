@@ -12,8 +12,8 @@ from fastapi.sse import EventSourceResponse, ServerSentEvent
 
 from bsdflab.jobs import FINISHED
 
-from bsdflab.service.deps import KEY, JobsDep, SettingsDep
-from bsdflab.service.errors import KEY_ERRORS, NOT_FOUND
+from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep
+from bsdflab.service.errors import NOT_FOUND
 from bsdflab.service.schemas import JOB_ID_PATTERN, JobInfo, JobList
 from bsdflab.service.views import job_info
 
@@ -21,8 +21,8 @@ router = APIRouter(prefix="/v1/jobs", tags=["jobs"], responses=NOT_FOUND)
 JobId = Annotated[str, Path(pattern=JOB_ID_PATTERN, description="a job id (32 hex digits)")]
 
 
-def existing_job(job_id: JobId, jobs: JobsDep) -> dict[str, Any]:
-    row = jobs.job(job_id)
+def existing_job(job_id: JobId, jobs: JobsDep, client: ClientDep) -> dict[str, Any]:
+    row = jobs.visible(jobs.job(job_id), client)
     if row is None:
         raise HTTPException(404, f"no job {job_id}")
     return row
@@ -32,9 +32,13 @@ JobRow = Annotated[dict, Depends(existing_job)]
 
 
 @router.get("", response_model=JobList, summary="Recent jobs")
-def list_jobs(jobs: JobsDep, state: Annotated[str | None, Query(pattern="^(queued|running|done|failed|cancelled)$")] = None,
+def list_jobs(jobs: JobsDep, client: ClientDep,
+              state: Annotated[str | None, Query(pattern="^(queued|running|done|failed|cancelled)$")] = None,
               limit: Annotated[int, Query(ge=1, le=1000)] = 100) -> JobList:
-    return JobList(jobs=[job_info(r) for r in jobs.store.jobs(limit, state)])
+    """The client's own jobs (those it created or joined), newest first; an admin key sees
+    every client's."""
+    rows = jobs.store.jobs(limit, state, client=None if client.admin else client.name)
+    return JobList(jobs=[job_info(r) for r in rows])
 
 
 @router.get("/{job_id}", response_model=JobInfo, summary="A job's state and progress")
@@ -44,12 +48,14 @@ def get_job(row: JobRow) -> JobInfo:
     return job_info(row)
 
 
-@router.delete("/{job_id}", response_model=JobInfo, dependencies=[KEY],
-               responses={**KEY_ERRORS, 409: {"description": "the job has already finished"}},
+@router.delete("/{job_id}", response_model=JobInfo, responses={409: {"description": "the job has already finished"}},
                summary="Cancel a job")
-def cancel_job(row: JobRow, jobs: JobsDep) -> JobInfo:
+def cancel_job(row: JobRow, jobs: JobsDep, client: ClientDep) -> JobInfo:
     """Cancel a queued or running job: it stops within a moment and its state becomes
-    cancelled (``cancel_requested`` is true until then). Finished jobs answer 409."""
+    cancelled (``cancel_requested`` is true until then). Finished jobs answer 409. Only the
+    client that created the job (or an admin) may cancel it; one that joined it gets 403."""
+    if not client.admin and row.get("owner") != client.name:
+        raise HTTPException(403, f"job {row['id']} was started by another client; only it or an admin may cancel it")
     if row["state"] == "cancelled":
         return job_info(row)
     if row["state"] in FINISHED or not jobs.cancel(row["id"]):

@@ -9,7 +9,8 @@ from fastapi import APIRouter
 import bsdflab
 from bsdflab import _core
 
-from bsdflab.service.deps import JobsDep, SettingsDep
+from bsdflab.service.deps import KEY, JobsDep, SettingsDep
+from bsdflab.service.errors import KEY_ERRORS
 from bsdflab.service.schemas import Health, VersionInfo
 
 router = APIRouter(tags=["meta"])
@@ -24,11 +25,14 @@ def _mitsuba_version() -> str | None:
 
 
 @router.get("/healthz", response_model=Health, summary="Liveness")
-def healthz() -> Health:
+async def healthz() -> Health:
+    """A coroutine on the event loop: it never waits for a thread, so computation (which
+    runs on the heavy pool) cannot delay it."""
     return Health(status="ok")
 
 
-@router.get("/v1/version", response_model=VersionInfo, summary="Versions, executor and limits")
+@router.get("/v1/version", response_model=VersionInfo, dependencies=[KEY], responses=KEY_ERRORS,
+            summary="Versions, executor and limits")
 def version(settings: SettingsDep, jobs: JobsDep) -> VersionInfo:
     """The package, the C++ core build (module file, threads), Mitsuba's version, the job
     executor and the request limits in force."""
@@ -38,4 +42,5 @@ def version(settings: SettingsDep, jobs: JobsDep) -> VersionInfo:
                        core={"module": _core.__file__.rsplit("/", 1)[-1], "threads": _core.worker_count()},
                        mitsuba=_mitsuba_version(), python=platform.python_version(),
                        executor=settings.executor, workers=jobs.executor.workers,
-                       api_key_required=settings.api_key is not None, limits=limits)
+                       api_key_required=settings.api_key is not None or bool(settings.api_keys)
+                       or settings.api_keys_file is not None, limits=limits)

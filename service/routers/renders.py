@@ -6,8 +6,9 @@ from typing import Annotated, Any
 from fastapi import APIRouter, HTTPException, Path
 from fastapi.responses import FileResponse, JSONResponse
 
-from bsdflab.service.deps import KEY, JobsDep, SettingsDep
-from bsdflab.service.errors import ERRORS, KEY_ERRORS, NOT_FOUND, over_limit
+from bsdflab.service import render_checks
+from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep, model_spec
+from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
 from bsdflab.service.job_service import JobService
 from bsdflab.service.schemas import HASH_PATTERN, RenderInfo, RenderRequest
 from bsdflab.service.views import job_info
@@ -32,19 +33,20 @@ def render_info(jobs: JobService, h: str, request: dict[str, Any], result: dict[
                       summary=None if result is None else result["summary"], links=_links(h))
 
 
-@router.post("", response_model=RenderInfo, dependencies=[KEY], responses={**QUEUED, **ERRORS, **KEY_ERRORS},
+@router.post("", response_model=RenderInfo, responses={**QUEUED, **ERRORS},
              summary="Render a scene (or get the existing image)")
-def create_render(body: RenderRequest, jobs: JobsDep, settings: SettingsDep):
+def create_render(body: RenderRequest, jobs: JobsDep, settings: SettingsDep, client: ClientDep):
     """200 with the render when this exact request (scene, options, size, spp, seed) was
     rendered before, else 202 with its job; identical requests in flight share it."""
-    request, key = jobs.prepare(KIND, body.model_dump())
+    request, key = jobs.prepare(KIND, model_spec(body.model_dump(), jobs))
     pixels = request["width"] * request["height"]
     over_limit(settings, "limit_render_pixels", pixels, "width x height")
     over_limit(settings, "limit_render_samples", pixels * request["spp"], "width x height x spp")
     found = jobs.cached(KIND, key) or jobs.adopt(KIND, key, request)
     if found is not None:
         return render_info(jobs, key, request, found)
-    row, _ = jobs.submit(KIND, request, key)
+    render_checks.check(request)   # what the worker would refuse, refused now (422)
+    row, _ = jobs.submit(KIND, request, key, client)
     info = job_info(jobs.job(row["id"]))
     return JSONResponse(info.model_dump(mode="json"), status_code=202, headers={"Location": info.links["self"]})
 

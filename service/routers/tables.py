@@ -8,8 +8,8 @@ from fastapi.responses import FileResponse, JSONResponse
 
 from bsdflab.jobs import tabulate as tabulate_kind
 
-from bsdflab.service.deps import KEY, JobsDep, SettingsDep
-from bsdflab.service.errors import ERRORS, KEY_ERRORS, NOT_FOUND, over_limit
+from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep, model_spec
+from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
 from bsdflab.service.job_service import JobService
 from bsdflab.service.schemas import HASH_PATTERN, JobInfo, TableInfo, TableList, TableRequest
 from bsdflab.service.views import job_info
@@ -27,38 +27,34 @@ def table_info(result: dict[str, Any]) -> TableInfo:
     return TableInfo(hash=h, links={"self": f"/v1/tables/{h}", "file": f"/v1/tables/{h}/file"}, **fields)
 
 
-@router.post("", response_model=TableInfo, dependencies=[KEY], responses={**QUEUED, **ERRORS, **KEY_ERRORS},
+@router.post("", response_model=TableInfo, responses={**QUEUED, **ERRORS},
              summary="Tabulate a model (or get the existing table)")
-def create_table(body: TableRequest, jobs: JobsDep, settings: SettingsDep):
+def create_table(body: TableRequest, jobs: JobsDep, settings: SettingsDep, client: ClientDep):
     """200 with the table when it exists already (the same model, grid, target error and
     channels: the table cache's key), else 202 with the job that makes it; identical
     requests in flight share that job."""
-    request, key = jobs.prepare(KIND, body.model_dump(exclude_none=True))
+    request, key = jobs.prepare(KIND, model_spec(body.model_dump(exclude_none=True), jobs))
     over_limit(settings, "limit_table_cells", tabulate_kind.cells(request), "table cells (both lobes counted)")
     if request["wavelengths"] is not None:
         over_limit(settings, "limit_wavelengths", len(request["wavelengths"]), "wavelengths")
     found = jobs.cached(KIND, key) or jobs.adopt(KIND, key, request)
     if found is not None:
         return table_info(found)
-    row, _ = jobs.submit(KIND, request, key)
+    row, _ = jobs.submit(KIND, request, key, client)
     info = job_info(jobs.job(row["id"]))
     return JSONResponse(info.model_dump(mode="json"), status_code=202, headers={"Location": info.links["self"]})
 
 
 @router.get("", response_model=TableList, summary="The tables this server has made")
-def list_tables(jobs: JobsDep, limit: Annotated[int, Query(ge=1, le=1000)] = 100) -> TableList:
-    return TableList(tables=[table_info(r["result"]) for r in jobs.store.artefacts(KIND, limit)])
+def list_tables(jobs: JobsDep, client: ClientDep, limit: Annotated[int, Query(ge=1, le=1000)] = 100) -> TableList:
+    """Tables made by the client's jobs (an admin: every table), newest first. A table's
+    hash is its name: any client that knows it may read the table."""
+    rows = jobs.store.artefacts(KIND, limit) if client.admin else jobs.store.artefacts_of(KIND, client.name, limit)
+    return TableList(tables=[table_info(r["result"]) for r in rows])
 
 
 def _found(jobs: JobService, key: str) -> dict[str, Any]:
-    result = jobs.cached(KIND, key)
-    if result is None:   # a table another job made (a render's), or a deleted record
-        path = jobs.artefact_dir / f"{key}.exr"
-        if path.is_file():
-            try:
-                result = {"hash": key, "files": {"exr": path.name}, **tabulate_kind.describe(path)}
-            except ValueError:   # not a table (a render's image has the same naming)
-                result = None
+    result = jobs.table(key)
     if result is None:
         job = jobs.store.latest_for(KIND, key)
         hint = f"; job {job['id']} is {job['state']}" if job is not None else ""

@@ -3,18 +3,19 @@ colour vs incidence angle (bsdflab.optics and bsdflab.plots.film_colour)."""
 from __future__ import annotations
 
 import numpy as np
-from fastapi import APIRouter
+from fastapi import APIRouter, Request
+from fastapi.responses import Response
 
 from bsdflab.util import args as check
 from bsdflab.optics import film_reflectance, film_transmittance
 from bsdflab.plots.film_colour import display_exposure, display_srgb, spectral_rgb
 
-from bsdflab.service.deps import KEY, SettingsDep
-from bsdflab.service.errors import ERRORS, KEY_ERRORS, over_limit
+from bsdflab.service.deps import HeavyDep, SettingsDep
+from bsdflab.service.errors import ERRORS, over_limit
 from bsdflab.service.schemas import ThinFilmRequest, ThinFilmResponse
+from bsdflab.service.settings import Settings
 
-router = APIRouter(prefix="/v1/thinfilm", tags=["thin film"], dependencies=[KEY],
-                   responses={**ERRORS, **KEY_ERRORS})
+router = APIRouter(prefix="/v1/thinfilm", tags=["thin film"], responses=ERRORS)
 DEFAULT_ANGLES = np.arange(0.0, 86.0, 5.0)
 # Physical ranges: indices of optical materials (1e-3..1e3), films up to 1 cm, wavelengths
 # from 1 nm to 1 mm; beyond them the film arithmetic loses all precision.
@@ -30,11 +31,15 @@ def _hex(encoded: np.ndarray) -> list[str]:
 
 
 @router.post("/spectrum", response_model=ThinFilmResponse, summary="Film spectra and colour vs angle")
-def spectrum(body: ThinFilmRequest, settings: SettingsDep) -> ThinFilmResponse:
+async def spectrum(body: ThinFilmRequest, request: Request, settings: SettingsDep, heavy: HeavyDep) -> Response:
     """One film of index ``film_ior`` and ``thickness_nm`` between the incident medium and a
     substrate (real indices): unpolarised R and T at each angle and wavelength, and the
     reflected colour (CIE 1931 2 deg, D65, linear sRGB) at each angle, integrated on a grid
     fine enough for the film's fringes."""
+    return await heavy.run(request, _spectrum, body, settings)
+
+
+def _spectrum(body: ThinFilmRequest, settings: Settings) -> Response:
     angles = DEFAULT_ANGLES if body.angles is None else np.asarray(body.angles, dtype=float)
     wavelengths = DEFAULT_WAVELENGTHS if body.wavelengths is None else np.asarray(body.wavelengths, dtype=float)
     over_limit(settings, "limit_angles", len(angles), "angles")
@@ -52,6 +57,7 @@ def spectrum(body: ThinFilmRequest, settings: SettingsDep) -> ThinFilmResponse:
     exposure = display_exposure(rgb, np.radians(angles))
     if not all(np.all(np.isfinite(a)) for a in (r, t, rgb)):
         raise ValueError("the film's reflectance is not finite for these indices and thickness")
-    return ThinFilmResponse(angles=angles.tolist(), wavelengths=wavelengths.tolist(), reflectance=r.tolist(),
-                            transmittance=t.tolist(), rgb=rgb.tolist(), srgb=_hex(display_srgb(rgb, exposure)),
-                            exposure=exposure)
+    answer = ThinFilmResponse(angles=angles.tolist(), wavelengths=wavelengths.tolist(), reflectance=r.tolist(),
+                              transmittance=t.tolist(), rgb=rgb.tolist(), srgb=_hex(display_srgb(rgb, exposure)),
+                              exposure=exposure)
+    return Response(answer.model_dump_json(), media_type="application/json")

@@ -316,11 +316,23 @@ async function cancelRender() {
 
 // -- start -------------------------------------------------------------------------------------
 async function main() {
-  const [{ data: presets }, { data: version }] = await Promise.all([api("/v1/presets"), api("/v1/version")]);
+  // the key first: with keys configured every /v1 route needs one (a 401 asks for it)
+  $("api-key").value = localStorage.getItem("bsdflab-api-key") || "";
+  $("api-key").addEventListener("change", () => {
+    localStorage.setItem("bsdflab-api-key", $("api-key").value);
+    location.reload();
+  });
+  let presets, version;
+  try {
+    [{ data: presets }, { data: version }] = await Promise.all([api("/v1/presets"), api("/v1/version")]);
+  } catch (e) {
+    if (!String(e.message).startsWith("401")) throw e;
+    $("key-box").hidden = false;
+    status("this server needs an API key: enter it above", true);
+    return;
+  }
   $("version").textContent = `bsdflab ${version.bsdflab} · ${version.executor}`;
   $("key-box").hidden = !version.api_key_required;
-  $("api-key").value = localStorage.getItem("bsdflab-api-key") || "";
-  $("api-key").addEventListener("change", () => localStorage.setItem("bsdflab-api-key", $("api-key").value));
   const select = $("preset");
   for (const p of presets) {
     state.presets[p.name] = p;

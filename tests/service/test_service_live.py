@@ -1,7 +1,7 @@
 """End to end against a real `bsdflab serve` process (worker processes, SQLite, uvicorn):
 a table and a render through HTTP with progress followed as server-sent events, the
 downloads checked against the Python API; dedup of concurrent identical requests;
-SIGKILL mid-job and restart; schemathesis over the OpenAPI schema; the page in Chromium."""
+SIGKILL mid-job and restart; the page in Chromium (schemathesis: test_schema_fuzz_live.py)."""
 from __future__ import annotations
 
 import hashlib
@@ -13,6 +13,7 @@ from concurrent.futures import ThreadPoolExecutor
 import httpx2 as httpx
 import numpy as np
 import pytest
+from playwright import sync_api as playwright
 from support.service_process import ServiceProcess, follow_events, wait_state
 
 from bsdflab import presets
@@ -115,66 +116,12 @@ def test_sigkill_mid_job_then_restart_completes_it(tmp_path):
         assert again["attempts"] == 1 and again["state"] in ("queued", "running")
         done = wait_state(second.url, job["id"], ("done", "failed", "cancelled"))
         assert done["state"] == "done", done
-        assert httpx.post(f"{second.url}/v1/tables", json=request).status_code == 200
+        # (the first table key of a fresh process takes seconds: bsdflab.jobs.tabulate.key)
+        assert httpx.post(f"{second.url}/v1/tables", json=request, timeout=120).status_code == 200
     finally:
         second.stop()
     assert not [p.name for p in artefact.parent.iterdir() if p.name.startswith(".")]   # no temp files
     np.testing.assert_array_equal(read_table(artefact).values, direct_table(request).values)
-
-
-# -- schemathesis: no 5xx (and conformance) for anything a client can send ---------------------
-# Driven through hypothesis directly: schemathesis' pytest plugin does not run on pytest 9.
-def fuzz_schema(url: str, examples_per_operation: int) -> tuple[int, list[str]]:
-    """(cases sent, failures) for every operation: its explicit examples, then
-    ``examples_per_operation`` generated cases each of schema-valid and schema-invalid data
-    (hypothesis derandomised: the same cases every run)."""
-    schemathesis = pytest.importorskip("schemathesis")
-    from hypothesis import HealthCheck, given, settings, strategies as st
-    from schemathesis.generation import GenerationMode
-    from schemathesis.specs.openapi.checks import positive_data_acceptance
-
-    # 4xx for schema-valid data is the API's job (an unknown preset, a range): not a failure
-    excluded = [positive_data_acceptance]
-    schema = schemathesis.openapi.from_url(f"{url}/openapi.json")
-    count, failures = 0, []
-    for result in schema.get_all_operations():
-        operation = result.ok()
-        strategy = st.one_of(operation.as_strategy(GenerationMode.POSITIVE),
-                             operation.as_strategy(GenerationMode.NEGATIVE),
-                             *operation.get_strategies_from_examples())
-
-        @given(case=strategy)
-        @settings(max_examples=examples_per_operation, deadline=None, database=None, derandomize=True,
-                  suppress_health_check=list(HealthCheck))
-        def check(case):
-            nonlocal count
-            count += 1
-            try:
-                case.call_and_validate(excluded_checks=excluded, timeout=120)
-            except Exception as e:   # noqa: BLE001 -- collected, reported together below
-                failures.append(f"{operation.label}: {str(e)[:1500]}")
-                raise
-
-        try:
-            check()
-        except Exception:   # noqa: BLE001 -- already recorded
-            pass
-    return count, failures
-
-
-def test_schema_no_server_errors(server):
-    """CI: a bounded sample (about 12 cases per operation)."""
-    count, failures = fuzz_schema(server.url, 12)
-    print(f"\nschemathesis: {count} cases")
-    assert not failures, "\n\n".join(failures)
-
-
-@pytest.mark.slow
-def test_schema_no_server_errors_long(server):
-    """The long run: up to 80 cases per operation, over 1000 in all."""
-    count, failures = fuzz_schema(server.url, 80)
-    print(f"\nschemathesis: {count} cases")
-    assert count >= 1000 and not failures, "\n\n".join(failures)
 
 
 # -- the page in a real browser --------------------------------------------------------------
@@ -182,7 +129,6 @@ CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 
 
 def test_page_in_chromium(server, tmp_path):
-    playwright = pytest.importorskip("playwright.sync_api")
     if not os.path.exists(CHROMIUM):
         pytest.fail("Debian's chromium is required (apt-get install chromium; dev.sh installs it)")
     with playwright.sync_playwright() as p:

@@ -28,13 +28,14 @@ def bsdflab_command() -> list[str]:
 class ServiceProcess:
     """``bsdflab serve`` in a subprocess; ``url`` once it answers /healthz."""
 
-    def __init__(self, data_dir: Path, workers: int = 1, env: dict[str, str] | None = None):
+    def __init__(self, data_dir: Path, workers: int = 1, env: dict[str, str] | None = None,
+                 log_level: str = "warning"):
         self.data_dir, self.port = data_dir, free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.log = open(data_dir / f"server-{self.port}.log", "w")
         self.process = subprocess.Popen(
             [*bsdflab_command(), "serve", "--port", str(self.port), "--data-dir", str(data_dir),
-             "--workers", str(workers), "--log-level", "warning"],
+             "--workers", str(workers), "--log-level", log_level],
             stdout=self.log, stderr=subprocess.STDOUT, env={**os.environ, **(env or {})})
         self._wait_healthy()
 
