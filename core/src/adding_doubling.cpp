@@ -52,6 +52,28 @@ std::vector<double> kernel_at(const std::vector<double> &coef, std::size_t rows,
     return K;
 }
 
+// Product integration of a fine-node kernel over its rows (fine x cols -> n x cols) or
+// its columns (rows x fine -> rows x n): sum_f B[f][k] (mu_f w_f) / (mu_k w_k) K_f, on
+// every (channel, order) coefficient at once (`cm` of them per entry).
+std::vector<double> project(const std::vector<double> &fine, bool rows_fine, std::size_t other,
+                            const std::vector<double> &B, const std::vector<double> &ratio_f,
+                            const std::vector<double> &mw, std::size_t nf, std::size_t n, std::size_t cm) {
+    std::vector<double> out(n * other * cm, 0.0);
+    parallel_for(n, 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k)
+            for (std::size_t f = 0; f < nf; ++f) {
+                double b = B[f * n + k] * ratio_f[f] / mw[k];
+                if (b == 0.0) continue;
+                for (std::size_t o = 0; o < other; ++o) {
+                    double *dst = rows_fine ? &out[(k * other + o) * cm] : &out[(o * n + k) * cm];
+                    const double *src = rows_fine ? &fine[(f * other + o) * cm] : &fine[(o * nf + f) * cm];
+                    for (std::size_t x = 0; x < cm; ++x) dst[x] += b * src[x];
+                }
+            }
+    });
+    return out;
+}
+
 } // namespace
 
 int hg_orders_needed(double g, double tolerance) {
@@ -92,16 +114,21 @@ AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
             throw std::invalid_argument("sigma_a needs one value per channel");
     if (settings_.nodes < 2) throw std::invalid_argument("nodes must be >= 2");
     if (!(settings_.thin_depth > 0)) throw std::invalid_argument("thin_depth must be > 0");
+    if (settings_.film_lookup) {
+        FilmLookupStats stats;
+        for (auto &b : boundaries_)
+            if (auto fast = b->with_film_lookup(-1.0, stats)) b = fast;
+        film_lookup_error_ = stats.max_error;
+    }
     smooth_top_ = is_delta(*boundaries_[0]);
-    std::vector<double> breaks;
-    for (std::size_t j = 0; j + 1 < media_.size(); ++j) {
+    for (std::size_t j = 0; j + 1 < media_.size(); ++j) {  // critical cosines of every index step
         double a = media_[j], b = media_[j + 1];
         if (a > 0 && b > 0 && std::abs(a - b) > kIndexTolerance * std::max(a, b)) {
             double r = std::min(a, b) / std::max(a, b);
-            breaks.push_back(std::sqrt((1.0 - r) * (1.0 + r)));
+            breaks_.push_back(std::sqrt((1.0 - r) * (1.0 + r)));
         }
     }
-    ad::panel_nodes(settings_.nodes, breaks, mu_, w_);
+    ad::panel_nodes(settings_.nodes, breaks_, mu_, w_);
     // Fourier orders: what the slabs' phase functions and the boundaries below the top
     // carry (the top's own reflection is evaluated directly; below it, only orders the
     // stack under it scatters into survive the adding).
@@ -187,9 +214,19 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
             for (int c = 0; c < C; ++c) topRb[c * N + i] = v[c];
         }
     } else {
-        topRb = ad::fourier_kernel(top, down, down, M, H);
-        topTd = ad::fourier_kernel(top, down, in_cos, M, H);
-        topTu = ad::fourier_kernel(top, out_cos, down, M, H);
+        // The top's lobes are narrower than the nodes resolve: integrate them on fine
+        // nodes against the (smooth) interpolant of what lies below.
+        std::vector<double> mu_f, w_f, B;
+        double h = std::clamp(rough_alpha(top) / 4.0, 0.004, 0.05);
+        ad::product_nodes(settings_.nodes, breaks_, h, mu_f, w_f, B);
+        const std::size_t nf = mu_f.size(), cm = static_cast<std::size_t>(C) * M;
+        std::vector<double> ratio(nf), mw(n);
+        for (std::size_t f = 0; f < nf; ++f) ratio[f] = mu_f[f] * w_f[f];
+        for (int k = 0; k < n; ++k) mw[k] = mu_[k] * w_[k];
+        const std::vector<double> fine_down = signed_cos(mu_f, -1.0);
+        topRb = project(ad::fourier_kernel(top, fine_down, down, M, H), true, N, B, ratio, mw, nf, n, cm);
+        topTd = project(ad::fourier_kernel(top, fine_down, in_cos, M, H), true, Qi, B, ratio, mw, nf, n, cm);
+        topTu = project(ad::fourier_kernel(top, out_cos, fine_down, M, H), false, Qo, B, ratio, mw, nf, n, cm);
     }
     // Phase-function coefficients per slab (orders beyond its own are unscattered).
     std::vector<int> slab_orders(K, 0);
@@ -309,7 +346,8 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
     });
 }
 
-void AddingDoubling::eval(const double *wi_, const double *wo_, std::size_t count, double *out) const {
+void AddingDoubling::eval(const double *wi_, const double *wo_, std::size_t count, double *out,
+                          bool scattered_only) const {
     const int C = channels(), M = orders_;
     std::fill(out, out + count * C, 0.0);
     std::vector<std::size_t> active;
@@ -347,12 +385,12 @@ void AddingDoubling::eval(const double *wi_, const double *wo_, std::size_t coun
             Vec3 wi{wi_[3 * p], wi_[3 * p + 1], wi_[3 * p + 2]}, wo{wo_[3 * p], wo_[3 * p + 1], wo_[3 * p + 2]};
             double dphi = std::atan2(wi.y, wi.x) - std::atan2(wo.y, wo.x) - kPi;
             for (int m = 0; m < M; ++m) cm[m] = std::cos(m * dphi);
-            if (!smooth_top_) top.eval(wi, wo, kAll, q, direct.data());
+            if (!smooth_top_ && !scattered_only) top.eval(wi, wo, kAll, q, direct.data());
             std::size_t cell = io[a] * Qi + ii[a];
             for (int c = 0; c < C; ++c) {
                 double s = 0.0;
                 for (int m = 0; m < M; ++m) s += V[(static_cast<std::size_t>(c) * M + m) * Qo * Qi + cell] * cm[m];
-                double v = s * scale[a * C + c] + (smooth_top_ ? 0.0 : direct[c]);
+                double v = s * scale[a * C + c] + (smooth_top_ || scattered_only ? 0.0 : direct[c]);
                 out[p * C + c] = std::isfinite(v) ? v : 0.0;
             }
         }

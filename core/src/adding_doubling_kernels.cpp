@@ -47,14 +47,25 @@ struct CosineTable {
 
 } // namespace
 
-void panel_nodes(int per_panel, std::vector<double> breaks, std::vector<double> &mu,
-                 std::vector<double> &w) {
+static std::vector<double> panel_cuts(std::vector<double> breaks) {
     breaks.push_back(0.0);
     breaks.push_back(1.0);
     std::sort(breaks.begin(), breaks.end());
     std::vector<double> cuts;
     for (double b : breaks)
         if (b >= 0.0 && b <= 1.0 && (cuts.empty() || b - cuts.back() > 1e-9)) cuts.push_back(b);
+    return cuts;
+}
+
+// The panel variable u in [0, 1] of mu on panel [a, b] (see panel_nodes).
+static double panel_u(double a, double b, double mu) {
+    if (a == 0.0) return mu / b;
+    return std::sqrt(std::max(0.0, (mu - a) * (mu + a) / ((b - a) * (b + a))));
+}
+
+void panel_nodes(int per_panel, std::vector<double> breaks, std::vector<double> &mu,
+                 std::vector<double> &w) {
+    std::vector<double> cuts = panel_cuts(std::move(breaks));
     std::vector<double> x, wx;
     gauss_legendre(per_panel, x, wx);
     mu.clear();
@@ -72,6 +83,49 @@ void panel_nodes(int per_panel, std::vector<double> breaks, std::vector<double> 
                 w.push_back(wu * span * u / m);
             }
         }
+    }
+}
+
+void product_nodes(int per_panel, std::vector<double> breaks, double h, std::vector<double> &mu_f,
+                   std::vector<double> &w_f, std::vector<double> &B) {
+    std::vector<double> cuts = panel_cuts(std::move(breaks));
+    std::vector<double> x, wx, g4, w4;
+    gauss_legendre(per_panel, x, wx);
+    gauss_legendre(4, g4, w4);
+    const int P = static_cast<int>(cuts.size()) - 1, n = P * per_panel;
+    std::vector<double> u(per_panel), bary(per_panel);
+    for (int i = 0; i < per_panel; ++i) u[i] = 0.5 * (x[i] + 1.0);
+    for (int i = 0; i < per_panel; ++i) {  // barycentric weights of the panel's nodes
+        double prod = 1.0;
+        for (int j = 0; j < per_panel; ++j)
+            if (j != i) prod *= u[i] - u[j];
+        bary[i] = 1.0 / prod;
+    }
+    mu_f.clear();
+    w_f.clear();
+    B.clear();
+    for (int p = 0; p < P; ++p) {
+        double a = cuts[p], b = cuts[p + 1];
+        double t_lo = std::acos(b), t_hi = std::acos(a);
+        int S = std::max(1, static_cast<int>(std::ceil((t_hi - t_lo) / h)));
+        for (int s = 0; s < S; ++s)
+            for (int q = 0; q < 4; ++q) {
+                double lo = t_lo + (t_hi - t_lo) * s / S, hi = t_lo + (t_hi - t_lo) * (s + 1) / S;
+                double t = 0.5 * (lo + hi) + 0.5 * (hi - lo) * g4[q];
+                double m = std::cos(t);
+                mu_f.push_back(m);
+                w_f.push_back(0.5 * (hi - lo) * w4[q] * std::sin(t));
+                std::vector<double> row(n, 0.0);
+                double v = panel_u(a, b, m), den = 0.0;
+                int exact = -1;
+                for (int i = 0; i < per_panel; ++i) {
+                    if (v == u[i]) exact = i;
+                    den += bary[i] / (v - u[i]);
+                }
+                for (int i = 0; i < per_panel; ++i)
+                    row[p * per_panel + i] = exact >= 0 ? (i == exact ? 1.0 : 0.0) : bary[i] / (v - u[i]) / den;
+                B.insert(B.end(), row.begin(), row.end());
+            }
     }
 }
 

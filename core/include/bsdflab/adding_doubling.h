@@ -48,6 +48,7 @@ struct ADSettings {
     double thin_depth = 1.0 / 4096;  // optical depth of the doubling's start
     double order_tolerance = 1e-6;   // automatic orders: HG coefficients below this
     int azimuth_samples = 0;         // half-period samples of eval (0: automatic)
+    bool film_lookup = false;        // boundaries' films from their cosine lookups (film_lookup.h)
 };
 
 class AddingDoubling {
@@ -62,8 +63,12 @@ public:
     int azimuth_samples() const { return half_samples_; }
     const std::vector<double> &nodes() const { return mu_; }
     const std::vector<double> &weights() const { return w_; }
-    // f |cos theta_o| for n direction pairs (rows of 3), written to out (n x channels).
-    void eval(const double *wi, const double *wo, std::size_t n, double *out) const;
+    // Largest measured error of the film lookups used (-1: none).
+    double film_lookup_error() const { return film_lookup_error_; }
+    // f |cos theta_o| for n direction pairs (rows of 3), written to out (n x channels);
+    // scattered_only leaves out a rough top's own reflection (what a table stores).
+    void eval(const double *wi, const double *wo, std::size_t n, double *out,
+              bool scattered_only = false) const;
 
 private:
     struct Boundary;
@@ -75,10 +80,12 @@ private:
     std::vector<double> media_;
     std::vector<ADSlab> slabs_;
     ADSettings settings_;
+    std::vector<double> breaks_;  // critical cosines cutting (0, 1] into panels
     std::vector<double> mu_, w_;  // nodes and weights on (0, 1]
     int orders_ = 1;
     int half_samples_ = 64;
     bool smooth_top_ = false;
+    double film_lookup_error_ = -1.0;
 };
 
 // Fourier orders after which Henyey-Greenstein's coefficients fall below `tolerance` of

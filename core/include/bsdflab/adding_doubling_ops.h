@@ -49,6 +49,16 @@ namespace bsdflab::ad {
 void panel_nodes(int per_panel, std::vector<double> breaks, std::vector<double> &mu,
                  std::vector<double> &w);
 
+// Product integration for kernels narrower than the nodes resolve (a rough top's
+// lobes): fine nodes mu_f (weights w_f in mu) on every panel, composite 4-point Gauss in
+// theta = acos(mu) with sub-panels no wider than h radians, and B (fine x n, row-major)
+// with B[f][k] = l_k(mu_f), the Lagrange basis of node k's panel in its own variable u
+// (zero outside the panel). sum_k B[f][k] Y_k interpolates a function smooth on the
+// panels, so a narrow kernel K integrates against it exactly as
+// sum_f K(mu_f) mu_f w_f sum_k B[f][k] Y_k.
+void product_nodes(int per_panel, std::vector<double> breaks, double h, std::vector<double> &mu_f,
+                   std::vector<double> &w_f, std::vector<double> &B);
+
 // Cosine coefficients over the propagation-azimuth difference of f = eval(wi, wo) /
 // |wo.z| with wi.z = out_z[i], wo.z = in_z[j]: out[((i * in + j) * C + c) * M + m], from
 // 2 H samples of one period (the BSDF is isotropic: H + 1 evaluations on [0, pi]).
