@@ -82,6 +82,27 @@ class Solution:
         self.settings = settings
         self._wl, self._to_rgb = BSDF._channels(model, wavelengths)
         self._core = _build(model, self._wl, settings)
+        self._coarse = None
+
+    def _coarse_core(self):
+        if self._coarse is None:
+            self._coarse = _build(self.model, self._wl, self.settings.coarser(self.orders))
+        return self._coarse
+
+    def with_model(self, model: Layered) -> "Solution":
+        """The solution of ``model``, which may differ from this one's only in its rough
+        top (e.g. another film thickness): what lies below the top is solved once and
+        shared (the expensive part: slabs and base per wavelength and order)."""
+        mine, theirs = self.model.to_dict(), model.to_dict() if isinstance(model, Layered) else None
+        if theirs is None or {**mine, "interfaces": mine["interfaces"][1:]} != {
+                **theirs, "interfaces": theirs["interfaces"][1:]} or not hasattr(self.model.interfaces[0], "alpha"):
+            raise ValueError("with_model needs a Layered model that differs only in its rough top")
+        new = object.__new__(Solution)
+        new.model, new.settings, new._wl, new._to_rgb = model, self.settings, self._wl, self._to_rgb
+        top = model.interfaces[0]._core(self._wl)
+        new._core = self._core.with_top(top)
+        new._coarse = self._coarse_core().with_top(top)
+        return new
 
     @property
     def film_lookup_error(self) -> float | None:
@@ -109,7 +130,7 @@ class Solution:
         finer solve is below that change; tests/solvers checks it)."""
         a, b = check.direction_pair(wi, wo)
         fine = self._core.eval(a, b, bool(scattered_only))
-        coarse = _build(self.model, self._wl, self.settings.coarser(self.orders)).eval(a, b, bool(scattered_only))
+        coarse = self._coarse_core().eval(a, b, bool(scattered_only))
         err = np.abs(fine - coarse)
         if self._to_rgb is not None:
             return fine @ self._to_rgb.T, err @ np.abs(self._to_rgb).T

@@ -1,5 +1,6 @@
 """Tables by adding-doubling: every cell of a layered model's table from one
-deterministic solve per film-thickness node (bsdflab.solvers), in the same format as the
+deterministic solve (bsdflab.solvers; with a rough top, what lies below it is solved once
+and shared by every film-thickness node, only the top is redone), in the same format as the
 PFMC tabulator's (the top's own reflection left out, ``split_direct``), with the method,
 the solver's settings and its a-posteriori error bound in the header (``meta``).
 
@@ -58,9 +59,13 @@ def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = 0.01, wa
     wi = np.stack([np.sin(ti), np.zeros_like(ti), np.cos(ti)], axis=-1).reshape(-1, 3)
     wo = np.stack([np.sin(to) * np.cos(ph), np.sin(to) * np.sin(ph), np.cos(to)], axis=-1).reshape(-1, 3)
     thicknesses = list(grid.thickness_nm) or [-1.0]
-    values, bounds, lookup_error, orders = [], [], None, 0
+    values, bounds, lookup_error, orders, first = [], [], None, 0, None
     for t in thicknesses:
-        sol = solve(with_film_thickness(model, t), model_wl, nodes=nodes, film_lookup=True)
+        model_t = with_film_thickness(model, t)
+        if first is not None and hasattr(model.interfaces[0], "alpha"):  # rough top: reuse the rest
+            sol = first.with_model(model_t)
+        else:
+            sol = first = solve(model_t, model_wl, nodes=nodes, film_lookup=True)
         v, e = sol.eval_with_error(wi, wo, scattered_only=True)
         values.append(v / wo[:, 2:] @ P.T)
         bounds.append(e / wo[:, 2:] @ np.abs(P).T)

@@ -53,5 +53,9 @@ void bind_adding_doubling(py::module_ &m) {
              },
              py::arg("wi"), py::arg("wo"), py::arg("scattered_only") = false,
              "f |cos theta_o| (N, C): reflection from above, no delta lobe")
+        .def("with_top", [](const AddingDoubling &s, std::shared_ptr<BSDF> top) {
+                 py::gil_scoped_release nogil;
+                 return s.with_top(std::move(top));
+             }, py::arg("top"), "the solver with another rough top, sharing what lies below")
         .def_static("hg_orders_needed", &hg_orders_needed, py::arg("g"), py::arg("tolerance"));
 }

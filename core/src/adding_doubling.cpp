@@ -99,6 +99,24 @@ struct AddingDoubling::Boundary {
     }
 };
 
+struct AddingDoubling::Inner {
+    std::mutex mutex;
+    bool ready = false;
+    std::vector<Op> R;  // [channel * orders + order], on the nodes
+};
+
+std::shared_ptr<AddingDoubling> AddingDoubling::with_top(std::shared_ptr<const BSDF> top) const {
+    if (!top || top->channels() != channels()) throw std::invalid_argument("top channel count mismatch");
+    if (smooth_top_ || is_delta(*top)) throw std::invalid_argument("with_top needs rough tops");
+    if (settings_.film_lookup) {
+        FilmLookupStats stats;
+        if (auto fast = top->with_film_lookup(-1.0, stats)) top = fast;
+    }
+    auto copy = std::make_shared<AddingDoubling>(*this);
+    copy->boundaries_[0] = std::move(top);
+    return copy;
+}
+
 AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
                                std::vector<std::shared_ptr<const BSDF>> boundaries,
                                std::vector<double> media, std::vector<ADSlab> slabs, ADSettings settings)
@@ -121,6 +139,7 @@ AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
         film_lookup_error_ = stats.max_error;
     }
     smooth_top_ = is_delta(*boundaries_[0]);
+    inner_ = std::make_shared<Inner>();
     for (std::size_t j = 0; j + 1 < media_.size(); ++j) {  // critical cosines of every index step
         double a = media_[j], b = media_[j + 1];
         if (a > 0 && b > 0 && std::abs(a - b) > kIndexTolerance * std::max(a, b)) {
@@ -169,10 +188,15 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
     }
     const std::size_t N = grid.size();
     const std::vector<double> up = grid, down = signed_cos(grid, -1.0);
+    // A rough top's queries never enter below it: what lies there is solved once per
+    // solver (and shared with with_top copies).
+    std::unique_lock<std::mutex> lock(inner_->mutex, std::defer_lock);
+    if (!smooth_top_) lock.lock();
+    const bool cached = !smooth_top_ && inner_->ready;
 
     // Boundaries below the top.
     std::vector<Boundary> below(K + 1);
-    for (std::size_t j = 1; j <= K; ++j) {
+    for (std::size_t j = 1; j <= K && !cached; ++j) {
         const BSDF &b = *boundaries_[j];
         Boundary &B = below[j];
         B.interior = j < K;
@@ -231,7 +255,7 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
     // Phase-function coefficients per slab (orders beyond its own are unscattered).
     std::vector<int> slab_orders(K, 0);
     std::vector<std::vector<double>> pr(K), pt(K);
-    for (std::size_t j = 0; j < K; ++j) {
+    for (std::size_t j = 0; j < K && !cached; ++j) {
         const ADSlab &s = slabs_[j];
         if (!(s.sigma_s > 0 && s.thickness > 0)) continue;
         slab_orders[j] = settings_.orders > 0 ? M : std::min(M, hg_orders_needed(s.g, settings_.order_tolerance));
@@ -240,6 +264,7 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
     }
 
     values.assign(static_cast<std::size_t>(C) * M * Qo * Qi, 0.0);
+    if (!smooth_top_ && !cached) inner_->R.assign(static_cast<std::size_t>(C) * M, Op());
     parallel_for_each(static_cast<std::size_t>(C) * M, [&](std::size_t task) {
         const int c = static_cast<int>(task / M), m = static_cast<int>(task % M);
         Grid g;
@@ -300,15 +325,21 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
             return ad::reflect_over(L, R, g);
         };
         // From the base up.
-        Op R = below[K].op(below[K].Rt, N, C, M, c, m);
-        for (std::size_t j = K; j-- > 0;) {
-            R = slab(j, R);
-            if (j >= 1) {
-                const Boundary &B = below[j];
-                Layer L{B.op(B.Rt, N, C, M, c, m), B.op(B.Td, N, C, M, c, m), B.op(B.Rb, N, C, M, c, m),
-                        B.op(B.Tu, N, C, M, c, m)};
-                R = ad::reflect_over(L, R, g);
+        Op R;
+        if (cached) {
+            R = inner_->R[task];
+        } else {
+            R = below[K].op(below[K].Rt, N, C, M, c, m);
+            for (std::size_t j = K; j-- > 0;) {
+                R = slab(j, R);
+                if (j >= 1) {
+                    const Boundary &B = below[j];
+                    Layer L{B.op(B.Rt, N, C, M, c, m), B.op(B.Td, N, C, M, c, m), B.op(B.Rb, N, C, M, c, m),
+                            B.op(B.Tu, N, C, M, c, m)};
+                    R = ad::reflect_over(L, R, g);
+                }
             }
+            if (!smooth_top_) inner_->R[task] = R;
         }
         if (R.D.empty() && R.K.empty()) return;
         Op Rb;
@@ -344,6 +375,7 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
                 for (std::size_t b = 0; b < Qi; ++b) V[a * Qi + b] += s * Z[k * Qi + b];
             }
     });
+    if (!smooth_top_) inner_->ready = true;
 }
 
 void AddingDoubling::eval(const double *wi_, const double *wo_, std::size_t count, double *out,

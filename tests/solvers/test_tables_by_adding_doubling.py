@@ -35,3 +35,20 @@ def test_02_bad_method():
         tabulate(preset("xenopeltis"), GRID, method="exact", progress=False)
     with pytest.raises(ValueError, match="tabulates Layered models"):
         tabulate(preset("xenopeltis-diffuse"), GRID, method="adding-doubling", progress=False)
+
+
+def test_03_shared_solve_across_thicknesses_is_exact():
+    """Solution.with_model (what lies below a rough top solved once) gives the values of
+    a fresh solve of the other thickness, to round-off."""
+    from bsdflab.solvers import solve
+    from bsdflab.tables.adding_doubling import with_film_thickness
+    from bsdflab.testing import random_unit_vectors
+
+    wi = random_unit_vectors(6, seed=1, hemisphere="upper")
+    wo = random_unit_vectors(6, seed=2, hemisphere="upper")
+    model = preset("xenopeltis")
+    other = with_film_thickness(model, 450.0)
+    shared = solve(model, WL).with_model(other).eval_with_error(wi, wo)
+    fresh = solve(other, WL).eval_with_error(wi, wo)
+    for a, b in zip(shared, fresh):
+        assert np.allclose(a, b, rtol=1e-12, atol=0)

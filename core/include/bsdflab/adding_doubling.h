@@ -30,6 +30,7 @@
 // Transmission through the stack and reflection from below are not solved (0).
 #pragma once
 #include <memory>
+#include <mutex>
 #include <vector>
 #include "bsdf.h"
 
@@ -70,8 +71,13 @@ public:
     void eval(const double *wi, const double *wo, std::size_t n, double *out,
               bool scattered_only = false) const;
 
+    // The same solver with another top boundary (a rough top: e.g. another film
+    // thickness). What lies below the top is solved once and shared between the two.
+    std::shared_ptr<AddingDoubling> with_top(std::shared_ptr<const BSDF> top) const;
+
 private:
     struct Boundary;
+    struct Inner;  // the reflection of everything below a rough top, per (channel, order)
     void solve(const std::vector<double> &out_cos, const std::vector<double> &in_cos,
                std::vector<double> &values) const;
 
@@ -86,6 +92,7 @@ private:
     int half_samples_ = 64;
     bool smooth_top_ = false;
     double film_lookup_error_ = -1.0;
+    std::shared_ptr<Inner> inner_;
 };
 
 // Fourier orders after which Henyey-Greenstein's coefficients fall below `tolerance` of
