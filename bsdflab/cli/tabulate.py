@@ -26,6 +26,9 @@ def register(sub) -> None:
     p.add_argument("--min-samples", type=int, default=512, help="walks per cell in the first pass (default 512)")
     p.add_argument("--max-samples", type=int, default=65536, help="cap on walks per cell (default 65536)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--method", choices=("pfmc", "adding-doubling"), default="pfmc",
+                   help="pfmc (Monte Carlo, default) or adding-doubling (deterministic, layered "
+                        "reflectors; needs --out and bypasses the cache, docs/solvers.md)")
     p.add_argument("--no-cache", action="store_true", help="always tabulate; do not read or fill the cache")
     p.add_argument("--cache-dir", default=None, help="cache folder (default: $BSDFLAB_CACHE_DIR or the user cache)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -41,6 +44,10 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None:
         check_writable(args.out, "--out")  # before the tabulation, not after it
     model = material_from_args(args)
+    if args.method == "adding-doubling":
+        if args.out is None:
+            raise ValueError("--method adding-doubling needs --out (its tables are not cached)")
+        args.no_cache = True
     grid = TableGrid(args.n_theta_i, args.n_theta_o, args.n_phi, tuple(args.thickness))
     wavelengths = args.wavelengths if args.wavelengths else None
     check_table_memory(grid, 3 if wavelengths is None else len(wavelengths))
@@ -50,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
         def make():
             return tabulate(model, grid, rel_error=args.rel_error, wavelengths=wavelengths,
                             min_samples=args.min_samples, max_samples=args.max_samples,
-                            seed=args.seed, progress=not args.quiet, client=client)
+                            seed=args.seed, progress=not args.quiet, client=client, method=args.method)
 
         return _tabulate(args, model, grid, channels, make)
 

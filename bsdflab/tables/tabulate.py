@@ -17,14 +17,16 @@ from bsdflab.util import args as check
 from bsdflab.util import runners
 from bsdflab.util.runners import Runner
 
-__all__ = ["DEFAULT_MAX_SAMPLES", "DEFAULT_MIN_SAMPLES", "ERROR_FLOOR", "tabulate"]
+__all__ = ["DEFAULT_MAX_SAMPLES", "DEFAULT_MIN_SAMPLES", "ERROR_FLOOR", "METHODS", "tabulate"]
+
+METHODS = ("pfmc", "adding-doubling")
 
 
 def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = 0.01,
              wavelengths=None, min_samples: int = DEFAULT_MIN_SAMPLES,
              max_samples: int = DEFAULT_MAX_SAMPLES, seed: int = 0,
              progress: bool = True, client=None, film_lookup: bool = True,
-             runner: Runner | None = None) -> TableData:
+             runner: Runner | None = None, method: str = "pfmc") -> TableData:
     """Tabulate ``model`` on ``grid``; returns the table (write it with ``write_table``).
 
     Parameters
@@ -56,12 +58,26 @@ def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = 0.01
         when it is built, is <= 1e-7 absolute, meta["film_lookup_error"]) instead of the
         Airy sum per wavelength: ~3x fewer CPU-seconds per walk for the snake. False
         evaluates every film exactly (the reference; not available with a runner).
+    method : 'pfmc' (default) or 'adding-doubling'
+        'adding-doubling' tabulates a reflecting ``Layered`` model deterministically
+        (bsdflab.tables.adding_doubling: one solve per thickness node, the solver's error
+        bound stored as each cell's error, method and settings in ``meta``); the walk
+        settings (samples, seed, film_lookup, runner, client) do not apply to it.
 
     Runs :func:`pilot_cells`, :func:`floor_scale`, :func:`finish_cells` and
     :func:`assemble` over every cell (bsdflab.tables.stages).
     """
     grid = grid or TableGrid()
     check.real_scalar("rel_error", rel_error, 0.0, 1.0, lo_open=True)
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {check.brief(method)}")
+    if method == "adding-doubling":
+        if client is not None or runner is not None:
+            raise ValueError("method 'adding-doubling' runs in this process (no runner or client)")
+        from bsdflab.tables.adding_doubling import tabulate_adding_doubling
+
+        check_table_memory(grid, len(table_channels(wavelengths)[0]), 1)
+        return tabulate_adding_doubling(model, grid, rel_error=rel_error, wavelengths=wavelengths)
     if check.count("max_samples", max_samples) < check.count("min_samples", min_samples):
         raise ValueError(f"max_samples ({max_samples}) must be >= min_samples ({min_samples})")
     n = cell_count(model, grid)

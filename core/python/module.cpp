@@ -3,6 +3,7 @@
 #include "bsdflab/parallel.h"
 
 namespace py = pybind11;
+void bind_adding_doubling(py::module_ &m);
 void bind_bsdf(py::module_ &m);
 void bind_fit(py::module_ &m);
 void bind_fresnel(py::module_ &m);
@@ -17,6 +18,7 @@ void bind_thin_film(py::module_ &m);
 PYBIND11_MODULE(_core, m) {
     m.doc() = "bsdflab C++ core: optics, BSDFs and estimators (vectorised, GIL released)";
     m.def("worker_count", &bsdflab::worker_count, "threads used by parallel loops");
+    bind_adding_doubling(m);
     bind_bsdf(m);
     bind_fit(m);
     bind_fresnel(m);

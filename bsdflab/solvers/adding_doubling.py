@@ -1,0 +1,210 @@
+r"""Adding-doubling for a ``bsdflab.Layered`` stack: the deterministic twin of its
+Position-Free Monte Carlo estimator (docs/solvers.md; core/include/bsdflab/adding_doubling.h).
+
+Method (Jakob et al. 2014, "A comprehensive framework for rendering layered materials";
+van de Hulst 1980): radiance in each medium is a cosine series in the propagation-azimuth
+difference, sampled at Gauss-Legendre nodes in mu = |cos theta| on panels cut at the
+critical cosines. The interfaces' operators are cosine transforms over azimuth of the
+core's own BSDF values (rough dielectrics and conductors, GGX or Beckmann, film-coated or
+not, ``multiscatter`` as the models define it; Lambertian bases) and of the delta
+weights of smooth ones, so the solver and PFMC share one definition of every interface.
+Slabs (isotropic or Henyey-Greenstein, spectral sigma_a, grey sigma_s) are doubled from
+a single-scattering layer with a Richardson-corrected start; the adding equations join
+everything from the base up, one independent task per (wavelength, Fourier order) on all
+cores with the GIL released.
+
+What it computes: reflection from above, f |cos theta_o| exactly as ``Layered.eval``
+(without the top's delta lobe). A rough top's own reflection is evaluated directly; the
+light that entered the stack is solved. Transmission through the stack and reflection
+from below are not solved (zero).
+
+Validated range (tests/solvers, docs/solvers.md): alpha in [1e-3, 1] for rough
+interfaces and bases (ValueError outside); Henyey-Greenstein |g| <= 0.95 (ValueError
+beyond), with at least ``nodes_for_g(g)`` nodes per panel (raised automatically, with a
+warning naming the new count). Units: wavelengths in nm, slab thickness in µm, sigma in 1/µm.
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from bsdflab import _core
+from bsdflab.util import args as check
+from bsdflab.bsdfs.base import BSDF
+from bsdflab.layered import Layered
+
+ALPHA_RANGE = (1e-3, 1.0)
+MAX_G = 0.95
+DEFAULT_NODES = 16
+DEFAULT_THIN_DEPTH = 2.0 ** -16
+DEFAULT_ORDER_TOLERANCE = 1e-6
+PHASES = ("isotropic", "hg")
+
+
+def nodes_for_g(g: float) -> int:
+    """Nodes per panel that resolve a Henyey-Greenstein lobe of asymmetry g (its width in
+    cosine is ~ 1 - |g|): 6 / (1 - |g|), at least 8."""
+    return max(8, int(np.ceil(6.0 / (1.0 - abs(g)))))
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Truncations of the solve: Gauss-Legendre nodes per panel, Fourier orders (None:
+    from the phase functions and the roughness of the boundaries below the top), the
+    optical depth of the doubling's start and the order tolerance."""
+
+    nodes: int = DEFAULT_NODES
+    orders: int | None = None
+    thin_depth: float = DEFAULT_THIN_DEPTH
+    order_tolerance: float = DEFAULT_ORDER_TOLERANCE
+    film_lookup: bool = False
+
+    def coarser(self, orders_used: int) -> "Settings":
+        """Half the nodes, 2/3 of the orders and a 16 x thicker start: the a-posteriori
+        check (node convergence is geometric but not monotone for a rough top, so the
+        coarse solve halves the nodes)."""
+        return replace(self, nodes=max(4, self.nodes // 2),
+                       orders=max(1, (2 * orders_used) // 3), thin_depth=16.0 * self.thin_depth)
+
+    def to_dict(self) -> dict:
+        return {"nodes": self.nodes, "orders": self.orders, "thin_depth": self.thin_depth,
+                "order_tolerance": self.order_tolerance, "film_lookup": self.film_lookup}
+
+
+class Solution:
+    """A solved stack at fixed wavelengths: ``eval`` and ``eval_with_error`` of direction
+    pairs (light arrives from wo, leaves toward wi, both unit, +z up)."""
+
+    def __init__(self, model: Layered, wavelengths, settings: Settings):
+        self.model = model
+        self.settings = settings
+        self._wl, self._to_rgb = BSDF._channels(model, wavelengths)
+        self._core = _build(model, self._wl, settings)
+        self._coarse = None
+
+    def _coarse_core(self):
+        if self._coarse is None:
+            self._coarse = _build(self.model, self._wl, self.settings.coarser(self.orders))
+        return self._coarse
+
+    def with_model(self, model: Layered) -> "Solution":
+        """The solution of ``model``, which may differ from this one's only in its rough
+        top (e.g. another film thickness): what lies below the top is solved once and
+        shared (the expensive part: slabs and base per wavelength and order)."""
+        mine, theirs = self.model.to_dict(), model.to_dict() if isinstance(model, Layered) else None
+        if theirs is None or {**mine, "interfaces": mine["interfaces"][1:]} != {
+                **theirs, "interfaces": theirs["interfaces"][1:]} or not hasattr(self.model.interfaces[0], "alpha"):
+            raise ValueError("with_model needs a Layered model that differs only in its rough top")
+        new = object.__new__(Solution)
+        new.model, new.settings, new._wl, new._to_rgb = model, self.settings, self._wl, self._to_rgb
+        top = model.interfaces[0]._core(self._wl)
+        new._core = self._core.with_top(top)
+        new._coarse = self._coarse_core().with_top(top)
+        return new
+
+    @property
+    def film_lookup_error(self) -> float | None:
+        """Largest measured error of the film lookups used (None: none)."""
+        err = float(self._core.film_lookup_error)
+        return err if err >= 0 else None
+
+    @property
+    def orders(self) -> int:
+        """Fourier orders used."""
+        return int(self._core.orders)
+
+    def eval(self, wi, wo, scattered_only: bool = False) -> np.ndarray:
+        """f(wi, wo) |cos theta_o| of reflection from above, (N, C); 0 elsewhere.
+        ``scattered_only`` leaves out a rough top's own reflection (what a table stores;
+        ``Layered.exact_part`` re-adds it)."""
+        a, b = check.direction_pair(wi, wo)
+        out = self._core.eval(a, b, bool(scattered_only))
+        return out @ self._to_rgb.T if self._to_rgb is not None else out
+
+    def eval_with_error(self, wi, wo, scattered_only: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """(eval, a-posteriori error bound), each (N, C): the bound is the change to a
+        solve with half the nodes, 2/3 of the orders and a 16 x thicker doubling start (the
+        truncations converge geometrically, the start quadratically, so the error of the
+        finer solve is below that change; tests/solvers checks it)."""
+        a, b = check.direction_pair(wi, wo)
+        fine = self._core.eval(a, b, bool(scattered_only))
+        coarse = self._coarse_core().eval(a, b, bool(scattered_only))
+        err = np.abs(fine - coarse)
+        if self._to_rgb is not None:
+            return fine @ self._to_rgb.T, err @ np.abs(self._to_rgb).T
+        return fine, err
+
+
+def solve(model: Layered, wavelengths=None, nodes: int = DEFAULT_NODES, orders: int | None = None,
+          thin_depth: float = DEFAULT_THIN_DEPTH,
+          order_tolerance: float = DEFAULT_ORDER_TOLERANCE, film_lookup: bool = False) -> Solution:
+    """Adding-doubling solution of a ``Layered`` model (module docstring).
+
+    Parameters
+    ----------
+    model : Layered
+        Interfaces smooth or rough (alpha in [1e-3, 1]); slabs isotropic or
+        Henyey-Greenstein with |g| <= 0.95; base any BSDF (alpha in [1e-3, 1] if rough).
+    wavelengths : array_like or None
+        Vacuum wavelengths in nm (one column each), or None for linear sRGB through the
+        default 5 nm grid.
+    nodes : int in [4, 256]
+        Gauss-Legendre nodes per cosine panel (raised to ``nodes_for_g`` with a warning).
+    orders : int in [1, 4096] or None
+        Fourier orders in azimuth (None: automatic).
+    thin_depth : float in (0, 1]
+        Largest optical depth of the doubling's single-scattering start.
+    order_tolerance : float in (0, 0.1]
+        Automatic orders: Henyey-Greenstein coefficients below this are dropped.
+    film_lookup : bool
+        Read the interfaces' films from their cosine lookups (core film_lookup.h, measured
+        error <= 1e-7 absolute, as PFMC tabulation does) instead of the Airy sum: faster
+        for 81 wavelengths. ``Solution.film_lookup_error`` reports the measured error.
+    """
+    if not isinstance(model, Layered):
+        raise ValueError(f"model must be a Layered stack, got {type(model).__name__}")
+    nodes = check.integer("nodes", nodes, 4, 256)
+    if orders is not None:
+        orders = check.integer("orders", orders, 1, 4096)
+    thin_depth = check.real_scalar("thin_depth", thin_depth, 0.0, 1.0, lo_open=True)
+    order_tolerance = check.real_scalar("order_tolerance", order_tolerance, 0.0, 0.1, lo_open=True)
+    for name, part in [(f"interfaces[{i}]", m) for i, m in enumerate(model.interfaces)] + [("base", model.base)]:
+        alpha = getattr(part, "alpha", None)
+        if alpha is not None and not ALPHA_RANGE[0] <= alpha <= ALPHA_RANGE[1]:
+            raise ValueError(f"{name}.alpha must be in [{ALPHA_RANGE[0]}, {ALPHA_RANGE[1]}] for the "
+                             f"adding-doubling solver (its validated range), got {alpha}")
+    for i, s in enumerate(model.slabs):
+        if s.phase.type not in PHASES:
+            raise ValueError(f"slabs[{i}].phase must be one of {', '.join(PHASES)} for the "
+                             f"adding-doubling solver, got {s.phase.type!r}")
+        g = s.phase.g if s.phase.type == "hg" else 0.0
+        if abs(g) > MAX_G:
+            raise ValueError(f"slabs[{i}].phase.g must be in [-{MAX_G}, {MAX_G}] for the "
+                             f"adding-doubling solver (its validated range), got {g}")
+        if s.sigma_s > 0 and nodes < nodes_for_g(g):
+            warnings.warn(f"adding-doubling: nodes raised from {nodes} to {nodes_for_g(g)} to "
+                          f"resolve slabs[{i}]'s Henyey-Greenstein g = {g}", stacklevel=2)
+            nodes = nodes_for_g(g)
+    if not isinstance(film_lookup, (bool, np.bool_)):
+        raise ValueError(f"film_lookup must be True or False, got {film_lookup!r}")
+    return Solution(model, wavelengths, Settings(nodes, orders, thin_depth, order_tolerance, bool(film_lookup)))
+
+
+def media_indices(model: Layered) -> list[float]:
+    """Real indices of the exterior, every slab, and the medium below (0: opaque base)."""
+    media = [float(model.interfaces[0].ext_ior)] + [float(m.int_ior) for m in model.interfaces]
+    below = getattr(model.base, "int_ior", None)
+    media.append(float(below) if isinstance(below, (int, float)) else 0.0)
+    return media
+
+
+def _build(model: Layered, wl: np.ndarray, s: Settings):
+    boundaries = [m._core(wl) for m in (*model.interfaces, model.base)]
+    slabs = model.slabs
+    return _core.AddingDoubling(
+        list(wl), boundaries, media_indices(model), [x.thickness_um for x in slabs],
+        [list(x.sigma_a_at(wl)) for x in slabs], [x.sigma_s for x in slabs],
+        [x.phase.g if x.phase.type == "hg" else 0.0 for x in slabs], s.nodes, s.orders or 0,
+        s.thin_depth, s.order_tolerance, 0, s.film_lookup)

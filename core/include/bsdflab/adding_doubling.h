@@ -1,0 +1,102 @@
+// A deterministic solver for layered BSDFs: adding-doubling (van de Hulst 1980; Jakob et
+// al. 2014, "A comprehensive framework for rendering layered materials") in a Fourier
+// basis over the propagation-azimuth difference and Gauss-Legendre nodes in mu = |cos|.
+//
+// The stack is the PFMC model's (layered.h): boundaries 0..K (0 the top, K the base) and
+// slabs 0..K-1, with the real index of every medium (media[0] the exterior, media[j+1]
+// slab j). Every boundary is one of the core's own BSDFs, and the solver's operators come
+// from its values: a non-delta boundary (rough dielectric / conductor, with or without a
+// film, multiscatter or not; Lambertian) by a cosine transform of eval() over azimuth at
+// every pair of node cosines; a delta boundary (smooth, with or without a film) by the
+// weights sample() returns for its delta lobes. So the solver and the estimator share
+// one definition of every interface.
+//
+// Radiance is expanded as sum_m L^m(mu) cos(m dphi) and sampled at nodes mu_j (weights
+// w_j) on panels of (0, 1] cut at the critical cosines of every index step (the same
+// node values in every medium). Order m of an operator acts as
+//     (O L)_i = D_i L_i + sum_j K_ij W_j L_j,   W_j = pi (1 + [m = 0]) mu_j w_j,
+// with its delta part D (unscattered beam, specular bounce) kept apart from its kernel K
+// (a BSDF value f, without the cosine). Each (wavelength, order) is an independent task
+// (threads); a slab comes from a single-scattering layer of depth <= thin_depth with a
+// Richardson-corrected start (its O(delta^2) error removed), doubled to its depth; the
+// adding equations join slabs and boundaries from the base up.
+//
+// What eval returns: reflection from above (wi.z > 0, wo.z > 0), f |cos theta_o| as
+// Layered.eval, without the top's delta lobe: for a rough top, its own reflection is
+// evaluated directly (exact) and the rest (light that entered the stack) by
+// adding-doubling, the query directions entering through the top's transmission
+// kernels; for a smooth top the query cosines are zero-weight extra nodes inside the
+// first slab (Nystrom extension) and the top's transmittances are applied at the ends.
+// Transmission through the stack and reflection from below are not solved (0).
+#pragma once
+#include <memory>
+#include <mutex>
+#include <vector>
+#include "bsdf.h"
+
+namespace bsdflab {
+
+struct ADSlab {
+    double thickness = 0.0;       // um
+    std::vector<double> sigma_a;  // 1/um per channel
+    double sigma_s = 0.0;         // 1/um, grey
+    double g = 0.0;               // Henyey-Greenstein asymmetry (0: isotropic)
+};
+
+struct ADSettings {
+    int nodes = 16;                  // Gauss-Legendre nodes per panel
+    int orders = 0;                  // Fourier orders (0: automatic, see orders())
+    double thin_depth = 1.0 / 4096;  // optical depth of the doubling's start
+    double order_tolerance = 1e-6;   // automatic orders: HG coefficients below this
+    int azimuth_samples = 0;         // half-period samples of eval (0: automatic)
+    bool film_lookup = false;        // boundaries' films from their cosine lookups (film_lookup.h)
+};
+
+class AddingDoubling {
+public:
+    // boundaries: K + 1 core BSDFs (top first, base last); media: K + 2 real indices
+    // (exterior, slab 0 .. slab K-1, the medium below the base or 0 when it is opaque).
+    AddingDoubling(std::vector<double> wavelengths, std::vector<std::shared_ptr<const BSDF>> boundaries,
+                   std::vector<double> media, std::vector<ADSlab> slabs, ADSettings settings);
+
+    int channels() const { return static_cast<int>(wavelengths_.size()); }
+    int orders() const { return orders_; }
+    int azimuth_samples() const { return half_samples_; }
+    const std::vector<double> &nodes() const { return mu_; }
+    const std::vector<double> &weights() const { return w_; }
+    // Largest measured error of the film lookups used (-1: none).
+    double film_lookup_error() const { return film_lookup_error_; }
+    // f |cos theta_o| for n direction pairs (rows of 3), written to out (n x channels);
+    // scattered_only leaves out a rough top's own reflection (what a table stores).
+    void eval(const double *wi, const double *wo, std::size_t n, double *out,
+              bool scattered_only = false) const;
+
+    // The same solver with another top boundary (a rough top: e.g. another film
+    // thickness). What lies below the top is solved once and shared between the two.
+    std::shared_ptr<AddingDoubling> with_top(std::shared_ptr<const BSDF> top) const;
+
+private:
+    struct Boundary;
+    struct Inner;  // the reflection of everything below a rough top, per (channel, order)
+    void solve(const std::vector<double> &out_cos, const std::vector<double> &in_cos,
+               std::vector<double> &values) const;
+
+    std::vector<double> wavelengths_;
+    std::vector<std::shared_ptr<const BSDF>> boundaries_;
+    std::vector<double> media_;
+    std::vector<ADSlab> slabs_;
+    ADSettings settings_;
+    std::vector<double> breaks_;  // critical cosines cutting (0, 1] into panels
+    std::vector<double> mu_, w_;  // nodes and weights on (0, 1]
+    int orders_ = 1;
+    int half_samples_ = 64;
+    bool smooth_top_ = false;
+    double film_lookup_error_ = -1.0;
+    std::shared_ptr<Inner> inner_;
+};
+
+// Fourier orders after which Henyey-Greenstein's coefficients fall below `tolerance` of
+// the largest (the pole of the phase function in complex azimuth bounds their decay).
+int hg_orders_needed(double g, double tolerance);
+
+} // namespace bsdflab
