@@ -1,6 +1,6 @@
 """Convergence of the adding-doubling solver in its truncations (docs/solvers.md's table).
 
-    python -m bsdflab.solvers.ad_convergence
+    python bench/solver_convergence.py
 
 For each configuration: the largest relative error, over 12 direction pairs (grazing
 ones included, outside cosines 1 ... 0.017) and 3 wavelengths, of the light that entered
