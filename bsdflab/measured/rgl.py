@@ -3,9 +3,9 @@
 The file stores an isotropic BSDF as a warp plus values on the warp's unit square
 (docs/measured.md). We build each part from the source BSDF ``f``:
 
-1. **NDF.** The retro-reflection of a microfacet surface is f(m, m) = F G D(m) / (4 cos^2),
-   so D(m) ~ Y(f(m, m)) cos^2(theta_m) up to F G (the paper's estimate, without its
-   shadowing correction); mixed with a little of the cosine NDF (``ndf_floor``) so every
+1. **NDF.** The retro-reflection of a microfacet surface is f(m, m) = F G1 D(m) / (4 cos^2)
+   with G1(m) = cos(theta_m) / sigma(m), so D(m) ~ Y(f(m, m)) cos(theta_m) sigma[D](m) up
+   to F: the paper's fixed point, found by power iteration (``_estimate_ndf``); mixed with a little of the cosine NDF (``ndf_floor``) so every
    half vector stays reachable; normalised to integrate(D cos) = 1.
 2. **sigma(wi)** = integral of D(m) max(0, wi . m) dm, by quadrature of the stored NDF.
 3. **VNDF** per incident angle: D(m) max(0, wi . m) times the Jacobian of
@@ -47,6 +47,13 @@ BOUND_SAFETY = 2.0
 THETA_I_MAX = math.radians(89.0)
 # Retro-reflection and source probes stay this far (rad) above the horizon.
 GRAZING = math.radians(0.5)
+# The NDF's power iteration (Dupuy & Jakob 2018): at most this many steps, stopping when
+# no node moves by more than NDF_TOLERANCE of the peak.
+NDF_ITERATIONS = 30
+NDF_TOLERANCE = 1e-4
+# The stored warp's cosine floor by default (rgl_from_bsdf's vndf_floor): 0, the paper's VNDF;
+# 0.5 halves the grazing error of rough gold but not of every source (docs/measured.md).
+VNDF_FLOOR = 0.0
 
 
 @dataclass(frozen=True)
@@ -75,7 +82,8 @@ class ExportReport:
 
 
 def rgl_from_bsdf(bsdf, wavelengths=None, *, n_theta_i: int = 16, resolution: int = 32,
-                  ndf_resolution: int = 64, ndf_floor: float = 0.05, error_points: int = 20000,
+                  ndf_resolution: int = 64, ndf_floor: float = 0.05, ndf_iterations: int = NDF_ITERATIONS,
+                  vndf_floor: float = VNDF_FLOOR, error_points: int = 20000,
                   seed: int = 0, source: dict | None = None) -> tuple[RGLData, ExportReport]:
     """An RGL material resampled from an isotropic BSDF's reflection.
 
@@ -95,6 +103,13 @@ def rgl_from_bsdf(bsdf, wavelengths=None, *, n_theta_i: int = 16, resolution: in
         Nodes of the NDF, sigma and VNDF along theta (the VNDF has resolution nodes in phi).
     ndf_floor : float in (0, 1)
         Weight of the cosine NDF mixed into the estimated one.
+    ndf_iterations : int in [1, 100]
+        Most steps of the NDF's power iteration (it stops earlier once converged); 1 is
+        the estimate without the shadowing correction, D ~ f(m, m) cos^2(theta_m).
+    vndf_floor : float in [0, 10]
+        Weight of D(m) cos(theta_m) added to the stored warp's D(m) max(0, wi . m): 0 is the
+        paper's VNDF; the default resolves grazing incidence better (any warp is a valid
+        file: the reader divides by the same density it inverts).
     error_points : int in [0, 10**7]
         Random direction pairs for the error report (plus every cell centre).
     source : dict, optional
@@ -105,11 +120,13 @@ def rgl_from_bsdf(bsdf, wavelengths=None, *, n_theta_i: int = 16, resolution: in
     resolution = check.integer("resolution", resolution, 4, 256)
     ndf_resolution = check.integer("ndf_resolution", ndf_resolution, 4, 1024)
     ndf_floor = check.real_scalar("ndf_floor", ndf_floor, 0.0, 1.0, lo_open=True, hi_open=True)
+    ndf_iterations = check.integer("ndf_iterations", ndf_iterations, 1, 100)
+    vndf_floor = check.real_scalar("vndf_floor", vndf_floor, 0.0, 10.0)
     error_points = check.integer("error_points", error_points, 0, 10**7)
     f, lum_w, channel_wl = _source(bsdf, wavelengths)
 
     u_ndf = np.linspace(0.0, 1.0, ndf_resolution)
-    ndf_row = _estimate_ndf(f, lum_w, u_ndf, ndf_floor)
+    ndf_row = _estimate_ndf(f, lum_w, u_ndf, ndf_floor, ndf_iterations)
     ndf = np.tile(ndf_row, (2, 1)).astype(np.float32)
     ndf_warp = Marginal2D(ndf, normalize=False)
     sigma_row = _sigma(ndf_warp, u2theta(u_ndf))
@@ -118,7 +135,7 @@ def rgl_from_bsdf(bsdf, wavelengths=None, *, n_theta_i: int = 16, resolution: in
 
     theta_i = np.linspace(0.0, THETA_I_MAX, n_theta_i).astype(np.float32)
     phi_i = np.zeros(1, dtype=np.float32)
-    vndf = np.stack([_vndf_slice(ndf_warp, float(t), ndf_resolution, resolution) for t in theta_i])[None]
+    vndf = np.stack([_vndf_slice(ndf_warp, float(t), ndf_resolution, resolution, vndf_floor) for t in theta_i])[None]
     vndf = vndf.astype(np.float32)
     vndf_warp = Marginal2D(vndf, (phi_i, theta_i))
 
@@ -139,7 +156,7 @@ def rgl_from_bsdf(bsdf, wavelengths=None, *, n_theta_i: int = 16, resolution: in
     header = {"format": "RGL .bsdf (Dupuy & Jakob 2018), written by bsdflab", "source": source or {},
               "channels": "RGB (linear sRGB, D65)" if channel_wl is None else "spectral, nm",
               "grid": {"n_theta_i": n_theta_i, "resolution": resolution, "ndf_resolution": ndf_resolution,
-                       "ndf_floor": ndf_floor, "theta_i_max_deg": math.degrees(THETA_I_MAX)},
+                       "ndf_floor": ndf_floor, "ndf_iterations": ndf_iterations, "vndf_floor": vndf_floor, "theta_i_max_deg": math.degrees(THETA_I_MAX)},
               "reflection_only": True}
     fields = {"description": json.dumps(header, sort_keys=True), "jacobian": np.array([1], dtype=np.uint8),
               "theta_i": theta_i, "phi_i": phi_i, "ndf": ndf, "sigma": sigma, "vndf": vndf,
@@ -214,13 +231,30 @@ def _source(bsdf, wavelengths):
     return call, weights / weights.sum(), wl
 
 
-def _estimate_ndf(f, lum_w, u, floor):
+def _estimate_ndf(f, lum_w, u, floor, iterations: int = NDF_ITERATIONS):
+    """D(theta_m) at the nodes u from the retro-reflection, by the paper's power iteration.
+
+    A microfacet surface reflects f(m, m) = F G1(m) D(m) / (4 cos^2 theta_m) back along m,
+    with Smith's G1(m) = cos theta_m / sigma(m) (Heitz 2014), so D ~ f(m, m) cos(theta_m)
+    sigma[D](m): D is the fixed point of D -> f cos sigma[D] (normalised), an eigenvector
+    found by power iteration from sigma = cos (the smooth-surface guess). F is ignored."""
     theta = np.minimum(u2theta(u), PI / 2 - GRAZING)
     m = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=1)
-    retro = np.maximum(f(m, m) @ lum_w, 0.0) / m[:, 2]          # Y(f(m, m))
-    d = retro * m[:, 2] ** 2
-    total = _cos_integral(d, u)
-    d = d / total if total > 0 and np.isfinite(total) else np.full_like(d, 1 / PI)
+    brdf = np.maximum(f(m, m) @ lum_w, 0.0) / m[:, 2]     # Y(f(m, m)), 1/sr (f returns f cos)
+    sigma = m[:, 2]
+    d = np.full_like(u, 1 / PI)
+    for _ in range(iterations):
+        new = brdf * m[:, 2] * sigma
+        total = _cos_integral(new, u)
+        if not (total > 0 and np.isfinite(total)):
+            new = np.full_like(u, 1 / PI)
+            break
+        new = new / total
+        done = np.max(np.abs(new - d)) <= NDF_TOLERANCE * np.max(new)
+        d = new
+        if done:
+            break
+        sigma = _sigma_of(d, u, u2theta(u))
     return (1 - floor) * d + floor / PI
 
 
@@ -232,26 +266,35 @@ def _cos_integral(d, u):
 
 
 def _sigma(ndf_warp, theta_i):
-    """sigma(theta_i) = integral of D(m) max(0, wi . m) dm, midpoint rule in (u, phi)."""
+    """sigma(theta_i) = integral of D(m) max(0, wi . m) dm for the stored (bilinear) NDF."""
+    nu = 1024
+    uu = (np.arange(nu) + 0.5) / nu
+    return _sigma_of(ndf_warp.eval(np.stack([uu, np.full(nu, 0.5)], axis=1)), uu, theta_i)
+
+
+def _sigma_of(d, u, theta_i):
+    """sigma(theta_i) for an isotropic D given at nodes u (linear in u between them),
+    midpoint rule in (u, phi) with dm = sin(theta) dtheta dphi."""
     nu, nphi = 1024, 128
     uu = (np.arange(nu) + 0.5) / nu
     ph = (np.arange(nphi) + 0.5) / nphi * 2 * PI
     tm = u2theta(uu)
-    d = ndf_warp.eval(np.stack([uu, np.full(nu, 0.5)], axis=1))
-    weight = d * np.sin(tm) * PI * uu / nu * (2 * PI / nphi)       # dm = sin dtheta dphi
-    out = []
-    for t in theta_i:
-        cos = np.cos(t) * np.cos(tm)[:, None] + np.sin(t) * np.sin(tm)[:, None] * np.cos(ph)[None, :]
-        out.append(np.sum(weight[:, None] * np.maximum(cos, 0.0)))
-    return np.maximum(np.array(out), 1e-12)
+    weight = np.interp(uu, u, d) * np.sin(tm) * PI * uu / nu * (2 * PI / nphi)
+    cos = (np.cos(theta_i)[:, None, None] * np.cos(tm)[None, :, None]
+           + np.sin(theta_i)[:, None, None] * np.sin(tm)[None, :, None] * np.cos(ph)[None, None, :])
+    return np.maximum(np.einsum("tup,u->t", np.maximum(cos, 0.0), weight), 1e-12)
 
 
-def _vndf_slice(ndf_warp, theta_i, nx, ny):
+def _vndf_slice(ndf_warp, theta_i, nx, ny, floor=0.0):
+    """The warp's density in u-space at one incident elevation: D(m) (max(0, wi . m) +
+    floor cos theta_m) times the Jacobian of u -> m. floor = 0 is the VNDF; a floor keeps
+    area for half vectors near the pole at grazing incidence, where wi . m -> 0 squeezes
+    them into the first cell while f cos theta_o is largest there (docs/measured.md)."""
     ux, uy = np.meshgrid(np.linspace(0, 1, nx), np.linspace(0, 1, ny))
     tm, pm = u2theta(ux), u2phi(uy)
     cos = np.cos(theta_i) * np.cos(tm) + np.sin(theta_i) * np.sin(tm) * np.cos(pm)
     d = ndf_warp.eval(np.stack([ux.ravel(), uy.ravel()], axis=1)).reshape(ux.shape)
-    return d * np.maximum(cos, 0.0) * 2 * PI * PI * ux * np.sin(tm)
+    return d * (np.maximum(cos, 0.0) + floor * np.cos(tm)) * 2 * PI * PI * ux * np.sin(tm)
 
 
 def _grid(n):

@@ -23,6 +23,17 @@ double elevation(const Vec3 &d) {
     return 2.0 * std::asin(std::clamp(0.5 * dist, -1.0, 1.0));
 }
 double lerp(double a, double b, double t) { return a + (b - a) * t; }
+
+// d / |d| in `out`; false for NaN, infinite, zero or overflowing vectors. The readers'
+// angle maps (elevation, the Rusinkiewicz rotations) assume unit vectors, and the core's
+// callers (the renderer) do not check them as the Python API does.
+bool unit_direction(const Vec3 &d, Vec3 &out) {
+    if (!all_finite(d)) return false;
+    double len = length(d);
+    if (!(len > 0) || !std::isfinite(len)) return false;
+    out = d * (1.0 / len);
+    return true;
+}
 } // namespace
 
 Warp2D::Warp2D(const std::vector<float> &data, int w, int h, std::vector<std::vector<double>> params,
@@ -223,10 +234,13 @@ double jacobian(double ux_m, const Vec3 &m, const Vec3 &wi) {
 }
 } // namespace
 
-void MeasuredBSDF::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &, double *out) const {
+void MeasuredBSDF::eval(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, const Query &, double *out) const {
     zero(out);
     Frame f;
-    if (!(lobes & kGlossyReflection) || !(wi.z > 0) || !(wo.z > 0) || !frame(wi, wo, f)) return;
+    Vec3 wi, wo;
+    if (!(lobes & kGlossyReflection) || !unit_direction(wi_, wi) || !unit_direction(wo_, wo) || !(wi.z > 0) ||
+        !(wo.z > 0) || !frame(wi, wo, f))
+        return;
     double sx, sy;
     vndf_.invert(f.ux_m, f.uy_m, f.param, sx, sy);
     values(sx, sy, f.param, f.ux_m, f.uy_m, f.ux_i, f.uy_i, out);
@@ -234,20 +248,24 @@ void MeasuredBSDF::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Qu
         if (!std::isfinite(out[c])) out[c] = 0.0;
 }
 
-double MeasuredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &) const {
+double MeasuredBSDF::pdf(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, const Query &) const {
     Frame f;
-    if (!(lobes & kGlossyReflection) || !(wi.z > 0) || !(wo.z > 0) || !frame(wi, wo, f)) return 0.0;
+    Vec3 wi, wo;
+    if (!(lobes & kGlossyReflection) || !unit_direction(wi_, wi) || !unit_direction(wo_, wo) || !(wi.z > 0) ||
+        !(wo.z > 0) || !frame(wi, wo, f))
+        return 0.0;
     double sx, sy;
     double vndf_pdf = vndf_.invert(f.ux_m, f.uy_m, f.param, sx, sy);
     double p = vndf_pdf * luminance_.eval(sx, sy, f.param) / jacobian(f.ux_m, f.m, wi);
     return std::isfinite(p) && p > 0 ? p : 0.0;
 }
 
-BSDFSample MeasuredBSDF::sample(const Vec3 &wi, double, double u2x, double u2y, uint32_t lobes, const Query &,
+BSDFSample MeasuredBSDF::sample(const Vec3 &wi_, double, double u2x, double u2y, uint32_t lobes, const Query &,
                                 double *weight) const {
     BSDFSample s;
     zero(weight);
-    if (!(lobes & kGlossyReflection) || !(wi.z > 0) || !all_finite(wi)) return s;
+    Vec3 wi;
+    if (!(lobes & kGlossyReflection) || !unit_direction(wi_, wi) || !(wi.z > 0)) return s;
     double theta_i = elevation(wi), phi_i = std::atan2(wi.y, wi.x);
     double param[2] = {phi_i, theta_i};
     double sx, sy, ux_m, uy_m;
@@ -303,15 +321,21 @@ MerlBSDF::MerlBSDF(std::vector<float> values) : BSDF({0.0, 1.0, 2.0}), values_(s
         throw std::invalid_argument("MerlBSDF: values must hold 3 x 90 x 90 x 180 entries");
 }
 
-void MerlBSDF::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &, double *out) const {
+void MerlBSDF::eval(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, const Query &, double *out) const {
     zero(out);
-    if (!(lobes & kGlossyReflection) || !(wi.z > 0) || !(wo.z > 0) || !all_finite(wi) || !all_finite(wo)) return;
+    Vec3 wi, wo;
+    if (!(lobes & kGlossyReflection) || !unit_direction(wi_, wi) || !unit_direction(wo_, wo) || !(wi.z > 0) ||
+        !(wo.z > 0))
+        return;
     const std::size_t i = merl_index(wi, wo), n = std::size_t(kThetaH) * kThetaD * kPhiD;
     for (int c = 0; c < 3; ++c) out[c] = double(values_[c * n + i]) * wo.z;
 }
 
-double MerlBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &) const {
-    if (!(lobes & kGlossyReflection) || !(wi.z > 0) || !(wo.z > 0)) return 0.0;
+double MerlBSDF::pdf(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, const Query &) const {
+    Vec3 wi, wo;
+    if (!(lobes & kGlossyReflection) || !unit_direction(wi_, wi) || !unit_direction(wo_, wo) || !(wi.z > 0) ||
+        !(wo.z > 0))
+        return 0.0;
     return wo.z / kPi;
 }
 
@@ -319,7 +343,8 @@ BSDFSample MerlBSDF::sample(const Vec3 &wi, double, double u2x, double u2y, uint
                             double *weight) const {
     BSDFSample s;
     zero(weight);
-    if (!(lobes & kGlossyReflection) || !(wi.z > 0) || !all_finite(wi)) return s;
+    Vec3 unit;
+    if (!(lobes & kGlossyReflection) || !unit_direction(wi, unit) || !(unit.z > 0)) return s;
     double r = std::sqrt(u2x), phi = 2.0 * kPi * u2y;
     Vec3 wo(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(1.0 - u2x, 0.0)));
     double p = pdf(wi, wo, lobes, q);
