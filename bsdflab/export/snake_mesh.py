@@ -18,18 +18,20 @@ def to_blender(p: np.ndarray) -> np.ndarray:
     return np.stack([p[..., 0], -p[..., 2], p[..., 1]], axis=-1)
 
 
-def snake_mesh(width: int = 640, height: int = 360) -> dict:
+def snake_mesh(width: int = 640, height: int = 360, y_up: bool = False) -> dict:
     """positions (V, 3) m, indices (T, 3), normals (V, 3), and the camera (origin, target in
-    m, fov_x in degrees, width, height), all in Blender's frame."""
+    m, fov_x in degrees, width, height), in Blender's frame (``y_up``: in bsdflab's and
+    glTF's, y up, still in metres)."""
     from bsdflab.scenes.geometry import build_mesh
     from bsdflab.scenes.snake import snake
 
+    frame = (lambda p: np.asarray(p, float)) if y_up else to_blender
     scene = snake(width, height, material="xenopeltis-diffuse", scales=False, eyes=False)
     parts = [build_mesh(s.geometry) for s in scene.shapes if s.name in ("body", "head")]
     offsets = np.cumsum([0] + [len(m.positions) for m in parts[:-1]])
     c = scene.camera
-    return {"positions": to_blender(np.concatenate([m.positions for m in parts])) * CM_TO_M,
+    return {"positions": frame(np.concatenate([m.positions for m in parts])) * CM_TO_M,
             "indices": np.concatenate([m.indices + o for m, o in zip(parts, offsets)]).astype(np.int64),
-            "normals": to_blender(np.concatenate([m.normals for m in parts])),
-            "camera_origin": to_blender(c.origin) * CM_TO_M, "camera_target": to_blender(c.target) * CM_TO_M,
+            "normals": frame(np.concatenate([m.normals for m in parts])),
+            "camera_origin": frame(c.origin) * CM_TO_M, "camera_target": frame(c.target) * CM_TO_M,
             "fov_x_deg": np.array(c.fov_deg), "size": np.array([c.width, c.height])}
