@@ -24,10 +24,9 @@ import pytest
 from bsdflab.export import export
 from bsdflab.reference.approximations.cycles import cycles_thin_film_rgb
 from bsdflab.reference.approximations.study import delta_e00, exact_rgb
-from support.cycles_spheres import pixel_cosines, render_spheres
+from support.cycles_spheres import FILM, blocks, pixel_cosines, render_spheres
 
 SIZE, BLOCK = 48, 4
-FILM = {"type": "dielectric", "int_ior": 1.5515, "ext_ior": 1.0, "film": [{"material": 1.83, "thickness_nm": 400.0}]}
 
 
 @pytest.fixture(scope="module")
@@ -40,8 +39,7 @@ def crosscheck(tmp_path_factory):
 
 
 def _blocks(img):
-    h, w, c = img.shape
-    return img.reshape(h // BLOCK, BLOCK, w // BLOCK, BLOCK, c).mean(axis=(1, 3))
+    return blocks(img, BLOCK)
 
 
 def _region():

@@ -29,10 +29,9 @@ import pytest
 import bsdflab.reference.approximations.cycles_bsdf  # noqa: F401  (registers the comparison BSDF)
 from bsdflab.export import export
 from bsdflab.reference.approximations.study import delta_e00
-from support.cycles_spheres import bsdflab_sphere, perspective_cosines, render_perspective
+from support.cycles_spheres import FILM, blocks, bsdflab_sphere, perspective_cosines, render_perspective
 
 SIZE, BLOCK, SPP = 48, 4, 16
-FILM = {"type": "dielectric", "int_ior": 1.5515, "ext_ior": 1.0, "film": [{"material": 1.83, "thickness_nm": 400.0}]}
 
 
 @pytest.fixture(scope="module")
@@ -49,8 +48,7 @@ def renders(tmp_path_factory):
 
 
 def _blocks(img):
-    h, w, c = img.shape
-    return img.reshape(h // BLOCK, BLOCK, w // BLOCK, BLOCK, c).mean(axis=(1, 3))
+    return blocks(img, BLOCK)
 
 
 def _region():
