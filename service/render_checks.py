@@ -8,7 +8,7 @@ from typing import Any
 from bsdflab.bsdfs.base import from_dict
 from bsdflab.jobs.render import build_scene
 from bsdflab.render.build import TABULATED
-from bsdflab.scenes.geometry import build_mesh
+from bsdflab.render.geometry import build_mesh
 
 
 def _model(d: dict[str, Any]) -> None:

@@ -23,6 +23,7 @@ from pathlib import Path
 TIMEOUT_S = 600.0
 
 SCRIPT = '''"""Built by bsdflab export: the material {name!r} in Blender (Principled BSDF with Thin Film)."""
+import os
 import sys
 
 import bpy
@@ -86,6 +87,46 @@ scene.view_settings.look = "None"
 scene.render.image_settings.file_format = "OPEN_EXR"
 scene.render.image_settings.color_depth = "32"
 
+SNAKE = os.environ.get("BSDFLAB_SNAKE_MESH")   # an .npz from bsdflab.export.snake_mesh
+if SNAKE:
+    import numpy as np
+    from mathutils import Vector
+
+    d = np.load(SNAKE)
+    pos, idx = d["positions"], d["indices"]
+    mesh = bpy.data.meshes.new("snake")
+    mesh.vertices.add(len(pos))
+    mesh.vertices.foreach_set("co", pos.astype(np.float32).ravel())
+    mesh.loops.add(idx.size)
+    mesh.loops.foreach_set("vertex_index", idx.astype(np.int32).ravel())
+    mesh.polygons.add(len(idx))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, idx.size, 3, dtype=np.int32))
+    mesh.polygons.foreach_set("loop_total", np.full(len(idx), 3, dtype=np.int32))
+    mesh.update()
+    mesh.validate()
+    mesh.shade_smooth()
+    mesh.normals_split_custom_set_from_vertices([tuple(n) for n in d["normals"]])
+    mesh.materials.append(mat)
+    snake_scene = bpy.data.scenes.new("snake")
+    snake_scene.world = world
+    snake_obj = bpy.data.objects.new("snake", mesh)
+    snake_scene.collection.objects.link(snake_obj)
+    snake_cam = bpy.data.cameras.new("snake camera")
+    snake_cam.sensor_fit = "HORIZONTAL"
+    snake_cam.angle = float(d["fov_x_deg"]) * 3.141592653589793 / 180.0
+    snake_cam_obj = bpy.data.objects.new("snake camera", snake_cam)
+    snake_cam_obj.location = tuple(d["camera_origin"])
+    snake_cam_obj.rotation_euler = (Vector(tuple(d["camera_target"])) - Vector(tuple(d["camera_origin"]))
+                                    ).to_track_quat("-Z", "Y").to_euler()
+    snake_scene.collection.objects.link(snake_cam_obj)
+    snake_scene.camera = snake_cam_obj
+    snake_scene.render.engine = "CYCLES"
+    snake_scene.cycles.device = "CPU"
+    snake_scene.cycles.samples = 64
+    snake_scene.cycles.use_denoising = False
+    snake_scene.render.resolution_x, snake_scene.render.resolution_y = (int(v) for v in d["size"])
+    snake_scene.view_settings.view_transform = "Standard"
+
 if SAVE_AS:
     bpy.context.preferences.filepaths.save_version = 0  # no "<file>.blend1" backup beside it
     bpy.ops.wm.save_as_mainfile(filepath=SAVE_AS, compress=False)
@@ -145,9 +186,23 @@ def run_bpy(code: str, args: list[str] = (), timeout: float = TIMEOUT_S, env: di
     return proc.stdout
 
 
-def write_blend(params: dict, path: str, name: str = "bsdflab") -> None:
-    """Run the script under bpy (a child process) to save the .blend at ``path``."""
-    run_bpy(blender_script(params, name), [os.path.abspath(path)])
+def write_blend(params: dict, path: str, name: str = "bsdflab", snake: bool = True) -> None:
+    """Run the script under bpy (a child process) to save the .blend at ``path``; with
+    ``snake``, the .blend also holds a scene "snake" (the snake's mesh and camera,
+    ``bsdflab.export.snake_mesh``) with the same material."""
+    import tempfile
+
+    import numpy as np
+
+    with tempfile.TemporaryDirectory() as tmp:
+        env = None
+        if snake:
+            from bsdflab.export.snake_mesh import snake_mesh
+
+            npz = os.path.join(tmp, "snake.npz")
+            np.savez(npz, **snake_mesh())
+            env = dict(os.environ, BSDFLAB_SNAKE_MESH=npz)
+        run_bpy(blender_script(params, name), [os.path.abspath(path)], env=env)
 
 
 def render_blend(blend: str, out_exr: str, size: int = 64, spp: int = 16, seed: int = 0, threads: int = 2,

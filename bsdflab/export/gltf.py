@@ -1,4 +1,4 @@
-"""glTF 2.0: a UV sphere with the material as KHR_materials_iridescence + KHR_materials_ior,
+"""glTF 2.0: a UV sphere (scene 0) and the snake's mesh (scene 1) with the material as KHR_materials_iridescence + KHR_materials_ior,
 written with pygltflib (``.gltf`` with a ``.bin`` beside it, or one ``.glb``), and read back.
 
 Mapping (Khronos extension specifications): baseColorFactor = body colour, metallic 0,
@@ -41,34 +41,48 @@ def material_extensions(params: dict) -> dict:
                 "iridescenceThicknessMaximum": float(params["film_thickness_nm"])}}
 
 
+def _meshes():
+    """[(name, positions, normals, indices)]: the unit sphere, then the snake (y up, metres)."""
+    from bsdflab.export.snake_mesh import snake_mesh
+
+    sn = snake_mesh(y_up=True)
+    snake = (sn["positions"].astype(np.float32), sn["normals"].astype(np.float32),
+             sn["indices"].astype(np.uint32).ravel())
+    return [("sphere", *uv_sphere()), ("snake", *snake)]
+
+
 def gltf_document(params: dict, bin_uri: str | None):
-    """(pygltflib.GLTF2, binary blob) for the sphere and material."""
+    """(pygltflib.GLTF2, binary blob): scene 0 (the default) the sphere, scene 1 the snake's
+    mesh (bsdflab.export.snake_mesh, no scale texture), both with the material."""
     import pygltflib as g
 
-    pos, nrm, idx = uv_sphere()
-    blob = idx.tobytes() + pos.tobytes() + nrm.tobytes()
-    n_idx, n_v = idx.nbytes, pos.nbytes
+    chunks, views, accessors, meshes, offset = [], [], [], [], 0
+    for k, (name, pos, nrm, idx) in enumerate(_meshes()):
+        for data, target in ((idx, g.ELEMENT_ARRAY_BUFFER), (pos, g.ARRAY_BUFFER), (nrm, g.ARRAY_BUFFER)):
+            chunks.append(data.tobytes())
+            views.append(g.BufferView(buffer=0, byteOffset=offset, byteLength=data.nbytes, target=target))
+            offset += data.nbytes
+        v = 3 * k
+        accessors += [g.Accessor(bufferView=v, componentType=g.UNSIGNED_INT, count=len(idx), type=g.SCALAR,
+                                 min=[int(idx.min())], max=[int(idx.max())]),
+                      g.Accessor(bufferView=v + 1, componentType=g.FLOAT, count=len(pos), type=g.VEC3,
+                                 min=pos.min(0).tolist(), max=pos.max(0).tolist()),
+                      g.Accessor(bufferView=v + 2, componentType=g.FLOAT, count=len(nrm), type=g.VEC3,
+                                 min=nrm.min(0).tolist(), max=nrm.max(0).tolist())]
+        meshes.append(g.Mesh(name=name, primitives=[g.Primitive(attributes=g.Attributes(POSITION=v + 1, NORMAL=v + 2),
+                                                                indices=v, material=0)]))
+    blob = b"".join(chunks)
     doc = g.GLTF2(
         asset=g.Asset(version="2.0", generator="bsdflab export"),
-        scene=0, scenes=[g.Scene(nodes=[0])], nodes=[g.Node(mesh=0, name="sphere")],
-        meshes=[g.Mesh(name="sphere", primitives=[g.Primitive(attributes=g.Attributes(POSITION=1, NORMAL=2),
-                                                               indices=0, material=0)])],
+        scene=0, scenes=[g.Scene(name="sphere", nodes=[0]), g.Scene(name="snake", nodes=[1])],
+        nodes=[g.Node(mesh=0, name="sphere"), g.Node(mesh=1, name="snake")], meshes=meshes,
         materials=[g.Material(name="bsdflab_material",
                               pbrMetallicRoughness=g.PbrMetallicRoughness(
                                   baseColorFactor=[*map(float, params["base_color"]), 1.0],
                                   metallicFactor=0.0, roughnessFactor=float(params["roughness"])),
                               extensions=material_extensions(params))],
         extensionsUsed=list(EXTENSIONS),
-        buffers=[g.Buffer(byteLength=len(blob), uri=bin_uri)],
-        bufferViews=[g.BufferView(buffer=0, byteOffset=0, byteLength=n_idx, target=g.ELEMENT_ARRAY_BUFFER),
-                     g.BufferView(buffer=0, byteOffset=n_idx, byteLength=n_v, target=g.ARRAY_BUFFER),
-                     g.BufferView(buffer=0, byteOffset=n_idx + n_v, byteLength=n_v, target=g.ARRAY_BUFFER)],
-        accessors=[g.Accessor(bufferView=0, componentType=g.UNSIGNED_INT, count=len(idx), type=g.SCALAR,
-                              min=[int(idx.min())], max=[int(idx.max())]),
-                   g.Accessor(bufferView=1, componentType=g.FLOAT, count=len(pos), type=g.VEC3,
-                              min=pos.min(0).tolist(), max=pos.max(0).tolist()),
-                   g.Accessor(bufferView=2, componentType=g.FLOAT, count=len(nrm), type=g.VEC3,
-                              min=nrm.min(0).tolist(), max=nrm.max(0).tolist())])
+        buffers=[g.Buffer(byteLength=len(blob), uri=bin_uri)], bufferViews=views, accessors=accessors)
     return doc, blob
 
 

@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 #include "arrays.h"
 #include "bsdflab/interfaces.h"
+#include "bsdflab/tabulated_term.h"
 
 namespace py = pybind11;
 using namespace bsdflab;
@@ -27,6 +28,8 @@ void bind_interfaces(py::module_ &m) {
         .def(py::init<int, double, double>(), py::arg("channels"), py::arg("int_ior"), py::arg("ext_ior"));
     py::class_<ConductorTerm, FresnelTerm, std::shared_ptr<ConductorTerm>>(m, "ConductorTerm")
         .def(py::init<cvec, double>(), py::arg("n_int"), py::arg("ext_ior"));
+    py::class_<TabulatedTerm, FresnelTerm, std::shared_ptr<TabulatedTerm>>(m, "TabulatedTerm")
+        .def(py::init<std::vector<std::vector<double>>>(), py::arg("reflectance"));
     py::class_<FilmTerm, FresnelTerm, std::shared_ptr<FilmTerm>>(m, "FilmTerm")
         .def(py::init<std::vector<double>, double, std::vector<cvec>, std::vector<double>, cvec, bool>(),
              py::arg("wavelengths"), py::arg("ext_ior"), py::arg("layer_n"), py::arg("layer_d_nm"),

@@ -24,10 +24,9 @@ import pytest
 from bsdflab.export import export
 from bsdflab.reference.approximations.cycles import cycles_thin_film_rgb
 from bsdflab.reference.approximations.study import delta_e00, exact_rgb
-from support.cycles_spheres import pixel_cosines, render_spheres
+from support.cycles_spheres import FILM, blocks, pixel_cosines, render_spheres
 
 SIZE, BLOCK = 48, 4
-FILM = {"type": "dielectric", "int_ior": 1.5515, "ext_ior": 1.0, "film": [{"material": 1.83, "thickness_nm": 400.0}]}
 
 
 @pytest.fixture(scope="module")
@@ -40,8 +39,7 @@ def crosscheck(tmp_path_factory):
 
 
 def _blocks(img):
-    h, w, c = img.shape
-    return img.reshape(h // BLOCK, BLOCK, w // BLOCK, BLOCK, c).mean(axis=(1, 3))
+    return blocks(img, BLOCK)
 
 
 def _region():
@@ -72,3 +70,34 @@ def test_cycles_error_against_the_exact_film_is_the_reported_one(crosscheck):
     predicted = np.interp(np.degrees(np.arccos(block_cos)), e["angles_deg"], np.array(e["map"])[:, mid])
     assert np.all(np.abs(measured - predicted) <= 0.4), np.abs(measured - predicted).max()
     assert json.dumps(report)   # the report is plain JSON
+
+
+SNAKE_PROBE = '''import sys, json
+import bpy
+bpy.ops.wm.open_mainfile(filepath=sys.argv[sys.argv.index("--") + 1])
+s = bpy.data.scenes["snake"]
+obj = s.objects["snake"]
+bsdf = obj.data.materials[0].node_tree.nodes["Principled BSDF"]
+print("PROBE" + json.dumps({"active": bpy.context.scene.name, "vertices": len(obj.data.vertices),
+      "triangles": len(obj.data.polygons), "camera": list(s.camera.location),
+      "film": bsdf.inputs["Thin Film Thickness"].default_value}))
+'''
+
+
+def test_the_blend_holds_the_snake_mesh(crosscheck, tmp_path_factory):
+    """The .blend's scene "snake": the snake's mesh (bsdflab.export.snake_mesh), its camera,
+    the exported material; the sphere stays the active (validation) scene."""
+    from bsdflab.export.blender import run_bpy
+    from bsdflab.export.snake_mesh import snake_mesh
+
+    report, p, _ = crosscheck
+    blend = [f for f in report["files"] if f.endswith(".blend")][0]
+    folder = tmp_path_factory.getbasetemp()
+    path = next(folder.glob(f"cycles*/{blend}"))
+    out = run_bpy(SNAKE_PROBE, [str(path)])
+    got = json.loads(out.split("PROBE", 1)[1].splitlines()[0])
+    want = snake_mesh()
+    assert got["active"] == "Scene"
+    assert (got["vertices"], got["triangles"]) == (len(want["positions"]), len(want["indices"]))
+    np.testing.assert_allclose(got["camera"], want["camera_origin"], rtol=0, atol=1e-4)
+    assert abs(got["film"] - p["film_thickness_nm"]) < 1e-3

@@ -93,6 +93,16 @@ def test_gltf_round_trips_within_the_extension_ranges(exported):
     view = doc.bufferViews[acc.bufferView]
     pos = np.frombuffer(data[view.byteOffset:view.byteOffset + view.byteLength], np.float32).reshape(-1, 3)
     assert np.allclose(np.linalg.norm(pos, axis=1), 1.0, rtol=0, atol=1e-6)
+    # scene 1: the snake's mesh, as bsdflab.scenes builds it (metres, y up)
+    from bsdflab.export.snake_mesh import snake_mesh
+
+    mesh = doc.meshes[doc.nodes[doc.scenes[1].nodes[0]].mesh]
+    acc = doc.accessors[mesh.primitives[0].attributes.POSITION]
+    view = doc.bufferViews[acc.bufferView]
+    snake = np.frombuffer(data[view.byteOffset:view.byteOffset + view.byteLength], np.float32).reshape(-1, 3)
+    want = snake_mesh(y_up=True)["positions"]
+    assert mesh.name == "snake" and doc.scene == 0 and snake.shape == want.shape
+    np.testing.assert_allclose(snake, want, rtol=0, atol=1e-6)
 
 
 IMPORT_GLTF = """
