@@ -70,17 +70,18 @@ def _table():
                               min_samples=64, max_samples=256, progress=False))
 
 
-# (name, factory, incident cosines; negative = from below)
+# (name, factory, incident cosines; negative = from below; -0.3 is beyond the critical
+# angle of the macro-surface: total internal reflection for most microfacets)
 MODELS = [
     ("diffuse", lambda: bl.Diffuse(0.7), (0.6,)),
     ("conductor", lambda: bl.Conductor(material="Au"), (0.6,)),
     ("dielectric", lambda: bl.Dielectric(1.5, 1.0), (0.6, -0.5)),
-    ("dielectric_film", lambda: bl.Dielectric(1.5, 1.0, film=FILM), (0.6,)),
+    ("dielectric_film", lambda: bl.Dielectric(1.5, 1.0, film=FILM), (0.6, -0.5)),
     ("roughconductor", lambda: bl.RoughConductor(0.3, material="Cu"), (0.6,)),
     ("roughconductor_ms", lambda: bl.RoughConductor(0.3, material="Ag", multiscatter=True), (0.6,)),
-    ("roughdielectric", lambda: bl.RoughDielectric(0.3, 1.5), (0.6, -0.5)),
+    ("roughdielectric", lambda: bl.RoughDielectric(0.3, 1.5), (0.6, -0.5, -0.3)),
     ("roughdielectric_ms", lambda: bl.RoughDielectric(0.3, 1.5, multiscatter=True), (0.6,)),
-    ("roughdielectric_film", lambda: bl.RoughDielectric(0.3, 1.5, film=FILM), (0.6,)),
+    ("roughdielectric_film", lambda: bl.RoughDielectric(0.3, 1.5, film=FILM), (0.6, -0.5)),
     ("layered_rough", _layered_rough_over_diffuse, (0.6,)),
     ("layered_smooth_transmissive", _layered_smooth_transmissive, (0.6, -0.5)),
     ("layered_clear_smooth", _layered_clear_smooth, (0.6,)),
