@@ -575,7 +575,8 @@ void LayeredBSDF::delta_reflectance(const Vec3 &wi, const Query &q, double *out)
 //    of the pair, which multiple importance sampling needs for its weights to sum to 1.
 //  - a delta X (smooth top): the exits' density is that of the last non-delta vertex's
 //    sample refracted through X; not estimated here: the share of draws that leave
-//    through X (estimated by the same walks) spread as a cosine lobe.
+//    through X (estimated by the same walks, smoothed so it is never 0) spread as a
+//    cosine lobe over the directions X can refract into (see the end of the function).
 // pbrt-v4's LayeredBxDF::PDF instead estimates the two-interface TRT density without the
 // medium, mixed with 10 % uniform; it does not integrate to the sampler's share.
 double LayeredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const {
