@@ -171,8 +171,9 @@ class Layered(BSDF):
 
     @property
     def capped_walks(self) -> int:
-        """Walks of ``eval`` and ``sample`` (all wavelength sets so far) that max_depth cut:
-        truncated, so biased low; 0 for a sound model (``estimate`` reports its own)."""
+        """Walks of ``eval``, ``sample`` and ``pdf`` (all wavelength sets so far) that
+        max_depth cut: truncated, so biased low; 0 for a sound model (``estimate`` reports
+        its own)."""
         return sum(int(core.capped_walks) for core in self._cores.values())
 
     @property
