@@ -82,7 +82,9 @@ class Layered(BSDF):
         Walks of one ``pdf`` estimate (seeded from (seed, wi, wo), so ``pdf`` is a fixed
         function of the pair). ``pdf`` is the density with which ``sample`` returns wo:
         the top's own reflection exactly plus an unbiased estimate of the walk's exits
-        through a rough outer boundary (docs/estimators.md). 0: estimator version 4's
+        through a rough outer boundary; through a smooth one, the estimated share of
+        exits (smoothed, never 0) as a cosine lobe over the directions it refracts into
+        (docs/estimators.md). 0: estimator version 4's
         deterministic approximation (for comparisons). Default 1 (bench/bench_layered_pdf.py:
         more walks cost more render time than their MIS weights save on the snake).
     """
@@ -169,8 +171,9 @@ class Layered(BSDF):
 
     @property
     def capped_walks(self) -> int:
-        """Walks of ``eval`` and ``sample`` (all wavelength sets so far) that max_depth cut:
-        truncated, so biased low; 0 for a sound model (``estimate`` reports its own)."""
+        """Walks of ``eval``, ``sample`` and ``pdf`` (all wavelength sets so far) that
+        max_depth cut: truncated, so biased low; 0 for a sound model (``estimate`` reports
+        its own)."""
         return sum(int(core.capped_walks) for core in self._cores.values())
 
     @property

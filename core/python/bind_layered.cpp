@@ -94,7 +94,7 @@ void bind_layered(py::module_ &m) {
              py::arg("thickness"), py::arg("samples"), py::arg("seed"),
              "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed")
         .def_property_readonly("capped_walks", &LayeredBSDF::capped_walks,
-                               "walks of eval() and sample() cut by max_depth since construction")
+                               "walks of eval(), sample() and pdf() cut by max_depth since construction")
         .def("delta_reflectance", &delta_reflectance_many, py::arg("wi"), py::arg("thickness") = py::none())
         .def("scattered_part", [](const std::shared_ptr<LayeredBSDF> &self) {
             return std::make_shared<ScatteredPart>(self);

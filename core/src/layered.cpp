@@ -575,7 +575,8 @@ void LayeredBSDF::delta_reflectance(const Vec3 &wi, const Query &q, double *out)
 //    of the pair, which multiple importance sampling needs for its weights to sum to 1.
 //  - a delta X (smooth top): the exits' density is that of the last non-delta vertex's
 //    sample refracted through X; not estimated here: the share of draws that leave
-//    through X (estimated by the same walks) spread as a cosine lobe.
+//    through X (estimated by the same walks, smoothed so it is never 0) spread as a
+//    cosine lobe over the directions X can refract into (see the end of the function).
 // pbrt-v4's LayeredBxDF::PDF instead estimates the two-interface TRT density without the
 // medium, mixed with 10 % uniform; it does not integrate to the sampler's share.
 double LayeredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const {
@@ -605,8 +606,22 @@ double LayeredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Qu
         if (out.lobe && !(out.lobe & kDelta) && (out.wo.z > 0) == (wo.z > 0)) ++left_through_x;
     }
     if (density.rough) return p + density.sum / n;
-    // delta X: the share of draws leaving through X as a cosine lobe
-    return p + double(left_through_x) / n * std::abs(wo.z) * kInvPi;
+    // Delta X: the share of draws leaving through X spread as a cosine lobe over the
+    // directions X can refract into. The share is smoothed, (k + 1) / (n + 2), so that a
+    // direction sample() returns never reads pdf 0 (with n = 1 the raw k / n was 0 for
+    // ~64 % of a smooth top's own samples, and a renderer that drops pdf-0 samples, or an
+    // emitter light sampling cannot reach, loses them). The lobe is 0 where X cannot
+    // refract toward wo (an outside denser than the slab, beyond the critical angle:
+    // sample() never goes there) and normalised over the rest.
+    const BSDF &X = *boundaries_[x];
+    double *t = buf + C;
+    if (!(X.sample(wo, 0.5, 0.5, 0.5, kDeltaTransmission, q, t).lobe & kDeltaTransmission)) return p;
+    const BSDFSample normal = X.sample(Vec3{0.0, 0.0, wo.z > 0 ? 1.0 : -1.0}, 0.5, 0.5, 0.5,
+                                       kDeltaTransmission, q, t);
+    // sin^2 of the critical angle on wo's side (1: no critical angle)
+    const double cone = normal.lobe ? std::min(1.0, normal.eta * normal.eta) : 1.0;
+    const double share = (left_through_x + 1.0) / (n + 2.0);
+    return p + share * std::abs(wo.z) * kInvPi / cone;
 }
 
 // Estimator version 4's pdf (pdf_samples = 0, kept for comparisons): the entry's glossy

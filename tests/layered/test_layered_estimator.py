@@ -245,19 +245,27 @@ CORE_GRAIN = 2048
 
 
 def test_09_thread_count_does_not_change_any_bit(monkeypatch):
-    """estimate (values and errors; one pair per task) and sample are bitwise the same on 1,
-    2 and 3 threads. The sample half draws 3 grains of rows, so 2 and 3 threads really
-    split it (fewer rows than the grain run on one thread whatever the setting)."""
-    m = bl.presets.xenopeltis(samples=32)
+    """eval, estimate errors, sample and the stochastic pdf (version 5: walks seeded from
+    (seed, wi, wo)) are bitwise the same on 1, 2 and 3 threads, for a rough top and a
+    smooth transmissive stack (pdf's smooth-exit branch). The sample half draws 3 grains of
+    rows, so 2 and 3 threads really split it (fewer rows than the grain run on one thread
+    whatever the setting)."""
+    smooth = bl.Layered([bl.Dielectric(1.5)], [bl.Slab(0.5, sigma_a=0.2, sigma_s=1.0)],
+                        bl.RoughDielectric(0.3, 1.0, 1.5), samples=32)
     wi = random_unit_vectors(24, seed=8, hemisphere="upper")
     wo = random_unit_vectors(24, seed=9, hemisphere="upper")
-    wi_many = random_unit_vectors(3 * CORE_GRAIN, seed=10, hemisphere="upper")
+    wo_any = random_unit_vectors(24, seed=10)
+    wi_many = random_unit_vectors(3 * CORE_GRAIN, seed=11, hemisphere="upper")
+    wl = [450.0, 650.0]
     results = []
     for threads in ("1", "2", "3"):
         monkeypatch.setenv("BSDFLAB_THREADS", threads)
-        e = m.estimate(wi, wo, wavelengths=[450.0, 650.0])
-        s = m.sample(wi_many, seed=3, wavelengths=[450.0, 650.0])
-        results.append((e.value, e.stderr, s.wo, s.weight))
+        r = []
+        for m in (bl.presets.xenopeltis(samples=32), smooth):
+            e = m.estimate(wi, wo, wavelengths=wl)
+            s = m.sample(wi_many, seed=3, wavelengths=wl)
+            r += [e.value, e.stderr, s.wo, s.weight, s.pdf, m.pdf(wi, wo_any, wavelengths=wl)]
+        results.append(r)
     for other in results[1:]:
         for x, y in zip(results[0], other, strict=True):
             assert np.array_equal(x, y)

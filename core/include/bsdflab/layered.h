@@ -93,7 +93,7 @@ public:
     // The top boundary: its reflection is the part of the model known exactly.
     const std::shared_ptr<const BSDF> &top() const { return boundaries_.front(); }
     const LayeredOptions &options() const { return options_; }
-    // Walks of eval() and sample() cut by max_depth since construction (estimate() reports
+    // Walks of eval(), sample() and pdf() cut by max_depth since construction (estimate() reports
     // its own through EstimateRequest::capped). A cut walk is biased: 0 for a sound model.
     std::uint64_t capped_walks() const { return capped_.load(std::memory_order_relaxed); }
 
