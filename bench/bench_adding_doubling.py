@@ -49,7 +49,8 @@ def main() -> None:
     mc, w_mc, c_mc = timed(lambda: tabulate(model, grid, rel_error=0.02, progress=False))
     e_ad, e_mc = errors(ad, ref), errors(mc, ref)
     print(f"(a) reference AD (24 nodes): {w_ref:.1f} s wall, {c_ref:.1f} CPU-s")
-    print(f"    PFMC 2 %:  {w_mc:.1f} s wall, {c_mc:.1f} CPU-s; error vs reference max {e_mc[0]:.4f}, RMS {e_mc[1]:.4f}")
+    print(f"    PFMC 2 %:  {w_mc:.1f} s wall, {c_mc:.1f} CPU-s; error vs reference max {e_mc[0]:.4f}, "
+          f"RMS {e_mc[1]:.4f}")
     print(f"    AD 16 nodes: {w_ad:.1f} s wall, {c_ad:.1f} CPU-s; error vs reference max {e_ad[0]:.2e}, "
           f"RMS {e_ad[1]:.2e}; stated bound max {ad.meta['error_bound_max_rel']:.2e}")
     print(f"    ratio PFMC / AD: wall {w_mc / w_ad:.1f}x, CPU {c_mc / c_ad:.1f}x, max error {e_mc[0] / e_ad[0]:.0f}x")

@@ -53,8 +53,8 @@ def cluster_run(n_workers: int, threads: int, fn):
 
 def unit_overhead(client, n: int = 400) -> float:
     """Seconds per unit of the Dask runner for units that do nothing."""
-    from bsdflab.distributed.runner import DaskRunner
     from bsdflab.distributed.probe import noop_unit
+    from bsdflab.distributed.runner import DaskRunner
 
     t = time.perf_counter()
     DaskRunner(client).run(noop_unit, [], list(range(n)), lambda u, r: None, key=f"noop-{time.time_ns()}",
@@ -64,8 +64,8 @@ def unit_overhead(client, n: int = 400) -> float:
 
 def transfer_rate(client, nbytes: int = 32 << 20) -> float:
     """Bytes/s of unit results coming back to the driver (loopback here)."""
-    from bsdflab.distributed.runner import DaskRunner
     from bsdflab.distributed.probe import payload_unit
+    from bsdflab.distributed.runner import DaskRunner
 
     t = time.perf_counter()
     DaskRunner(client).run(payload_unit, [nbytes // 8], list(range(8)), lambda u, r: None,
@@ -99,8 +99,8 @@ def main() -> int:
     from bsdflab import _core
     from bsdflab.distributed import cost_model as cm
     from bsdflab.distributed.runner import DaskRunner
-    from bsdflab.tables.units import tabulate_units
     from bsdflab.tables import tabulate
+    from bsdflab.tables.units import tabulate_units
 
     model, grid, kw = table_setup(args.quick)
     print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; grid {grid.to_dict()}", flush=True)

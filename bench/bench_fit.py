@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import os
 import time
-import tomllib
 import warnings
 
 import emcee
 import numpy as np
 import tmm
+import tomllib
 from colour.phenomena import thin_film_tmm
 
 from bsdflab.fit import GEOMETRIES, FitConfig, ForwardModel, LogPosterior, read_csv
@@ -145,7 +145,8 @@ def main():
     print(f"  bsdflab  {t_ours:8.2f} s  ESS {ess_ours:6.1f}  {ess_ours / t_ours:10.2f} ESS/s")
     print(f"  colour   {t_peer:8.2f} s  ESS {ess_peer:6.1f}  {ess_peer / t_peer:10.2f} ESS/s")
     print(f"  ESS/s ratio bsdflab / colour-film study: {(ess_ours / t_ours) / (ess_peer / t_peer):.1f}x "
-          f"(tmm-film study, from its evaluation rate: ~{(ess_ours / t_ours) / (ess_peer / t_peer) * rates['colour thin_film_tmm'] / rates['tmm']:.0f}x)")
+          f"(tmm-film study, from its evaluation rate: "
+          f"~{(ess_ours / t_ours) / (ess_peer / t_peer) * rates['colour thin_film_tmm'] / rates['tmm']:.0f}x)")
 
 
 if __name__ == "__main__":

@@ -64,7 +64,7 @@ def main() -> None:
         label = "old (v4 approximation)" if n == 0 else f"walk density, {n} walks"
         print(f"  {label:24s}: {spp:5d} spp in {r.seconds:6.1f} s, mean pixel variance {var:.4e}")
     old = rows[0]
-    for n, spp, sec, var, eff in rows[1:]:
+    for n, _spp, sec, var, eff in rows[1:]:
         print(f"  pdf_samples={n:2d}: variance ratio old/new at equal time "
               f"{old[3] * old[2] / (var * sec):.3f}x (efficiency ratio new/old {eff / old[4]:.3f})")
 

@@ -1,6 +1,6 @@
 """Measured materials: bl.Measured (RGL .bsdf) eval/sample throughput against Mitsuba 3's
-native ``measured`` plugin (llvm_ad_rgb: one kernel over all queries, timed after compiling; scalar_rgb: one Python call per query,
-so it measures Python's call overhead as much as the plugin) on the
+native ``measured`` plugin (llvm_ad_rgb: one kernel over all queries, timed after compiling; scalar_rgb: one Python call
+per query, so it measures Python's call overhead as much as the plugin) on the
 same file and against bsdflab's own table lookup (TableBSDF); the writer's time for a
 table; file sizes (RGL vs the bsdflab EXR). Prints ratios (same process, same queries).
 

@@ -75,7 +75,7 @@ def load(url: str, requests: int, concurrency: int, seconds: float, heavy: int) 
                 call().raise_for_status()
             deadline = time.perf_counter() + seconds
 
-            def one(_):
+            def one(_, deadline=deadline, call=call):
                 if time.perf_counter() > deadline:
                     return None
                 t = time.perf_counter()
@@ -199,7 +199,8 @@ def main() -> int:
           f"MiB; p50 JSON / .npy = {one['big/json']['p50_ms'] / one['big/npy']['p50_ms']:.2f}")
     sat = one["saturated"]
     print(f"saturated ({2 * heavy} clients on {heavy} heavy slots): /healthz p99 {sat['p99_ms']:.2f} ms = "
-          f"{sat['p99_ms'] / one['healthz']['p99_ms']:.2f} x idle; heavy evals {sat['heavy_ok_per_s']:.2f}/s at the cap, "
+          f"{sat['p99_ms'] / one['healthz']['p99_ms']:.2f} x idle; heavy evals {sat['heavy_ok_per_s']:.2f}/s "
+          f"at the cap, "
           f"{sat['429']} answered 429, {sat['200']} 200, {sat['other']} other")
     for name, s in here.items():
         print(f"{name:<16} {'direct':<18} {s['per_s']:9.1f} {s['p50_ms']:9.2f} {s['p99_ms']:9.2f}")

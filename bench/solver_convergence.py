@@ -27,7 +27,8 @@ CONFIGS = {
                                                                 phase={"type": "hg", "g": 0.6})], bl.Diffuse(0.5)),
     "xenopeltis (GGX 0.08 + guanine film / melanin HG slab / base)": lambda: preset("xenopeltis"),
     "GGX 0.05 + film / HG 0.6 slab / Lambertian": lambda: bl.Layered(
-        [bl.RoughDielectric(0.05, 1.5, 1.0, film=[{"material": 1.83, "thickness_nm": 400.0}])], [SLAB], bl.Diffuse(0.5)),
+        [bl.RoughDielectric(0.05, 1.5, 1.0, film=[{"material": 1.83, "thickness_nm": 400.0}])], [SLAB],
+        bl.Diffuse(0.5)),
     "Beckmann 0.5 / HG 0.6 slab / Lambertian": lambda: bl.Layered(
         [bl.RoughDielectric(0.5, 1.5, 1.0, distribution="beckmann")], [SLAB], bl.Diffuse(0.5)),
 }
@@ -53,7 +54,7 @@ def main() -> None:
         ref = solve(model, WL, nodes=48, orders=max(2, int(1.5 * auto)), thin_depth=2.0**-20).eval(
             wi, wo, scattered_only=True)
 
-        def err(**kw):
+        def err(model=model, ref=ref, **kw):
             v = solve(model, WL, **kw).eval(wi, wo, scattered_only=True)
             return float(np.max(np.abs(v - ref) / np.abs(ref)))
 

@@ -31,11 +31,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from bsdflab.util import args as check
 from bsdflab.bsdfs import Diffuse, RoughDielectric
 from bsdflab.bsdfs.interface_term import MAX_FILM_LAYERS
 from bsdflab.layered import Layered, Slab
 from bsdflab.spectra import Spectrum
+from bsdflab.util import args as check
 
 KERATIN_CAUCHY = {"model": "cauchy", "A": 1.532, "B": 5890.0}
 KERATIN_IOR_550 = KERATIN_CAUCHY["A"] + KERATIN_CAUCHY["B"] / 550.0**2

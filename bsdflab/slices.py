@@ -14,10 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bsdflab.util import args as check
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.lobes import Lobe
 from bsdflab.tables.channels import LUMINANCE_RGB
+from bsdflab.util import args as check
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,6 @@ import numpy as np
 
 from bsdflab.bsdfs import from_dict
 from bsdflab.lobes import Lobe
-
 from bsdflab.reference.comparison import QUANTITIES, TARGET, errors_between, rel_error
 from bsdflab.reference.query_sets import bsdflab_answers
 

@@ -36,14 +36,12 @@ import numpy as np
 
 from bsdflab.bsdfs import BSDF, from_dict
 from bsdflab.optics.metals import metal_ior
-from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, rgb_to_spectrum, spectrum_to_rgb
-
-from bsdflab.reference.comparison import (QUANTITIES, TARGET, Comparison, IllConditionedGroup, errors_between,
-                         rel_error)
+from bsdflab.reference.comparison import QUANTITIES, TARGET, Comparison, IllConditionedGroup, errors_between, rel_error
 from bsdflab.reference.conditioning import ILL_CONDITIONED, reasons, sensitivity
 from bsdflab.reference.mitsuba_calls import mitsuba_answers
 from bsdflab.reference.mitsuba_env import mitsuba, variant
 from bsdflab.reference.query_sets import bsdflab_answers, draw_queries
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, rgb_to_spectrum, spectrum_to_rgb
 
 
 # -- conversion ----------------------------------------------------------------------------

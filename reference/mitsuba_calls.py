@@ -15,7 +15,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from bsdflab.lobes import Lobe
-
 from bsdflab.reference.mitsuba_env import mitsuba
 
 

@@ -32,13 +32,12 @@ import contextlib
 
 import numpy as np
 
-from bsdflab.render.scene import Scene
-from bsdflab.util import args as check
-
 from bsdflab.reference import mitsuba_env
 from bsdflab.reference.mitsuba_scene import path_integrator, to_mitsuba_scene
 from bsdflab.reference.mitsuba_spectral import EDGES, sensor_bins
 from bsdflab.reference.table_plugin import scene_uses_plugin, wavefront_mode
+from bsdflab.render.scene import Scene
+from bsdflab.util import args as check
 
 MOMENTS_PLUGIN = "bsdflab_moments"
 MAX_LANES = 1 << 20  # paths per mi.render call

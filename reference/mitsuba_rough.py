@@ -39,7 +39,6 @@ import numpy as np
 
 from bsdflab.bsdfs import BSDF, from_dict
 from bsdflab.oracles.microsurface import smith_lambda
-
 from bsdflab.reference.comparison import QUANTITIES, Comparison, errors_between, rel_error
 from bsdflab.reference.conditioning import ILL_CONDITIONED, INPUT_PERTURBATION
 from bsdflab.reference.mitsuba_bsdf import comparison_notes, comparison_setup, critical_side, summarise, to_mitsuba

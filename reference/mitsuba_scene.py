@@ -32,13 +32,12 @@ from typing import Any
 
 import numpy as np
 
-from bsdflab.render.scene import Material, Scene, Shape
-
 from bsdflab.reference.mitsuba_bsdf import to_mitsuba
 from bsdflab.reference.mitsuba_env import mitsuba
 from bsdflab.reference.mitsuba_spectral import emission as spectral_emission
 from bsdflab.reference.mitsuba_spectral import environment as spectral_environment
 from bsdflab.reference.mitsuba_spectral import to_mitsuba_spectral
+from bsdflab.render.scene import Material, Scene, Shape
 
 # Mitsuba's perspective camera clips at near_clip (ours does not clip): a small fraction of
 # the camera's distance to its target keeps the clip far below any scene feature.

@@ -36,14 +36,12 @@ multiscatter), as in RGB.
 """
 from __future__ import annotations
 
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
-from bsdflab.spectra import DEFAULT_STEP_NM, DEFAULT_WAVELENGTHS, Spectrum, rgb_to_spectrum, sensor_model, srgb_weights
-
 from bsdflab.reference.mitsuba_bsdf import _bsdf_dict, to_mitsuba
+from bsdflab.spectra import DEFAULT_STEP_NM, DEFAULT_WAVELENGTHS, Spectrum, rgb_to_spectrum, sensor_model, srgb_weights
 
 GRID = DEFAULT_WAVELENGTHS
 STEP_NM = DEFAULT_STEP_NM

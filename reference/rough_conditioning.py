@@ -24,7 +24,6 @@ import numpy as np
 from bsdflab.bsdfs import from_dict
 from bsdflab.lobes import Lobe
 from bsdflab.optics.fresnel import fresnel_reflectance
-
 from bsdflab.reference.comparison import SAMPLE_QUANTITIES, errors_between, rel_error
 from bsdflab.reference.conditioning import GRAZING_COS, INPUT_PERTURBATION, NEAR_CRITICAL_COS2, perturbations
 from bsdflab.reference.query_sets import Queries

@@ -7,8 +7,8 @@ The plugin hands Mitsuba's queries to ``bsdflab.tables.TableBSDF`` (the same C++
 our renderer uses), so an image rendered by Mitsuba through it tests our renderer's light
 transport, not the table. Any other bsdflab BSDF object works the same way (same
 vectorised eval / pdf / sample); objects travel to the plugin through a registry here,
-since Mitsuba's properties hold only strings, numbers and Mitsuba objects. Both codes share the conventions the plugin relies on: local
-frame with +z the shading normal, wi and wo pointing away, eval = f |cos theta_o|,
+since Mitsuba's properties hold only strings, numbers and Mitsuba objects. Both codes share the conventions the plugin
+relies on: local frame with +z the shading normal, wi and wo pointing away, eval = f |cos theta_o|,
 sample weight = f |cos theta_o| / pdf, a delta lobe's pdf = the probability of picking it.
 
 How Python sees the queries: in ``llvm_ad_rgb`` Mitsuba traces its path loop and BSDF
@@ -27,7 +27,6 @@ import numpy as np
 
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.lobes import Lobe
-
 from bsdflab.reference.mitsuba_env import mitsuba
 
 PLUGIN_NAME = "bsdflab_table"

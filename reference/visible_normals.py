@@ -28,7 +28,6 @@ from __future__ import annotations
 import numpy as np
 
 from bsdflab.lobes import Lobe
-
 from bsdflab.reference.mitsuba_env import is_vectorised, mitsuba
 
 

@@ -7,8 +7,6 @@ from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
 
 import bsdflab
-from bsdflab.util import native_output
-
 from bsdflab.service import auth, errors, logs, metrics
 from bsdflab.service.deps import KEY
 from bsdflab.service.errors import KEY_ERRORS
@@ -16,6 +14,7 @@ from bsdflab.service.heavy import HeavyPool
 from bsdflab.service.job_service import JobService
 from bsdflab.service.routers import bsdf, catalog, jobs, meta, page, renders, tables, thinfilm
 from bsdflab.service.settings import Settings
+from bsdflab.util import native_output
 
 DESCRIPTION = """BSDF queries, thin-film spectra, tables and renders from bsdflab's Python API.
 

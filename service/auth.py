@@ -61,7 +61,8 @@ def load_clients(settings) -> dict[bytes, Client]:
             raise ValueError(f"API key {name!r}: unknown fields {sorted(unknown)}")
         rate = entry.get("rate_per_s", settings.key_rate_per_s)
         admin = bool(entry.get("admin", False))
-        clients[key.encode()] = Client(name, admin, entry.get("max_jobs", None if admin else settings.limit_queue_per_key),
+        clients[key.encode()] = Client(name, admin,
+                                       entry.get("max_jobs", None if admin else settings.limit_queue_per_key),
                                        None if admin and "rate_per_s" not in entry else rate)
     return clients
 

@@ -17,7 +17,6 @@ from typing import Any
 
 from bsdflab.jobs import JobHandle, get_kind, make_executor
 from bsdflab.jobs import tabulate as tabulate_kind
-
 from bsdflab.service.auth import ANONYMOUS, Client
 from bsdflab.service.settings import Settings
 from bsdflab.service.store import JobStore

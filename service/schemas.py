@@ -8,7 +8,6 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict
 from pydantic.json_schema import SkipJsonSchema
 
 
-
 def _integral(value):
     """JSON Schema counts 3.0 as an integer; a bool or a string is not one."""
     return int(value) if isinstance(value, float) and value.is_integer() else value
@@ -66,8 +65,10 @@ class Error(BaseModel):
 # -- BSDF queries ----------------------------------------------------------------------------
 class EvalRequest(ModelSpec):
     model_config = whole({"preset": "xenopeltis", "theta_i": [30.0], "theta_o": [20.0, 45.0], "samples": 16})
-    wi: Annotated[list[Vector3], Field(min_length=1)] | None = Field(None, description="incident unit vectors (N, 3) or one")
-    wo: Annotated[list[Vector3], Field(min_length=1)] | None = Field(None, description="outgoing unit vectors (N, 3) or one")
+    wi: Annotated[list[Vector3], Field(min_length=1)] | None = Field(
+        None, description="incident unit vectors (N, 3) or one")
+    wo: Annotated[list[Vector3], Field(min_length=1)] | None = Field(
+        None, description="outgoing unit vectors (N, 3) or one")
     theta_i: Floats | None = Field(None, description="incidence angles in degrees [0, 90]")
     theta_o: Floats | None = Field(None, description="outgoing angles in degrees [0, 180] (> 90: below)")
     phi: Floats | None = Field(None, description="azimuth phi_o - phi_i in degrees (mirror at 180)")

@@ -17,9 +17,8 @@ import platformdirs
 from pydantic import Field, SecretStr, model_validator
 from pydantic_settings import SettingsConfigDict
 
-from bsdflab.util.settings import LibrarySettings, variable
-
 from bsdflab.service.heavy import default_concurrency
+from bsdflab.util.settings import LibrarySettings, variable
 
 
 def _default_data_dir() -> Path:

@@ -15,15 +15,15 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from bsdflab.util import args as check
 from bsdflab.lobes import Lobe
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
+from bsdflab.util import args as check
 from bsdflab.util.registry import Registry
 
 # Types defined in this package register as their classes are created; types defined in
 # the layers above (layered models, tables) are lazy entries, so ``from_dict`` finds them
 # whatever was imported first, without this layer importing upward.
-TYPES: Registry[type["BSDF"]] = Registry("BSDF type", lazy={
+TYPES: Registry[type[BSDF]] = Registry("BSDF type", lazy={
     "layered": "bsdflab.layered.stack",
     "table": "bsdflab.tables.table_bsdf",
 })

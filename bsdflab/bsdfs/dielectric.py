@@ -6,8 +6,15 @@ import numpy as np
 
 from bsdflab import _core
 from bsdflab.bsdfs.base import BSDF
-from bsdflab.bsdfs.interface_term import (DEFAULT_EXT_IOR, DEFAULT_INT_IOR, ext_ior_param, film_to_list,
-                             int_ior_param, make_term, parse_film)
+from bsdflab.bsdfs.interface_term import (
+    DEFAULT_EXT_IOR,
+    DEFAULT_INT_IOR,
+    ext_ior_param,
+    film_to_list,
+    int_ior_param,
+    make_term,
+    parse_film,
+)
 
 
 class Dielectric(BSDF):

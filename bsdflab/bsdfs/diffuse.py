@@ -4,9 +4,9 @@ from __future__ import annotations
 import numpy as np
 
 from bsdflab import _core
-from bsdflab.util import args as check
-from bsdflab.spectra import Spectrum
 from bsdflab.bsdfs.base import BSDF
+from bsdflab.spectra import Spectrum
+from bsdflab.util import args as check
 
 
 class Diffuse(BSDF):

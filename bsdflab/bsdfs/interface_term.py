@@ -8,10 +8,10 @@ from typing import Any
 import numpy as np
 
 from bsdflab import _core
-from bsdflab.util.args import MAX_EXTINCTION, MAX_IOR, MIN_IOR, flag, ior
 from bsdflab.optics.metals import metal_ior
 from bsdflab.optics.thin_film import Layer
 from bsdflab.spectra import Spectrum
+from bsdflab.util.args import MAX_EXTINCTION, MAX_IOR, MIN_IOR, flag, ior
 
 MAX_FILM_LAYERS = 32  # the core's fixed scratch size (fresnel_terms.h)
 # Relative index of a dielectric interface (interior / exterior): 100 is beyond any pair of

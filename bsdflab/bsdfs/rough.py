@@ -18,11 +18,18 @@ from __future__ import annotations
 import numpy as np
 
 from bsdflab import _core
-from bsdflab.util.args import flag, real_scalar
 from bsdflab.bsdfs.base import BSDF
-from bsdflab.bsdfs.interface_term import (DEFAULT_EXT_IOR, DEFAULT_INT_IOR, ConductorParams, ext_ior_param,
-                             film_to_list, int_ior_param, make_term, parse_film)
-
+from bsdflab.bsdfs.interface_term import (
+    DEFAULT_EXT_IOR,
+    DEFAULT_INT_IOR,
+    ConductorParams,
+    ext_ior_param,
+    film_to_list,
+    int_ior_param,
+    make_term,
+    parse_film,
+)
+from bsdflab.util.args import flag, real_scalar
 
 DISTRIBUTIONS = ("ggx", "beckmann")
 

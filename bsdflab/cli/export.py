@@ -20,7 +20,8 @@ def register(sub) -> None:
     p.add_argument("--set", action="append", default=[], metavar="K=V",
                    help="a preset parameter (repeatable; value parsed as JSON, else a string)")
     p.add_argument("--format", required=True, metavar="F",
-                   help="one of openpbr (.mtlx), gltf (.gltf + .bin or .glb), usd (.usda), blender (.blend + .blend.py)")
+                   help="one of openpbr (.mtlx), gltf (.gltf + .bin or .glb), usd (.usda), "
+                        "blender (.blend + .blend.py)")
     p.add_argument("--out", required=True, metavar="PATH", help="output file")
     p.add_argument("--substitute", action="store_true",
                    help="export a multilayer film stack as the single film that looks most like it "
@@ -32,9 +33,8 @@ def model_from_args(args: argparse.Namespace):
     if args.set and args.preset is None:
         raise ValueError("--set applies to --preset only")
     if args.preset is not None:
-        from bsdflab.requests import model_from_spec
-
         from bsdflab.cli.key_values import key_values
+        from bsdflab.requests import model_from_spec
 
         return model_from_spec({"preset": args.preset, "overrides": key_values(args.set, "--set")}).to_dict()
     if args.json is not None:

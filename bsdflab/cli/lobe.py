@@ -5,8 +5,8 @@ import argparse
 
 import numpy as np
 
-from bsdflab.util.args import real_scalar
 from bsdflab.cli.materials import add_material_options, material_from_args
+from bsdflab.util.args import real_scalar
 
 
 def register(sub) -> None:

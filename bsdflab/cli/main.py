@@ -5,8 +5,7 @@ import argparse
 import sys
 
 from bsdflab import __version__
-from bsdflab.cli import fit, info, lobe, render, serve, table, tabulate, thinfilm
-from bsdflab.cli import export, validate
+from bsdflab.cli import export, fit, info, lobe, render, serve, table, tabulate, thinfilm, validate
 
 COMMANDS = (render, lobe, thinfilm, tabulate, table, info, fit, serve)
 COMMANDS += (validate, export)

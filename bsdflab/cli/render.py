@@ -66,13 +66,13 @@ def _scenes(args):
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
-    from bsdflab.util.files import write_together
+    from bsdflab.cli.errors import check_writable
     from bsdflab.plots.contact_sheet import contact_sheet, mosaic
     from bsdflab.render import render
     from bsdflab.render.image_io import EXR_SUFFIX, PNG_SUFFIX, exr_writer, write_exr_and_png
     from bsdflab.scenes import SCENE_SETS, SCENES
     from bsdflab.scenes.scene_file import save_scene
-    from bsdflab.cli.errors import check_writable
+    from bsdflab.util.files import write_together
 
     if args.list:
         for name, make in {**SCENES, **SCENE_SETS}.items():

@@ -15,7 +15,8 @@ def register(sub) -> None:
                                    "self-describing OpenEXR table (see docs/table_format.md).")
     add_material_options(p)
     p.add_argument("--out", default=None, help="output .exr path (default: only the cache)")
-    p.add_argument("--rel-error", type=float, default=0.01, help="target relative standard error per cell (default 0.01)")
+    p.add_argument("--rel-error", type=float, default=0.01,
+                   help="target relative standard error per cell (default 0.01)")
     p.add_argument("--theta-i", type=int, default=12, dest="n_theta_i", help="incidence nodes (default 12)")
     p.add_argument("--theta-o", type=int, default=24, dest="n_theta_o", help="outgoing nodes (default 24)")
     p.add_argument("--phi", type=int, default=13, dest="n_phi", help="azimuth nodes over [0, pi] (default 13)")
@@ -37,9 +38,9 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from bsdflab.cli.errors import check_writable
     from bsdflab.tables import TableGrid, tabulate
     from bsdflab.tables.data import check_table_memory
-    from bsdflab.cli.errors import check_writable
 
     if args.out is not None:
         check_writable(args.out, "--out")  # before the tabulation, not after it

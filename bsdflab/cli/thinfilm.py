@@ -3,9 +3,8 @@ from __future__ import annotations
 
 import argparse
 
+from bsdflab.presets import AIR_IOR, CYTOPLASM_IOR, FILM_THICKNESS_NM, GUANINE_IOR, KERATIN_IOR_550, iridophore_stack
 from bsdflab.util.args import real_scalar
-from bsdflab.presets import (AIR_IOR, CYTOPLASM_IOR, FILM_THICKNESS_NM, GUANINE_IOR, KERATIN_IOR_550,
-                       iridophore_stack)
 
 DEFAULT_THICKNESS_RANGE_NM = (0.0, 1200.0)
 

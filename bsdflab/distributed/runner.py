@@ -42,7 +42,7 @@ class DaskRunner(Runner):
 
     @classmethod
     @contextlib.contextmanager
-    def connect(cls, target: str) -> Iterator["DaskRunner"]:
+    def connect(cls, target: str) -> Iterator[DaskRunner]:
         """``target``: a scheduler address or ``local:N`` (a LocalCluster of N workers)."""
         target = target.strip()
         local = target.startswith("local:")

@@ -1,5 +1,5 @@
-"""glTF 2.0: a UV sphere (scene 0) and the snake's mesh (scene 1) with the material as KHR_materials_iridescence + KHR_materials_ior,
-written with pygltflib (``.gltf`` with a ``.bin`` beside it, or one ``.glb``), and read back.
+"""glTF 2.0: a UV sphere (scene 0) and the snake's mesh (scene 1) with the material as KHR_materials_iridescence +
+KHR_materials_ior, written with pygltflib (``.gltf`` with a ``.bin`` beside it, or one ``.glb``), and read back.
 
 Mapping (Khronos extension specifications): baseColorFactor = body colour, metallic 0,
 roughnessFactor = sqrt(GGX alpha); KHR_materials_ior.ior = the fitted base index (>= 1);

@@ -15,9 +15,9 @@ from bsdflab.export.material import SPREAD, ExportMaterial
 from bsdflab.export.targets import Target
 
 MATCHED = ["specular colour vs incidence angle (thin-film Fresnel, 0-80 deg) over the film-thickness spread: fitted "
-           "by CIEDE2000", "diffuse body colour: fitted by CIEDE2000 so that base_color (1 - F(theta)) matches the layered "
-           "model's scattered hemispherical albedo (everything but the top interface's reflection) at 0, 30, 50, "
-           "70 deg, per channel", "roughness: sqrt(GGX alpha), copied"]
+           "by CIEDE2000", "diffuse body colour: fitted by CIEDE2000 so that base_color (1 - F(theta)) matches the "
+           "layered model's scattered hemispherical albedo (everything but the top interface's reflection) at 0, 30, "
+           "50, 70 deg, per channel", "roughness: sqrt(GGX alpha), copied"]
 NOT_REPRESENTED = ["the pigment slab's spectral absorption and its angular darkening (folded into one RGB base colour)",
                    "the scale texture (per-scale thickness variation): one thickness; the map shows the spread",
                    "multilayer film stacks (one film only)", "the PFMC layered interreflections between film and body"]

@@ -7,8 +7,8 @@ published units: OpenPBR's thin_film_thickness is in micrometres, glTF's and Ble
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

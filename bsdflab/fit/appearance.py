@@ -12,11 +12,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
-from bsdflab.spectra.colour_weights import rgb_colourspace
 from bsdflab.fit.data import GEOMETRIES, Dataset
 from bsdflab.fit.forward import ForwardModel
 from bsdflab.fit.parameters import ALL_NAMES, FORWARD_NAMES
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
+from bsdflab.spectra.colour_weights import rgb_colourspace
 
 _FORWARD_COLS = [ALL_NAMES.index(n) for n in FORWARD_NAMES]
 

@@ -80,7 +80,7 @@ class ModelSettings:
     angle_nodes: int = 32
 
     @classmethod
-    def parse(cls, d: dict) -> "ModelSettings":
+    def parse(cls, d: dict) -> ModelSettings:
         return cls(**_settings(cls, "model", d, {"thickness_nodes": (1, 200), "angle_nodes": (2, 1000)}))
 
 
@@ -94,7 +94,7 @@ class SamplerSettings:
     map_starts: int = 8
 
     @classmethod
-    def parse(cls, d: dict) -> "SamplerSettings":
+    def parse(cls, d: dict) -> SamplerSettings:
         s = cls(**_settings(cls, "sampler", d, {
             "walkers": (4, 10000), "max_steps": (10, 10_000_000), "tau_multiple": (1.0, math.inf),
             "check_every": (10, 1_000_000), "seed": (0, 2**63 - 1), "map_starts": (1, 1000)}))
@@ -112,7 +112,7 @@ class AppearanceSettings:
     render_spp: int = 16
 
     @classmethod
-    def parse(cls, d: dict) -> "AppearanceSettings":
+    def parse(cls, d: dict) -> AppearanceSettings:
         angles = d.get("angles_deg", list(cls().angles_deg))
         if not isinstance(angles, list) or not angles:
             raise ValueError(f"[appearance] angles_deg must be a non-empty list, got {angles!r}")
@@ -137,7 +137,7 @@ class FitConfig:
         return tuple(n for n in P.ALL_NAMES if n in self.priors)
 
     @classmethod
-    def parse(cls, d: dict, source: str = "") -> "FitConfig":
+    def parse(cls, d: dict, source: str = "") -> FitConfig:
         _check_keys("top level", d, {"parameters": 0, "sampler": 0, "model": 0, "appearance": 0})
         params = d.get("parameters", {})
         if not isinstance(params, dict):
@@ -169,7 +169,7 @@ class FitConfig:
                    AppearanceSettings.parse(d.get("appearance", {})), source)
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> "FitConfig":
+    def load(cls, path: str | os.PathLike) -> FitConfig:
         path = os.fspath(path)
         try:
             return cls.parse(load_toml(path), path)
@@ -195,7 +195,7 @@ class SimulationConfig:
     model: ModelSettings = field(default_factory=ModelSettings)
 
     @classmethod
-    def parse(cls, d: dict) -> "SimulationConfig":
+    def parse(cls, d: dict) -> SimulationConfig:
         from bsdflab.fit.data import GEOMETRIES
 
         _check_keys("top level", d, {"truth": 0, "noise": 0, "measurement": 0, "model": 0})
@@ -225,9 +225,11 @@ class SimulationConfig:
                 raise ValueError(f"[{sec}] geometry must be one of {', '.join(GEOMETRIES)}, got {g!r}")
             if g == "diffuse":
                 pairs = m.get("angle_pairs_deg")
-                if not isinstance(pairs, list) or not pairs or not all(isinstance(p, list) and len(p) == 2 for p in pairs):
+                if (not isinstance(pairs, list) or not pairs
+                        or not all(isinstance(p, list) and len(p) == 2 for p in pairs)):
                     raise ValueError(f"[{sec}] a diffuse measurement needs angle_pairs_deg = [[in, out], ...]")
-                angles = tuple((_real(sec, "angle_pairs_deg", a, 0, 89.9), _real(sec, "angle_pairs_deg", b, -89.9, 89.9))
+                angles = tuple((_real(sec, "angle_pairs_deg", a, 0, 89.9),
+                                _real(sec, "angle_pairs_deg", b, -89.9, 89.9))
                                for a, b in pairs)
             else:
                 raw = m.get("angles_deg")
@@ -237,7 +239,8 @@ class SimulationConfig:
             wl = m.get("wavelengths_nm")
             if isinstance(wl, dict):
                 _check_keys(f"{sec}.wavelengths_nm", wl, {"start": 0, "stop": 0, "step": 0})
-                start, stop = _real(sec, "start", wl.get("start"), 0, lo_open=True), _real(sec, "stop", wl.get("stop"), 0)
+                start, stop = (_real(sec, "start", wl.get("start"), 0, lo_open=True),
+                               _real(sec, "stop", wl.get("stop"), 0))
                 step = _real(sec, "step", wl.get("step"), 0, lo_open=True)
                 grid = start + step * np.arange(int(round((stop - start) / step)) + 1)
             elif isinstance(wl, list) and wl:
@@ -248,7 +251,7 @@ class SimulationConfig:
         return cls(truth, rel, ab, seed, tuple(ms), ModelSettings.parse(d.get("model", {})))
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> "SimulationConfig":
+    def load(cls, path: str | os.PathLike) -> SimulationConfig:
         path = os.fspath(path)
         try:
             return cls.parse(load_toml(path))

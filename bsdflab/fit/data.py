@@ -45,7 +45,7 @@ class Dataset:
     def __len__(self) -> int:
         return len(self.geometry)
 
-    def with_reflectance(self, reflectance, sigma=None, comments=None) -> "Dataset":
+    def with_reflectance(self, reflectance, sigma=None, comments=None) -> Dataset:
         return Dataset(self.geometry, self.angle_deg, self.angle_out_deg, self.wavelength_nm,
                        np.asarray(reflectance, float),
                        self.sigma if sigma is None else np.asarray(sigma, float),

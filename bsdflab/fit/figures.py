@@ -6,14 +6,13 @@ import math
 
 import numpy as np
 
-from bsdflab.plots.lobe import save_figure
-from bsdflab.render.image_io import tone_map
 from bsdflab.fit.appearance import AppearancePosterior
 from bsdflab.fit.data import Dataset
 from bsdflab.fit.parameters import parameter
 from bsdflab.fit.sampling import RunResult
+from bsdflab.plots.lobe import save_figure
+from bsdflab.render.image_io import tone_map
 from bsdflab.util.extras import require
-
 
 # short titles over the corner plot's diagonal (the axis labels carry the full names)
 SYMBOLS = {"film_thickness_nm": "d", "film_thickness_spread_nm": "σ_d", "film_index_A": "A", "film_index_B": "B",

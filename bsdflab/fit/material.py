@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from bsdflab.spectra import DEFAULT_WAVELENGTHS
 from bsdflab.fit.parameters import ALL_NAMES
+from bsdflab.spectra import DEFAULT_WAVELENGTHS
 
 
 def material_dict(values, samples: int = 256) -> dict:

@@ -27,7 +27,7 @@ class Prior:
     args: tuple[tuple[str, float], ...]
 
     @classmethod
-    def make(cls, name: str, spec: dict) -> "Prior":
+    def make(cls, name: str, spec: dict) -> Prior:
         kind = spec.get("prior")
         if kind not in KINDS:
             raise ValueError(f"parameter {name!r}: prior must be one of {', '.join(KINDS)}, got {kind!r}")

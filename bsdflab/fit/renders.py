@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from bsdflab.fit.material import material_dict
 from bsdflab.render import Material, Scene, Shape, render
 from bsdflab.scenes.snake import ground, ground_material, orbit_camera, sky, soft_box
-from bsdflab.fit.material import material_dict
 
 SPHERE_RADIUS = 10.0
 PREVIEW_WALKS = 16   # PFMC walks per BSDF evaluation in the preview renders
@@ -22,6 +22,7 @@ def sphere_scene(values, size: int) -> Scene:
     return Scene(camera, shapes, materials, sky(), max_depth=4, name="fit-draw")
 
 
-def render_draws(values: list[np.ndarray], labels: list[str], size: int, spp: int, seed: int) -> list[tuple[str, np.ndarray]]:
+def render_draws(values: list[np.ndarray], labels: list[str], size: int, spp: int,
+                 seed: int) -> list[tuple[str, np.ndarray]]:
     return [(label, render(sphere_scene(v, size), spp=spp, seed=seed, progress=False).mean)
             for v, label in zip(values, labels)]

@@ -8,7 +8,6 @@ factor, which a fit with a free noise_scale should find).
 """
 from __future__ import annotations
 
-
 import numpy as np
 
 from bsdflab.fit.config import SimulationConfig
@@ -45,7 +44,8 @@ def simulate(config: SimulationConfig, command: str = "") -> tuple[Dataset, np.n
     rng = np.random.default_rng(config.seed)
     obs = y + config.truth["noise_scale"] * sigma * rng.standard_normal(len(y))
     truth = ", ".join(f"{k}={v:.10g}" for k, v in config.truth.items())
-    comments = ["SYNTHETIC DATA (not a measurement), made by bsdflab fit simulate" + (f": {command}" if command else ""),
+    comments = ["SYNTHETIC DATA (not a measurement), made by bsdflab fit simulate"
+                + (f": {command}" if command else ""),
                 f"truth: {truth}",
                 f"noise: sigma = sqrt({config.absolute_noise:g}^2 + ({config.relative_noise:g} y)^2), "
                 f"seed {config.seed}, numpy PCG64 standard normal"]

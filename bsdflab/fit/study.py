@@ -162,8 +162,8 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
 
 
 def _write_scene(values, folder: str) -> None:
-    from bsdflab.scenes.scene_file import save_scene
     from bsdflab.fit.renders import sphere_scene
+    from bsdflab.scenes.scene_file import save_scene
 
     scene = sphere_scene(values, 320)
     mat = scene.materials["object"]
@@ -172,8 +172,8 @@ def _write_scene(values, folder: str) -> None:
 
 
 def _write_renders(draws_full, mean_full, ap, folder: str, seed: int) -> None:
-    from bsdflab.plots.contact_sheet import contact_sheet
     from bsdflab.fit.renders import render_draws
+    from bsdflab.plots.contact_sheet import contact_sheet
 
     values = [mean_full, *draws_full]
     labels = ["posterior mean"] + [f"draw {i + 1}: d = {v[0]:.1f} nm" for i, v in enumerate(draws_full)]

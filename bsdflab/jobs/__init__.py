@@ -44,10 +44,10 @@ Dedup and caching
     ``key(request)`` is the content hash. For tables it is the table cache's own key
     (``bsdflab.tables.cache_key``), so a table asked for twice, or by a render, is one file.
 """
-from bsdflab.util.progress import JobCancelled
 from bsdflab.jobs.executor import FINISHED, STATES, JobExecutor, JobFailed, JobHandle, execute, outcome_error
 from bsdflab.jobs.factory import default_workers, make_executor
 from bsdflab.jobs.kinds import JobKind, get_kind, kind_names, module_of, register_kind
+from bsdflab.util.progress import JobCancelled
 
 __all__ = ["FINISHED", "STATES", "JobCancelled", "JobExecutor", "JobFailed", "JobHandle", "JobKind",
            "default_workers", "execute", "get_kind", "kind_names", "make_executor", "module_of", "outcome_error",

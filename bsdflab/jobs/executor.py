@@ -19,8 +19,8 @@ import uuid
 from pathlib import Path
 from typing import Any
 
-from bsdflab.util.progress import JobCancelled
 from bsdflab.jobs.kinds import get_kind
+from bsdflab.util.progress import JobCancelled
 
 STATES = ("queued", "running", "done", "failed", "cancelled")
 FINISHED = ("done", "failed", "cancelled")

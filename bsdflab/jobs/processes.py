@@ -17,9 +17,9 @@ import threading
 import time
 from typing import Any
 
-from bsdflab.util.progress import JobCancelled
 from bsdflab.jobs.executor import JobExecutor, JobFailed, JobHandle, execute, outcome_error
 from bsdflab.jobs.kinds import module_of
+from bsdflab.util.progress import JobCancelled
 
 PROGRESS_INTERVAL_S = 0.1   # at most ten progress messages a second per worker
 POLL_S = 0.5
@@ -260,7 +260,7 @@ def worker_main(conn, cancel, parent_pid: int) -> None:
         register_kind(kind, module)
         last = [0.0]
 
-        def progress(fraction: float) -> None:
+        def progress(fraction: float, *, last=last) -> None:
             now = time.monotonic()
             if now - last[0] >= PROGRESS_INTERVAL_S:
                 last[0] = now

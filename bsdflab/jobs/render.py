@@ -17,12 +17,12 @@ from pathlib import Path
 from typing import Any
 
 from bsdflab import __version__
-from bsdflab.util import args as check
-from bsdflab.util.progress import monitored
 from bsdflab.render import render, write_exr, write_png
 from bsdflab.render.render import MAX_SPP
 from bsdflab.scenes import SCENES, scene
 from bsdflab.tables.file_format import canonical_json
+from bsdflab.util import args as check
+from bsdflab.util.progress import monitored
 
 FIELDS = {"scene", "options", "width", "height", "spp", "seed", "max_depth"}
 MAX_SIDE = 16384

@@ -18,15 +18,15 @@ from typing import Any
 
 import numpy as np
 
-from bsdflab.util import args as check
-from bsdflab.util.progress import monitored
+from bsdflab.bsdfs import from_dict
 from bsdflab.requests import model_from_spec
 from bsdflab.tables import TableGrid, cache_key, cached_table, read_attributes, read_table, tabulate
 from bsdflab.tables.channels import table_channels
 from bsdflab.tables.file_format import HASH_ATTRIBUTE
 from bsdflab.tables.summary import relative_error_summary
 from bsdflab.tables.tabulate import DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES
-from bsdflab.bsdfs import from_dict
+from bsdflab.util import args as check
+from bsdflab.util.progress import monitored
 
 FIELDS = {"model", "preset", "overrides", "grid", "rel_error", "wavelengths", "min_samples",
           "max_samples", "seed"}

@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from bsdflab.util.args import real_scalar
 from bsdflab.spectra import Spectrum
+from bsdflab.util.args import real_scalar
 
 PHASE_KINDS = {"isotropic": 0, "hg": 1, "vmf": 2}
 
@@ -49,7 +49,7 @@ class PhaseFunction:
         return d
 
     @classmethod
-    def coerce(cls, value) -> "PhaseFunction":
+    def coerce(cls, value) -> PhaseFunction:
         if value is None:
             return cls()
         if isinstance(value, PhaseFunction):
@@ -90,7 +90,7 @@ class Slab:
         object.__setattr__(self, "phase", PhaseFunction.coerce(self.phase))
 
     @classmethod
-    def from_albedo(cls, thickness_um: float, albedo: float, sigma_t: float, phase=None) -> "Slab":
+    def from_albedo(cls, thickness_um: float, albedo: float, sigma_t: float, phase=None) -> Slab:
         """A grey slab given its single-scattering albedo in [0, 1] and extinction
         coefficient sigma_t (1/um): sigma_s = albedo sigma_t, sigma_a = (1 - albedo) sigma_t."""
         a = real_scalar("albedo", albedo, 0.0, 1.0)
@@ -105,7 +105,7 @@ class Slab:
                 "sigma_s": self.sigma_s, "phase": self.phase.to_dict()}
 
     @classmethod
-    def coerce(cls, value, index: int) -> "Slab":
+    def coerce(cls, value, index: int) -> Slab:
         if isinstance(value, Slab):
             return value
         if isinstance(value, dict):

@@ -11,8 +11,8 @@ next interface (or of a base that has one).
 eval() is a Monte Carlo estimate: `samples` random walks per direction pair, seeded from
 (seed, wi, wo), so the same call gives the same answer. `estimate` also returns the
 standard error and the number of walks whose contribution was not finite (counted, never
-hidden: 0 for a sound model); `eval_with_error` returns the first two. The top interface's delta reflection (a smooth top) is not part of
-eval: `delta_reflectance` gives it exactly, and `sample` returns it as a delta lobe.
+hidden: 0 for a sound model); `eval_with_error` returns the first two. The top interface's delta reflection (a smooth
+top) is not part of eval: `delta_reflectance` gives it exactly, and `sample` returns it as a delta lobe.
 `pdf` is the density with which `sample` returns wo (the top's own reflection exactly, the
 walk's exits by an unbiased estimate seeded from (seed, wi, wo)), for multiple importance
 sampling; `sample`'s weight is the walk's unbiased throughput.
@@ -26,12 +26,12 @@ from typing import Any
 import numpy as np
 
 from bsdflab import _core
-from bsdflab.util import args as check
 from bsdflab.bsdfs.base import BSDF, from_dict
 from bsdflab.bsdfs.dielectric import Dielectric
 from bsdflab.bsdfs.rough import RoughDielectric
-from bsdflab.lobes import Lobe
 from bsdflab.layered.slab import Slab
+from bsdflab.lobes import Lobe
+from bsdflab.util import args as check
 
 INTERFACE_TYPES = (Dielectric, RoughDielectric)
 MAX_SLABS = 16

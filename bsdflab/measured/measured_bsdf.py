@@ -84,7 +84,7 @@ class Measured(BSDF):
         return {"path": self.path}
 
 
-def core_of(d: RGLData, channel_ids) -> "_core.MeasuredBSDF":
+def core_of(d: RGLData, channel_ids) -> _core.MeasuredBSDF:
     """The C++ BSDF of a checked file, answering at ``channel_ids`` (nm, or 0, 1, 2 for RGB)."""
     flat = lambda a: np.ascontiguousarray(a, dtype=np.float32).ravel().tolist()
     nodes = d.wavelengths.astype(float).tolist() if d.spectral else list(RGB_NODES)

@@ -5,8 +5,8 @@ The file stores an isotropic BSDF as a warp plus values on the warp's unit squar
 
 1. **NDF.** The retro-reflection of a microfacet surface is f(m, m) = F G1 D(m) / (4 cos^2)
    with G1(m) = cos(theta_m) / sigma(m), so D(m) ~ Y(f(m, m)) cos(theta_m) sigma[D](m) up
-   to F: the paper's fixed point, found by power iteration (``_estimate_ndf``); mixed with a little of the cosine NDF (``ndf_floor``) so every
-   half vector stays reachable; normalised to integrate(D cos) = 1.
+   to F: the paper's fixed point, found by power iteration (``_estimate_ndf``); mixed with a little of the cosine NDF
+   (``ndf_floor``) so every half vector stays reachable; normalised to integrate(D cos) = 1.
 2. **sigma(wi)** = integral of D(m) max(0, wi . m) dm, by quadrature of the stored NDF.
 3. **VNDF** per incident angle: D(m) max(0, wi . m) times the Jacobian of
    u -> m, 2 pi^2 u sin(theta_m): a density in u-space (the reader normalises it).
@@ -36,7 +36,7 @@ import numpy as np
 
 from bsdflab.measured.marginal import Marginal2D
 from bsdflab.measured.rgl_file import RGLData, check_fields
-from bsdflab.measured.rgl_reference import RGLReference, elevation, u2phi, u2theta
+from bsdflab.measured.rgl_reference import RGLReference, u2phi, u2theta
 from bsdflab.measured.tensor_file import write_tensor_file
 from bsdflab.spectra import srgb_weights
 from bsdflab.util import args as check
@@ -156,7 +156,8 @@ def rgl_from_bsdf(bsdf, wavelengths=None, *, n_theta_i: int = 16, resolution: in
     header = {"format": "RGL .bsdf (Dupuy & Jakob 2018), written by bsdflab", "source": source or {},
               "channels": "RGB (linear sRGB, D65)" if channel_wl is None else "spectral, nm",
               "grid": {"n_theta_i": n_theta_i, "resolution": resolution, "ndf_resolution": ndf_resolution,
-                       "ndf_floor": ndf_floor, "ndf_iterations": ndf_iterations, "vndf_floor": vndf_floor, "theta_i_max_deg": math.degrees(THETA_I_MAX)},
+                       "ndf_floor": ndf_floor, "ndf_iterations": ndf_iterations, "vndf_floor": vndf_floor,
+                       "theta_i_max_deg": math.degrees(THETA_I_MAX)},
               "reflection_only": True}
     fields = {"description": json.dumps(header, sort_keys=True), "jacobian": np.array([1], dtype=np.uint8),
               "theta_i": theta_i, "phi_i": phi_i, "ndf": ndf, "sigma": sigma, "vndf": vndf,

@@ -20,7 +20,6 @@ Tabulated(wavelengths_nm, n, k)
 from __future__ import annotations
 
 import abc
-
 import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -78,7 +77,7 @@ class Constant(Dispersion):
         return {"model": self.model, "n": self.n, "k": self.k}
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "Constant":
+    def from_dict(cls, d: dict[str, Any]) -> Constant:
         return cls(d["n"], d.get("k", 0.0))
 
 
@@ -120,7 +119,7 @@ class Cauchy(Dispersion):
         return {"model": self.model, "A": self.A, "B": self.B, "C": self.C}
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "Cauchy":
+    def from_dict(cls, d: dict[str, Any]) -> Cauchy:
         return cls(d["A"], d["B"], d.get("C", 0.0))
 
 
@@ -170,7 +169,7 @@ class Tabulated(Dispersion):
                 "n": self.n.tolist(), "k": self.k.tolist()}
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "Tabulated":
+    def from_dict(cls, d: dict[str, Any]) -> Tabulated:
         return cls(d["wavelengths_nm"], d["n"], d.get("k"))
 
     def __eq__(self, other):

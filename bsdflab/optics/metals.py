@@ -5,7 +5,7 @@ source publication, the digitisation used and its licence.
 """
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from importlib import resources
 
 import numpy as np
@@ -15,7 +15,7 @@ from bsdflab.spectra import Spectrum
 METALS = ("Ag", "Al", "Au", "Cu")
 
 
-@lru_cache(maxsize=None)
+@cache
 def _table(name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
     text = resources.files("bsdflab.data.metals").joinpath(f"{name}.csv").read_text()
     provenance = "\n".join(l[1:].strip() for l in text.splitlines() if l.startswith("#"))

@@ -53,9 +53,9 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from bsdflab import _core
+from bsdflab.optics.dispersion import Constant, Dispersion, as_dispersion, dispersion_from_dict, wavelengths_nm
 from bsdflab.util import args as check
 from bsdflab.util.args import real_array
-from bsdflab.optics.dispersion import Constant, Dispersion, as_dispersion, dispersion_from_dict, wavelengths_nm
 
 POLARISATIONS = ("s", "p", "unpolarised")
 MIN_COSINE = 1e-60
@@ -85,7 +85,7 @@ class Layer:
         return {"material": self.material.to_dict(), "thickness_nm": self.thickness_nm}
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "Layer":
+    def from_dict(cls, d: dict[str, Any]) -> Layer:
         return cls(dispersion_from_dict(d["material"]), d["thickness_nm"])
 
 
@@ -119,7 +119,7 @@ class FilmStack:
                 raise ValueError(f"layers[{i}] must be a Layer, got {type(layer).__name__}")
         object.__setattr__(self, "layers", layers)
 
-    def reversed(self) -> "FilmStack":
+    def reversed(self) -> FilmStack:
         """The same stack seen from the substrate side."""
         return FilmStack(self.substrate, self.layers[::-1], self.incident)
 
@@ -129,7 +129,7 @@ class FilmStack:
                 "substrate": self.substrate.to_dict()}
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "FilmStack":
+    def from_dict(cls, d: dict[str, Any]) -> FilmStack:
         return cls(dispersion_from_dict(d["incident"]),
                    [Layer.from_dict(layer) for layer in d["layers"]],
                    dispersion_from_dict(d["substrate"]))

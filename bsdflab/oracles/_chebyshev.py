@@ -12,7 +12,7 @@ Chebyshev-Vandermonde solve, well conditioned for points this close to Chebyshev
 """
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from numpy.polynomial import chebyshev

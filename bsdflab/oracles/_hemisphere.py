@@ -10,8 +10,8 @@ square-root kink of the Fresnel terms out of every integrand.
 """
 from __future__ import annotations
 
-from functools import lru_cache
-from typing import Callable
+from collections.abc import Callable
+from functools import cache
 
 import numpy as np
 
@@ -22,7 +22,7 @@ FIRST_NODES = 16
 MAX_NODES = 8192
 
 
-@lru_cache(maxsize=None)
+@cache
 def _nodes(n: int) -> tuple[np.ndarray, np.ndarray]:
     return np.polynomial.legendre.leggauss(n)
 

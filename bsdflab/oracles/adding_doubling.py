@@ -65,13 +65,13 @@ from typing import Any
 
 import numpy as np
 
-from bsdflab.util import args as check
-from bsdflab.layered.slab import Slab
 from bsdflab.bsdfs.base import BSDF
-from bsdflab.spectra import Spectrum
+from bsdflab.layered.slab import Slab
 from bsdflab.oracles import _ad_boundaries as bd
 from bsdflab.oracles import _ad_operators as op
 from bsdflab.oracles._ad_slab import orders_needed, slab_layer
+from bsdflab.spectra import Spectrum
+from bsdflab.util import args as check
 
 NODES = 24
 THIN_DEPTH = 2.0 ** -28
@@ -131,7 +131,7 @@ class AddingDoublingOracle:
         self.thin_depth = check.real_scalar("thin_depth", thin_depth, 0.0, lo_open=True)
 
     @classmethod
-    def from_layered(cls, model, **settings) -> "AddingDoublingOracle":
+    def from_layered(cls, model, **settings) -> AddingDoublingOracle:
         """The oracle of a ``bsdflab.Layered`` made of a smooth film-free Dielectric top,
         index-matched smooth interior interfaces and a Diffuse (one-sided) or smooth
         film-free Dielectric base; ValueError for anything else."""
@@ -223,7 +223,7 @@ class AddingDoublingOracle:
         return d
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "AddingDoublingOracle":
+    def from_dict(cls, d: dict[str, Any]) -> AddingDoublingOracle:
         if d.get("type", cls.type_name) != cls.type_name:
             raise ValueError(f"expected type {cls.type_name!r}, got {d.get('type')!r}")
         return cls(**{k: v for k, v in d.items() if k != "type"})

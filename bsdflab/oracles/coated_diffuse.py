@@ -60,11 +60,11 @@ from typing import Any
 
 import numpy as np
 
-from bsdflab.util import args as check
 from bsdflab.bsdfs.interface_term import film_to_list, parse_film
-from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, srgb_weights
 from bsdflab.oracles._hemisphere import attenuation, escape, internal_return
 from bsdflab.oracles._interface import InterfaceAtWavelength
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, srgb_weights
+from bsdflab.util import args as check
 
 _CACHE_LIMIT = 512  # wavelengths remembered per oracle
 
@@ -178,7 +178,7 @@ class CoatedDiffuseOracle:
                 "base_reflectance": self.base_reflectance.to_dict()}
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "CoatedDiffuseOracle":
+    def from_dict(cls, d: dict[str, Any]) -> CoatedDiffuseOracle:
         params = {k: v for k, v in d.items() if k != "type"}
         if d.get("type", cls.type_name) != cls.type_name:
             raise ValueError(f"expected type {cls.type_name!r}, got {d.get('type')!r}")

@@ -27,8 +27,8 @@ def contact_sheet(items: list[tuple[str, np.ndarray]], path: str, exposure: floa
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from bsdflab.render.image_io import tone_map
     from bsdflab.plots.lobe import save_figure
+    from bsdflab.render.image_io import tone_map
 
     columns = columns or min(len(items), 3)
     rows = math.ceil(len(items) / columns)

@@ -18,8 +18,13 @@ import numpy as np
 
 from bsdflab.optics import Constant, FilmStack, film_reflectance
 from bsdflab.optics.dispersion import as_dispersion
-from bsdflab.spectra import (DEFAULT_STEP_NM, THREE_WAVELENGTHS_NM, spectrum_to_rgb,
-                       three_wavelength_rgb, wavelength_grid)
+from bsdflab.spectra import (
+    DEFAULT_STEP_NM,
+    THREE_WAVELENGTHS_NM,
+    spectrum_to_rgb,
+    three_wavelength_rgb,
+    wavelength_grid,
+)
 from bsdflab.spectra.grid import DEFAULT_RANGE_NM
 
 # Thicker films than this (optical thickness n d summed over layers, nm) need wavelength
@@ -29,6 +34,8 @@ MAX_OPTICAL_THICKNESS_NM = 10_000.0
 SAMPLES_PER_FRINGE = 6
 # Zero thickness in the stack's wavelength scaling: lambda / s stays finite.
 _TINY_SCALE = 1e-9
+# display_exposure's default largest incidence angle (radians).
+_THETA_MAX_DEFAULT = np.radians(60.0)
 
 
 def optical_thickness_nm(film, thickness_nm=None) -> float:
@@ -158,7 +165,7 @@ def delta_e_2000(rgb_a, rgb_b) -> np.ndarray:
     return colour.delta_E(lab(rgb_a), lab(rgb_b), method="CIE 2000")
 
 
-def display_exposure(rgb, theta, theta_max=np.radians(60.0), percentile=99.0) -> float:
+def display_exposure(rgb, theta, theta_max=_THETA_MAX_DEFAULT, percentile=99.0) -> float:
     """A display gain k >= 1: the given percentile of max(R, G, B) at theta <= theta_max -> 1.
 
     Grazing angles (R -> 1) are left out so that they do not darken the film's colours;

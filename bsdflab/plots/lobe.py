@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 
 from bsdflab.bsdfs import BSDF
-from bsdflab.util.files import write_atomically
 from bsdflab.lobes import Lobe
+from bsdflab.util.files import write_atomically
 
 
 def _in_plane(theta: np.ndarray) -> np.ndarray:

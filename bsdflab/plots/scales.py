@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from bsdflab.render.textures import ScaleTexture
 from bsdflab.plots.lobe import save_figure
+from bsdflab.render.textures import ScaleTexture
 
 RESOLUTION = 400
 

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from bsdflab.plots.lobe import save_figure
 from bsdflab.tables.data import TableData
 from bsdflab.tables.summary import SIGNIFICANT
-from bsdflab.plots.lobe import save_figure
 
 MAX_CHANNEL_PANELS = 4  # spectral tables: a few wavelengths spread over the range
 MAX_INCIDENCES = 4

@@ -19,11 +19,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from bsdflab.spectra import THREE_WAVELENGTHS_NM
-from bsdflab.plots.film_colour import (delta_e_2000, display_exposure, display_srgb, film_thickness_nm,
-                          optical_thickness_nm, colour_wavelengths, reflectance, spectral_rgb,
-                          three_wavelength_colour)
+from bsdflab.plots.film_colour import (
+    colour_wavelengths,
+    delta_e_2000,
+    display_exposure,
+    display_srgb,
+    film_thickness_nm,
+    optical_thickness_nm,
+    reflectance,
+    spectral_rgb,
+    three_wavelength_colour,
+)
 from bsdflab.plots.lobe import save_figure
+from bsdflab.spectra import THREE_WAVELENGTHS_NM
 
 SPECTRUM_ANGLES_DEG = (0.0, 30.0, 60.0, 75.0)
 IMAGE_ANGLES_DEG = np.linspace(0.0, 89.0, 90)  # 1 deg; bilinear display fills in

@@ -25,16 +25,18 @@ the front (outward for closed surfaces).
 from __future__ import annotations
 
 import os
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
-from bsdflab.util.args import brief
 from bsdflab.render.curves import SNAKE_DEFAULTS, snake_body, snake_head, snake_layout
-from bsdflab.render.mesh import MAX_SEGMENTS, Mesh, grid_indices, normalise as _normalise, reserve
+from bsdflab.render.mesh import MAX_SEGMENTS, Mesh, grid_indices, reserve
 from bsdflab.render.mesh import Params as _Params
+from bsdflab.render.mesh import normalise as _normalise
 from bsdflab.render.mesh import plane_axes as _orthonormal
 from bsdflab.util import limits
+from bsdflab.util.args import brief
 
 __all__ = ["GEOMETRY_TYPES", "MAX_SEGMENTS", "Mesh", "build_mesh", "grid_indices", "mesh_area",
            "transform_mesh", "triangle_normals", "validate_mesh"]

@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from bsdflab.util.args import brief
 from bsdflab.util import limits
+from bsdflab.util.args import brief
 
 MAX_SEGMENTS = 4096
 

@@ -203,7 +203,7 @@ class Scene:
         if self.environment.type == "none" and not any(s.emission and max(s.emission) > 0 for s in self.shapes):
             raise ValueError("the scene has no light: add an emissive shape or an environment")
 
-    def with_resolution(self, width: int, height: int) -> "Scene":
+    def with_resolution(self, width: int, height: int) -> Scene:
         return replace(self, camera=replace(self.camera, width=width, height=height))
 
     # -- dict form (scene files, the HTTP API) -----------------------------------------
@@ -219,7 +219,7 @@ class Scene:
         }
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "Scene":
+    def from_dict(cls, d: dict[str, Any]) -> Scene:
         if not isinstance(d, dict):
             raise ValueError("a scene must be a dict")
         nesting("the scene", d)

@@ -77,7 +77,7 @@ class ScaleTexture:
         return asdict(self)
 
     @classmethod
-    def from_dict(cls, d: dict) -> "ScaleTexture":
+    def from_dict(cls, d: dict) -> ScaleTexture:
         if not isinstance(d, dict):
             raise ValueError(f"scale texture parameters must be a dict, got {type(d).__name__}")
         known = [f.name for f in fields(cls)]
@@ -87,7 +87,7 @@ class ScaleTexture:
                              f"known: {', '.join(known)}")
         return cls(**d)
 
-    def to_core(self) -> "_core.ScaleTexture":
+    def to_core(self) -> _core.ScaleTexture:
         """The C++ texture (built once per object)."""
         core = self.__dict__.get("_core")
         if core is None:

@@ -9,5 +9,5 @@ from bsdflab.render.geometry import GEOMETRY_TYPES, Mesh, build_mesh, mesh_area,
 from bsdflab.scenes.registry import SCENE_SETS, SCENES, scene, scene_set
 from bsdflab.scenes.scene_file import load_scene, save_scene
 
-__all__ = ["GEOMETRY_TYPES", "Mesh", "SCENE_SETS", "SCENES", "scene_set", "build_mesh", "load_scene", "mesh_area", "save_scene", "scene",
-           "validate_mesh"]
+__all__ = ["GEOMETRY_TYPES", "Mesh", "SCENE_SETS", "SCENES", "scene_set", "build_mesh", "load_scene", "mesh_area",
+           "save_scene", "scene", "validate_mesh"]

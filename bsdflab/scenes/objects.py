@@ -15,7 +15,16 @@ from __future__ import annotations
 
 from bsdflab.presets import preset
 from bsdflab.render import Material, Scene, Shape
-from bsdflab.scenes.snake import GAP_BSDF, THICKNESS_JITTER, ground, ground_material, orbit_camera, sky, soft_box, tabulated
+from bsdflab.scenes.snake import (
+    GAP_BSDF,
+    THICKNESS_JITTER,
+    ground,
+    ground_material,
+    orbit_camera,
+    sky,
+    soft_box,
+    tabulated,
+)
 
 VARIANTS = ("diffuse", "diffuse+bump", "thin-film+bump", "full")
 OBJECTS = ("sphere", "torus")

@@ -12,10 +12,10 @@ import json
 import os
 from dataclasses import replace
 
-from bsdflab.util import args as check
-from bsdflab.util.files import write_atomically
 from bsdflab.render import Scene
 from bsdflab.render.geometry import GEOMETRY_TYPES
+from bsdflab.util import args as check
+from bsdflab.util.files import write_atomically
 
 FORMAT = "bsdflab-scene"
 VERSION = 1

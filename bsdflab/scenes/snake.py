@@ -21,8 +21,8 @@ import numpy as np
 
 from bsdflab.presets import FILM_THICKNESS_NM, PRESETS, preset
 from bsdflab.render import Camera, Environment, Material, Scene, Shape
-from bsdflab.tables import TableGrid
 from bsdflab.render.curves import SNAKE_DEFAULTS, layout_of, snake_eyes
+from bsdflab.tables import TableGrid
 
 GROUND_RGB = [0.37, 0.35, 0.32]        # warm grey, albedo ~0.35
 GAP_BSDF = {"type": "diffuse", "reflectance": [0.02, 0.018, 0.016]}

@@ -31,9 +31,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from bsdflab import _core
-from bsdflab.util import args as check
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.layered import Layered
+from bsdflab.util import args as check
 
 ALPHA_RANGE = (1e-3, 1.0)
 MAX_G = 0.95
@@ -61,7 +61,7 @@ class Settings:
     order_tolerance: float = DEFAULT_ORDER_TOLERANCE
     film_lookup: bool = False
 
-    def coarser(self, orders_used: int) -> "Settings":
+    def coarser(self, orders_used: int) -> Settings:
         """Half the nodes, 2/3 of the orders and a 16 x thicker start: the a-posteriori
         check (node convergence is geometric but not monotone for a rough top, so the
         coarse solve halves the nodes)."""
@@ -89,7 +89,7 @@ class Solution:
             self._coarse = _build(self.model, self._wl, self.settings.coarser(self.orders))
         return self._coarse
 
-    def with_model(self, model: Layered) -> "Solution":
+    def with_model(self, model: Layered) -> Solution:
         """The solution of ``model``, which may differ from this one's only in its rough
         top (e.g. another film thickness): what lies below the top is solved once and
         shared (the expensive part: slabs and base per wavelength and order)."""

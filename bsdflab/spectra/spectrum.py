@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from bsdflab.util.args import real_array, real_scalar
 from bsdflab.spectra.colour_weights import rgb_to_spectrum
+from bsdflab.util.args import real_array, real_scalar
 
 
 class Spectrum:
@@ -24,18 +24,18 @@ class Spectrum:
 
     # -- constructors -----------------------------------------------------------------
     @classmethod
-    def constant(cls, value: float, name: str = "value", lo=None, hi=None) -> "Spectrum":
+    def constant(cls, value: float, name: str = "value", lo=None, hi=None) -> Spectrum:
         return cls("constant", {"value": real_scalar(name, value, lo, hi)})
 
     @classmethod
-    def rgb(cls, rgb, name: str = "rgb", lo=0.0, hi=1.0) -> "Spectrum":
+    def rgb(cls, rgb, name: str = "rgb", lo=0.0, hi=1.0) -> Spectrum:
         a = real_array(name, rgb, lo, hi, ndim=1)
         if a.shape != (3,):
             raise ValueError(f"{name} as RGB must have 3 entries, got {a.shape[0]}")
         return cls("rgb", {"rgb": a})
 
     @classmethod
-    def tabulated(cls, wavelengths, values, name: str = "values", lo=None, hi=None) -> "Spectrum":
+    def tabulated(cls, wavelengths, values, name: str = "values", lo=None, hi=None) -> Spectrum:
         wl = real_array(f"{name}.wavelengths", wavelengths, 0.0, lo_open=True, ndim=1)
         v = real_array(name, values, lo, hi, ndim=1)
         if wl.shape != v.shape:
@@ -46,7 +46,7 @@ class Spectrum:
         return cls("tabulated", {"wavelengths": wl, "values": v})
 
     @classmethod
-    def coerce(cls, value: Any, name: str, lo=None, hi=None, lo_open: bool = False) -> "Spectrum":
+    def coerce(cls, value: Any, name: str, lo=None, hi=None, lo_open: bool = False) -> Spectrum:
         """A Spectrum from a number, an RGB triple, a dict or a Spectrum; range-checked."""
         if isinstance(value, Spectrum):
             s = value
@@ -85,7 +85,7 @@ class Spectrum:
         return out
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "Spectrum":
+    def from_dict(cls, d: dict[str, Any]) -> Spectrum:
         if not isinstance(d, dict) or "type" not in d:
             raise ValueError("a spectrum dict needs a 'type' of 'constant', 'rgb' or 'tabulated'")
         kind = d["type"]

@@ -20,10 +20,10 @@ from pathlib import Path
 from typing import Any
 
 from bsdflab import _core
-from bsdflab.util import args as check
 from bsdflab.tables.data import FORMAT_VERSION, TableData, TableGrid, check_table_memory
 from bsdflab.tables.file_format import canonical_json, read_table, write_table
 from bsdflab.tables.tabulate import ERROR_FLOOR, tabulate
+from bsdflab.util import args as check
 from bsdflab.util.settings import library_settings
 
 ENV_VAR = "BSDFLAB_CACHE_DIR"

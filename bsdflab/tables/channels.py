@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from bsdflab.util import args as check
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
+from bsdflab.util import args as check
 
 RGB = ("R", "G", "B")
 # Rec. 709 / sRGB luminance weights: the quantity whose error drives adaptive effort.

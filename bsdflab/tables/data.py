@@ -22,11 +22,11 @@ from typing import Any
 
 import numpy as np
 
-from bsdflab.util import args as check
-from bsdflab.util import limits
 from bsdflab.bsdfs.base import from_dict
 from bsdflab.lobes import Lobe
 from bsdflab.tables.channels import LUMINANCE_RGB
+from bsdflab.util import args as check
+from bsdflab.util import limits
 
 FORMAT_VERSION = 2  # 2: optional keyed signature (bsdflab.signature); 1 is still read
 LOBES = ("reflection", "transmission")
@@ -42,7 +42,7 @@ def node_centres(n: int) -> np.ndarray:
     return (np.arange(n) + 0.5) * (0.5 * np.pi / n)
 
 
-def check_table_memory(grid: "TableGrid", n_channels: int, n_lobes: int = 2) -> None:
+def check_table_memory(grid: TableGrid, n_channels: int, n_lobes: int = 2) -> None:
     """Refuse a table on ``grid`` whose estimated memory exceeds ``BSDFLAB_MAX_BYTES``
     (call before tabulating; ``n_lobes`` 2 covers transmissive models)."""
     cells = grid.cells(n_lobes)
@@ -96,7 +96,7 @@ class TableGrid:
                 "thickness_nm": list(self.thickness_nm)}
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "TableGrid":
+    def from_dict(cls, d: dict[str, Any]) -> TableGrid:
         if not isinstance(d, dict):
             raise ValueError(f"a table grid must be a dict, got {type(d).__name__}")
         unknown = set(d) - {"n_theta_i", "n_theta_o", "n_phi", "thickness_nm"}

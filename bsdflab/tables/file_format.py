@@ -56,11 +56,11 @@ from typing import Any
 import numpy as np
 
 from bsdflab import __version__
+from bsdflab.tables import signing
+from bsdflab.tables.data import FORMAT_VERSION, TableData, TableGrid
 from bsdflab.util import limits
 from bsdflab.util.files import write_atomically
-from bsdflab.tables import signing
 from bsdflab.util.native_output import quiet_native_output
-from bsdflab.tables.data import FORMAT_VERSION, TableData, TableGrid
 
 PREFIX = "bsdflab."
 HASH_ATTRIBUTE = PREFIX + "content_hash"

@@ -41,12 +41,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from bsdflab import __version__, _core
-from bsdflab.util.progress import run_with_progress
-from bsdflab.util import args as check
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.lobes import Lobe
 from bsdflab.tables.channels import table_channels
 from bsdflab.tables.data import LOBES, TableData, TableGrid
+from bsdflab.util import args as check
+from bsdflab.util.progress import run_with_progress
 
 ERROR_FLOOR = 0.05
 SIGNIFICANT = 0.01  # cells counted in the achieved-error statistics: f > 1 % of the max

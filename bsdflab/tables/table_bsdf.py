@@ -14,12 +14,12 @@ import numpy as np
 
 from bsdflab import _core
 from bsdflab.bsdfs.base import BSDF, from_dict
-from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
-from bsdflab.tables.channels import LUMINANCE_RGB, channel_wavelengths
-from bsdflab.tables.data import TableData
 from bsdflab.bsdfs.interface_term import make_term
 from bsdflab.bsdfs.rough import RoughDielectric
 from bsdflab.lobes import Lobe
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
+from bsdflab.tables.channels import LUMINANCE_RGB, channel_wavelengths
+from bsdflab.tables.data import TableData
 from bsdflab.tables.file_format import read_table
 
 

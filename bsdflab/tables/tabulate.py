@@ -10,8 +10,17 @@ from __future__ import annotations
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.tables.channels import table_channels
 from bsdflab.tables.data import TableData, TableGrid, check_table_memory
-from bsdflab.tables.stages import (DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES, ERROR_FLOOR, assemble, cell_count,
-                                   finish_cells, floor_scale, lobes_of, pilot_cells)
+from bsdflab.tables.stages import (
+    DEFAULT_MAX_SAMPLES,
+    DEFAULT_MIN_SAMPLES,
+    ERROR_FLOOR,
+    assemble,
+    cell_count,
+    finish_cells,
+    floor_scale,
+    lobes_of,
+    pilot_cells,
+)
 from bsdflab.tables.units import tabulate_units
 from bsdflab.util import args as check
 from bsdflab.util import runners

@@ -24,8 +24,16 @@ import numpy as np
 
 from bsdflab.bsdfs.base import from_dict
 from bsdflab.tables.data import TableGrid
-from bsdflab.tables.stages import (CellBlock, PilotBlock, assemble, cell_count, finish_cells, floor_scale,
-                                   merge_pilots, pilot_cells)
+from bsdflab.tables.stages import (
+    CellBlock,
+    PilotBlock,
+    assemble,
+    cell_count,
+    finish_cells,
+    floor_scale,
+    merge_pilots,
+    pilot_cells,
+)
 from bsdflab.util import args as check
 from bsdflab.util.runners import Runner, unit_key
 

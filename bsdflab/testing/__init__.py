@@ -61,13 +61,20 @@ To test a sampler that is not a bsdflab BSDF, give ``ChiSquareTest`` two functio
 ``sample_fn(n, seed) -> (n, 3)`` directions (rows of NaN or zeros for failed
 samples) and ``pdf_fn(wo) -> (n,)`` densities; see its docstring.
 """
-from bsdflab.testing.consistency import ConsistencyReport, eval_pdf_consistency, reciprocity_error
 from bsdflab.testing.chi2 import ChiSquareTest, bsdf_chi2
+from bsdflab.testing.consistency import ConsistencyReport, eval_pdf_consistency, reciprocity_error
 from bsdflab.testing.directions import random_unit_vectors, spherical_directions
 from bsdflab.testing.discrete import DiscreteChoiceResult, discrete_choice_chi2
 from bsdflab.testing.furnace import AlbedoEstimate, albedo_sampled, albedo_uniform
 from bsdflab.testing.image_compare import ImageTestResult, image_z_test, relative_mse  # noqa: F401  (image-level renderer checks)
-from bsdflab.testing.stats import PearsonResult, PooledCells, pearson_chi2, pool_low_expected, sidak_significance, sidak_z_limit
+from bsdflab.testing.stats import (
+           PearsonResult,
+           PooledCells,
+           pearson_chi2,
+           pool_low_expected,
+           sidak_significance,
+           sidak_z_limit,
+)
 
 __all__ = ["AlbedoEstimate", "ChiSquareTest", "ConsistencyReport", "DiscreteChoiceResult",
            "PearsonResult", "PooledCells", "albedo_sampled", "albedo_uniform", "bsdf_chi2",

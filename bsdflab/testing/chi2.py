@@ -19,15 +19,15 @@ choices with ``discrete_choice_chi2``.
 """
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
-from bsdflab.util import args as check
 from bsdflab.lobes import Lobe
 from bsdflab.testing.directions import directions_from_cos_phi, positive_int, single_direction
 from bsdflab.testing.discrete import discrete_choice_chi2
 from bsdflab.testing.stats import check_significance, pearson_chi2, sidak_significance
+from bsdflab.util import args as check
 
 __all__ = ["ChiSquareTest", "bsdf_chi2", "discrete_choice_chi2"]
 

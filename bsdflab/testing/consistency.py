@@ -10,9 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bsdflab.util import args as check
 from bsdflab.lobes import Lobe
 from bsdflab.testing.directions import positive_int, random_unit_vectors, single_direction, spherical_directions
+from bsdflab.util import args as check
 
 __all__ = ["ConsistencyReport", "eval_pdf_consistency", "random_unit_vectors",
            "reciprocity_error", "spherical_directions"]

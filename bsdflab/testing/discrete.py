@@ -6,8 +6,9 @@ reflection must be chosen with the Fresnel reflectance R and transmission with 1
 """
 from __future__ import annotations
 
+from collections.abc import Hashable
 from dataclasses import dataclass
-from typing import Any, Hashable
+from typing import Any
 
 import numpy as np
 from scipy import stats as sps

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bsdflab.util import args as check
 from bsdflab.lobes import Lobe
 from bsdflab.testing.directions import positive_int, random_unit_vectors, single_direction
+from bsdflab.util import args as check
 
 __all__ = ["AlbedoEstimate", "albedo_sampled", "albedo_uniform"]
 

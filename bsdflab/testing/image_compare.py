@@ -27,9 +27,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from scipy.special import erfc
 
 from bsdflab.util import args as check
-from scipy.special import erfc
 
 DEFAULT_RTOL = 1e-4
 DEFAULT_ATOL = 1e-12

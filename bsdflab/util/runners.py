@@ -37,7 +37,7 @@ from typing import Any, ClassVar
 from bsdflab.util.progress import JobCancelled, cancel_requested, report_progress
 from bsdflab.util.registry import Registry
 
-RUNNERS: Registry[type["Runner"]] = Registry("runner", lazy={"dask": "bsdflab.distributed.runner"})
+RUNNERS: Registry[type[Runner]] = Registry("runner", lazy={"dask": "bsdflab.distributed.runner"})
 
 
 class Runner(abc.ABC):
@@ -65,7 +65,7 @@ class Runner(abc.ABC):
 
     @classmethod
     @contextlib.contextmanager
-    def connect(cls, target: str) -> Iterator["Runner"]:
+    def connect(cls, target: str) -> Iterator[Runner]:
         """A runner for ``target`` (the part of an executor spec after ``name:``), closed
         on exit."""
         raise ValueError(f"the {cls.name!r} runner takes no target, got {target!r}")
@@ -90,7 +90,7 @@ class LocalRunner(Runner):
 
     @classmethod
     @contextlib.contextmanager
-    def connect(cls, target: str) -> Iterator["Runner"]:
+    def connect(cls, target: str) -> Iterator[Runner]:
         if target not in ("", "local"):
             raise ValueError(f"the local runner takes no target, got {target!r}")
         yield cls()

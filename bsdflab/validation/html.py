@@ -64,7 +64,8 @@ def _check_rows(rows, results_by_name) -> str:
         if row["status"] == "error":
             body += f"<pre>{_e(row['message'])}</pre>"
         if row["details"]:
-            body += f"<details><summary>numbers</summary><pre>{_e(json.dumps(row['details'], indent=1))}</pre></details>"
+            body += (f"<details><summary>numbers</summary><pre>{_e(json.dumps(row['details'], indent=1))}</pre>"
+                     f"</details>")
         if row["kind"] != "study":
             body += _figures(r.figures)
         out.append(f'<tr class="{row["status"]}"><td></td><td colspan="6"><details{opened}>'
@@ -98,7 +99,8 @@ def _approximations(doc, results_by_name) -> str:
             for name, v in models.items():
                 parts.append(f"<tr><td>{_e(label)}</td><td>{_e(name)}</td><td class='num'>"
                              f"{100 * v['fraction_over_jnd']:.0f}%</td><td class='num'>{v['median_delta_e00']:.1f}</td>"
-                             f"<td class='num'>{v['p95_delta_e00']:.1f}</td><td class='num'>{v['max_delta_e00']:.1f}</td></tr>")
+                             f"<td class='num'>{v['p95_delta_e00']:.1f}</td>"
+                             f"<td class='num'>{v['max_delta_e00']:.1f}</td></tr>")
         parts.append("</table>")
         cells = c["details"].get("grid_cells_median_delta_e00_over_angle")
         if cells:
@@ -106,7 +108,8 @@ def _approximations(doc, results_by_name) -> str:
             parts.append("<table><tr><th>grid cell: median &Delta;E00 over angle</th>"
                          + "".join(f"<th>{_e(n)}</th>" for n in names) + "</tr>")
             for cell, v in cells.items():
-                parts.append(f"<tr><td>{_e(cell)}</td>" + "".join(f"<td class='num'>{v[n]:.1f}</td>" for n in names) + "</tr>")
+                parts.append(f"<tr><td>{_e(cell)}</td>"
+                             + "".join(f"<td class='num'>{v[n]:.1f}</td>" for n in names) + "</tr>")
             parts.append("</table>")
         parts.append(_figures(results_by_name[c["name"]].figures))
     parts.append(f"<h3>Which standards can represent the snake's film?</h3><p class='small'>guanine n = "
@@ -175,7 +178,8 @@ def render_html(doc: dict, results) -> str:
     verdict = "all checks pass" if ok else f"{s['fail'] + s['error']} check(s) FAILED"
     sections = [f for f in FAMILIES if any(c["family"] == f for c in doc["checks"])]
     nav = "".join(f'<a href="#family-{f}">{f}</a>' for f in sections)
-    nav += '<a href="#approximations">approximations</a><a href="#performance">performance</a><a href="#provenance">provenance</a>'
+    nav += ('<a href="#approximations">approximations</a><a href="#performance">performance</a>'
+            '<a href="#provenance">provenance</a>')
     body = [_dashboard(doc, sections)]
     for f in sections:
         rows = [c for c in doc["checks"] if c["family"] == f]
@@ -194,5 +198,6 @@ def render_html(doc: dict, results) -> str:
             f"<header class='{'ok' if ok else 'bad'}'><h1>bsdflab validation report: {verdict}</h1>"
             f"<p>level <b>{_e(doc['level'])}</b>; {s['pass']} pass, {s['fail']} fail, {s['error']} error, "
             f"{s['skipped']} skipped, {s['study']} studies; {doc['duration_s']:.0f} s; bsdflab "
-            f"{_e(doc['provenance']['versions'].get('bsdflab'))} at {_e((doc['provenance']['git_commit'] or '?')[:10])}</p>"
+            f"{_e(doc['provenance']['versions'].get('bsdflab'))} at "
+            f"{_e((doc['provenance']['git_commit'] or '?')[:10])}</p>"
             f"</header><nav>{nav}</nav><main>{how}{''.join(body)}</main></body></html>")

@@ -36,7 +36,8 @@ def core_build() -> dict[str, str]:
     info: dict[str, str] = {}
     for cache in sorted(REPO.glob("build/*/CMakeCache.txt")):
         for line in cache.read_text(errors="replace").splitlines():
-            m = re.match(r"(CMAKE_BUILD_TYPE|CMAKE_CXX_COMPILER|CMAKE_CXX_FLAGS|CMAKE_CXX_FLAGS_RELEASE):\w+=(.*)", line)
+            m = re.match(r"(CMAKE_BUILD_TYPE|CMAKE_CXX_COMPILER|CMAKE_CXX_FLAGS|CMAKE_CXX_FLAGS_RELEASE):\w+=(.*)",
+                         line)
             if m:
                 info[m.group(1)] = m.group(2)
         info["cache"] = str(cache.relative_to(REPO))

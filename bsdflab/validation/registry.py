@@ -10,8 +10,9 @@ power (a deliberately broken model must fail them).
 from __future__ import annotations
 
 import fnmatch
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable
+from typing import Any
 
 LEVELS = ("quick", "standard", "full")
 FAMILIES = ("basic", "rough", "films", "layered", "tables", "renderer")
@@ -85,7 +86,7 @@ class Check:
             raise ValueError(f"check {self.name!r}: effort lacks levels {missing}")
 
     def with_model(self, make_model: Callable[[], Any], name: str | None = None,
-                   model: str | None = None) -> "Check":
+                   model: str | None = None) -> Check:
         """The same check (statistic, tolerance, effort, seed) on another model."""
         return replace(self, make_model=make_model, name=name or self.name,
                        model=model or self.model)

@@ -4,8 +4,9 @@ from __future__ import annotations
 import importlib.util
 import time
 import traceback
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any, Iterable
+from typing import Any
 
 import numpy as np
 

@@ -20,12 +20,13 @@ void bind_adding_doubling(py::module_ &m) {
                  if (sigma_a.size() != K || sigma_s.size() != K || g.size() != K)
                      throw std::invalid_argument("slab parameter lists must have equal length");
                  std::vector<ADSlab> slabs(K);
-                 for (std::size_t j = 0; j < K; ++j) slabs[j] = ADSlab{thickness[j], sigma_a[j], sigma_s[j], g[j]};
+                 for (std::size_t j = 0; j < K; ++j)
+                     slabs[j] = ADSlab{thickness[j], sigma_a[j], sigma_s[j], g[j]};
                  ADSettings s{nodes, orders, thin_depth, order_tolerance, azimuth_samples, film_lookup};
                  py::gil_scoped_release nogil;  // the film lookups take a moment
                  std::vector<std::shared_ptr<const BSDF>> b(boundaries.begin(), boundaries.end());
-                 return std::make_shared<AddingDoubling>(std::move(wavelengths), std::move(b), std::move(media),
-                                                         std::move(slabs), s);
+                 return std::make_shared<AddingDoubling>(std::move(wavelengths), std::move(b),
+                                                         std::move(media), std::move(slabs), s);
              }),
              py::arg("wavelengths"), py::arg("boundaries"), py::arg("media"), py::arg("thickness"),
              py::arg("sigma_a"), py::arg("sigma_s"), py::arg("g"), py::arg("nodes"), py::arg("orders"),
@@ -36,26 +37,30 @@ void bind_adding_doubling(py::module_ &m) {
         .def_property_readonly("nodes", &AddingDoubling::nodes)
         .def_property_readonly("weights", &AddingDoubling::weights)
         .def_property_readonly("film_lookup_error", &AddingDoubling::film_lookup_error)
-        .def("eval",
-             [](const AddingDoubling &s, const Darr &wi, const Darr &wo, bool scattered_only) {
-                 require_rows3(wi, "wi");
-                 require_rows3(wo, "wo");
-                 std::size_t n = wi.shape(0), C = s.channels();
-                 if (static_cast<std::size_t>(wo.shape(0)) != n)
-                     throw std::invalid_argument("wi and wo must have the same length");
-                 py::array_t<double> out({n, C});
-                 double *o = out.mutable_data();
-                 {
-                     py::gil_scoped_release nogil;
-                     s.eval(wi.data(), wo.data(), n, o, scattered_only);
-                 }
-                 return out;
-             },
-             py::arg("wi"), py::arg("wo"), py::arg("scattered_only") = false,
-             "f |cos theta_o| (N, C): reflection from above, no delta lobe")
-        .def("with_top", [](const AddingDoubling &s, std::shared_ptr<BSDF> top) {
-                 py::gil_scoped_release nogil;
-                 return s.with_top(std::move(top));
-             }, py::arg("top"), "the solver with another rough top, sharing what lies below")
+        .def(
+            "eval",
+            [](const AddingDoubling &s, const Darr &wi, const Darr &wo, bool scattered_only) {
+                require_rows3(wi, "wi");
+                require_rows3(wo, "wo");
+                std::size_t n = wi.shape(0), C = s.channels();
+                if (static_cast<std::size_t>(wo.shape(0)) != n)
+                    throw std::invalid_argument("wi and wo must have the same length");
+                py::array_t<double> out({n, C});
+                double *o = out.mutable_data();
+                {
+                    py::gil_scoped_release nogil;
+                    s.eval(wi.data(), wo.data(), n, o, scattered_only);
+                }
+                return out;
+            },
+            py::arg("wi"), py::arg("wo"), py::arg("scattered_only") = false,
+            "f |cos theta_o| (N, C): reflection from above, no delta lobe")
+        .def(
+            "with_top",
+            [](const AddingDoubling &s, std::shared_ptr<BSDF> top) {
+                py::gil_scoped_release nogil;
+                return s.with_top(std::move(top));
+            },
+            py::arg("top"), "the solver with another rough top, sharing what lies below")
         .def_static("hg_orders_needed", &hg_orders_needed, py::arg("g"), py::arg("tolerance"));
 }

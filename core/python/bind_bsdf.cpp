@@ -63,8 +63,8 @@ static py::array_t<double> pdf_many(const BSDF &b, const Darr &wi, const Darr &w
     return out;
 }
 
-static py::tuple sample_many(const BSDF &b, const Darr &wi, const Darr &u1, const Darr &u2,
-                             uint32_t lobes, const py::object &thickness) {
+static py::tuple sample_many(const BSDF &b, const Darr &wi, const Darr &u1, const Darr &u2, uint32_t lobes,
+                             const py::object &thickness) {
     require_rows3(wi, "wi");
     std::size_t n = wi.shape(0), C = b.channels();
     if (u1.ndim() != 1 || static_cast<std::size_t>(u1.shape(0)) != n)
@@ -84,8 +84,12 @@ static py::tuple sample_many(const BSDF &b, const Darr &wi, const Darr &u1, cons
             for (std::size_t i = s; i < e; ++i) {
                 BSDFSample bs = b.sample(row(pi, i), pu1[i], pu2[2 * i], pu2[2 * i + 1], lobes,
                                          query_row(t, i), pw + i * C);
-                pwo[3 * i] = bs.wo.x; pwo[3 * i + 1] = bs.wo.y; pwo[3 * i + 2] = bs.wo.z;
-                pp[i] = bs.pdf; pl[i] = bs.lobe; pe[i] = bs.eta;
+                pwo[3 * i] = bs.wo.x;
+                pwo[3 * i + 1] = bs.wo.y;
+                pwo[3 * i + 2] = bs.wo.z;
+                pp[i] = bs.pdf;
+                pl[i] = bs.lobe;
+                pe[i] = bs.eta;
             }
         });
     }

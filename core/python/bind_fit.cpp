@@ -17,7 +17,8 @@ fit::ForwardModel make_model(const Darr &wavelengths, const Iarr &geometry, cons
                              const Darr &gl_x, const Darr &gl_w) {
     const py::ssize_t n = geometry.size();
     if (wavelength_index.size() != n || cos_in.size() != n || cos_out.size() != n)
-        throw std::invalid_argument("geometry, wavelength_index, cos_in and cos_out must have one entry per row");
+        throw std::invalid_argument(
+            "geometry, wavelength_index, cos_in and cos_out must have one entry per row");
     std::vector<fit::Observation> rows(static_cast<std::size_t>(n));
     for (py::ssize_t i = 0; i < n; ++i)
         rows[i] = {geometry.data()[i], wavelength_index.data()[i], cos_in.data()[i], cos_out.data()[i]};

@@ -22,7 +22,11 @@ static py::tuple amplitudes_many(const Carr &n_i, const Carr &n_t, const Carr &c
         parallel_for(n, kGrain, [&](std::size_t s, std::size_t e) {
             for (std::size_t i = s; i < e; ++i) {
                 FresnelAmplitudes f = fresnel_amplitudes(a[i], b[i], c[i]);
-                prs[i] = f.r_s; prp[i] = f.r_p; pts[i] = f.t_s; ptp[i] = f.t_p; pct[i] = f.cos_t;
+                prs[i] = f.r_s;
+                prp[i] = f.r_p;
+                pts[i] = f.t_s;
+                ptp[i] = f.t_p;
+                pct[i] = f.cos_t;
             }
         });
     }

@@ -15,15 +15,16 @@ void bind_interfaces(py::module_ &m) {
     py::class_<FresnelTerm, std::shared_ptr<FresnelTerm>>(m, "FresnelTerm")
         .def_property_readonly("eta", &FresnelTerm::eta)
         .def_property_readonly("transmissive", &FresnelTerm::transmissive)
-        .def("eval",
-             [](const FresnelTerm &t, double cos_i, double thickness) {
-                 std::vector<double> R(t.channels()), T(t.channels());
-                 Query q;
-                 q.film_thickness_nm = thickness;
-                 t.eval(cos_i, q, R.data(), T.data());
-                 return py::make_tuple(R, T);
-             },
-             py::arg("cos_i"), py::arg("thickness") = -1.0, "(R, T) per channel");
+        .def(
+            "eval",
+            [](const FresnelTerm &t, double cos_i, double thickness) {
+                std::vector<double> R(t.channels()), T(t.channels());
+                Query q;
+                q.film_thickness_nm = thickness;
+                t.eval(cos_i, q, R.data(), T.data());
+                return py::make_tuple(R, T);
+            },
+            py::arg("cos_i"), py::arg("thickness") = -1.0, "(R, T) per channel");
     py::class_<DielectricTerm, FresnelTerm, std::shared_ptr<DielectricTerm>>(m, "DielectricTerm")
         .def(py::init<int, double, double>(), py::arg("channels"), py::arg("int_ior"), py::arg("ext_ior"));
     py::class_<ConductorTerm, FresnelTerm, std::shared_ptr<ConductorTerm>>(m, "ConductorTerm")
@@ -39,30 +40,31 @@ void bind_interfaces(py::module_ &m) {
         .def(py::init<std::vector<double>, std::shared_ptr<const FresnelTerm>, bool>(),
              py::arg("wavelengths"), py::arg("term"), py::arg("two_sided"));
     py::class_<RoughInterface, BSDF, std::shared_ptr<RoughInterface>>(m, "RoughInterface")
-        .def(py::init([](std::vector<double> wl, std::shared_ptr<const FresnelTerm> term,
-                         double alpha, bool two_sided, const std::string &distribution,
-                         bool multiscatter) {
+        .def(py::init([](std::vector<double> wl, std::shared_ptr<const FresnelTerm> term, double alpha,
+                         bool two_sided, const std::string &distribution, bool multiscatter) {
                  MicrofacetType type;
                  if (distribution == "ggx") type = MicrofacetType::GGX;
                  else if (distribution == "beckmann") type = MicrofacetType::Beckmann;
                  else throw std::invalid_argument("distribution must be 'ggx' or 'beckmann'");
                  py::gil_scoped_release release; // the energy tables take a moment
-                 return std::make_shared<RoughInterface>(std::move(wl), std::move(term), alpha,
-                                                         two_sided, type, multiscatter);
+                 return std::make_shared<RoughInterface>(std::move(wl), std::move(term), alpha, two_sided,
+                                                         type, multiscatter);
              }),
              py::arg("wavelengths"), py::arg("term"), py::arg("alpha"), py::arg("two_sided"),
              py::arg("distribution") = "ggx", py::arg("multiscatter") = false)
         .def_property_readonly("pass_through", &RoughInterface::pass_through)
-        .def("single_scattering_albedo",
-             [](const RoughInterface &r, int side, double mu) {
-                 const MultiScatter *ms = r.multiscatter();
-                 if (!ms) throw std::invalid_argument("only an energy-compensated interface has albedo tables");
-                 std::vector<double> out(r.channels());
-                 for (int c = 0; c < r.channels(); ++c) out[c] = ms->albedo(side, mu, c);
-                 return out;
-             },
-             py::arg("side"), py::arg("mu"),
-             "the tabulated single-scattering albedo per channel (side 0 above, 1 below)");
+        .def(
+            "single_scattering_albedo",
+            [](const RoughInterface &r, int side, double mu) {
+                const MultiScatter *ms = r.multiscatter();
+                if (!ms)
+                    throw std::invalid_argument("only an energy-compensated interface has albedo tables");
+                std::vector<double> out(r.channels());
+                for (int c = 0; c < r.channels(); ++c) out[c] = ms->albedo(side, mu, c);
+                return out;
+            },
+            py::arg("side"), py::arg("mu"),
+            "the tabulated single-scattering albedo per channel (side 0 above, 1 below)");
     // Scalar access to the distributions, for tests against quadrature.
     auto distribution = [](const std::string &name, double alpha) {
         if (name != "ggx" && name != "beckmann")
@@ -70,14 +72,16 @@ void bind_interfaces(py::module_ &m) {
         if (!(alpha > 0) || !std::isfinite(alpha)) throw std::invalid_argument("alpha must be > 0");
         return Microfacet(name == "ggx" ? MicrofacetType::GGX : MicrofacetType::Beckmann, alpha);
     };
-    m.def("microfacet_d",
-          [distribution](const std::string &name, double alpha, std::array<double, 3> v) {
-              return distribution(name, alpha).D(Vec3{v[0], v[1], v[2]});
-          },
-          py::arg("distribution"), py::arg("alpha"), py::arg("m"), "D(m) of a unit normal");
-    m.def("microfacet_lambda",
-          [distribution](const std::string &name, double alpha, std::array<double, 3> v) {
-              return distribution(name, alpha).Lambda(Vec3{v[0], v[1], v[2]});
-          },
-          py::arg("distribution"), py::arg("alpha"), py::arg("v"), "Smith's Lambda of a direction");
+    m.def(
+        "microfacet_d",
+        [distribution](const std::string &name, double alpha, std::array<double, 3> v) {
+            return distribution(name, alpha).D(Vec3{v[0], v[1], v[2]});
+        },
+        py::arg("distribution"), py::arg("alpha"), py::arg("m"), "D(m) of a unit normal");
+    m.def(
+        "microfacet_lambda",
+        [distribution](const std::string &name, double alpha, std::array<double, 3> v) {
+            return distribution(name, alpha).Lambda(Vec3{v[0], v[1], v[2]});
+        },
+        py::arg("distribution"), py::arg("alpha"), py::arg("v"), "Smith's Lambda of a direction");
 }

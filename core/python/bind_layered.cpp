@@ -27,10 +27,12 @@ static py::tuple estimate_many(const BSDF &model, const Darr &wi, const Darr &wo
     require_rows3(wi, "wi");
     require_rows3(wo, "wo");
     std::size_t n = wi.shape(0), C = model.channels();
-    if (static_cast<std::size_t>(wo.shape(0)) != n) throw std::invalid_argument("wi and wo must have the same length");
+    if (static_cast<std::size_t>(wo.shape(0)) != n)
+        throw std::invalid_argument("wi and wo must have the same length");
     if (samples < 1) throw std::invalid_argument("samples must be >= 1");
     Darr t = thickness.is_none() ? Darr() : py::cast<Darr>(thickness);
-    if (t.size() > 0 && static_cast<std::size_t>(t.size()) != n) throw std::invalid_argument("thickness must have shape (N,)");
+    if (t.size() > 0 && static_cast<std::size_t>(t.size()) != n)
+        throw std::invalid_argument("thickness must have shape (N,)");
     py::array_t<double> out({n, C}), err({n, C});
     const double *pi = wi.data(), *po = wo.data();
     double *o = out.mutable_data(), *e = err.mutable_data();
@@ -50,7 +52,8 @@ static py::tuple estimate_many(const BSDF &model, const Darr &wi, const Darr &wo
             capped += cut;
         });
     }
-    return py::make_tuple(out, err, static_cast<std::uint64_t>(nonfinite), static_cast<std::uint64_t>(capped));
+    return py::make_tuple(out, err, static_cast<std::uint64_t>(nonfinite),
+                          static_cast<std::uint64_t>(capped));
 }
 
 static py::array_t<double> delta_reflectance_many(const LayeredBSDF &b, const Darr &wi,
@@ -70,38 +73,41 @@ void bind_layered(py::module_ &m) {
         .def(py::init([](std::vector<double> wavelengths, std::vector<std::shared_ptr<BSDF>> boundaries,
                          std::vector<double> thickness, std::vector<std::vector<double>> sigma_a,
                          std::vector<double> sigma_s, std::vector<int> phase_kind,
-                         std::vector<double> phase_param, int samples, uint64_t seed, int max_depth,
-                         bool nee, int pdf_samples) {
+                         std::vector<double> phase_param, int samples, uint64_t seed, int max_depth, bool nee,
+                         int pdf_samples) {
                  std::size_t K = thickness.size();
                  if (sigma_a.size() != K || sigma_s.size() != K || phase_kind.size() != K ||
                      phase_param.size() != K)
                      throw std::invalid_argument("slab parameter lists must have equal length");
                  std::vector<Slab> slabs(K);
                  for (std::size_t j = 0; j < K; ++j) {
-                     if (phase_kind[j] < 0 || phase_kind[j] > 2) throw std::invalid_argument("unknown phase function");
+                     if (phase_kind[j] < 0 || phase_kind[j] > 2)
+                         throw std::invalid_argument("unknown phase function");
                      slabs[j] = Slab{thickness[j], sigma_a[j], sigma_s[j],
                                      PhaseFunction(PhaseFunction::Kind(phase_kind[j]), phase_param[j])};
                  }
                  std::vector<std::shared_ptr<const BSDF>> b(boundaries.begin(), boundaries.end());
                  if (pdf_samples < 0) throw std::invalid_argument("pdf_samples must be >= 0");
                  LayeredOptions opt{samples, seed, max_depth, nee, pdf_samples};
-                 return std::make_shared<LayeredBSDF>(std::move(wavelengths), std::move(b), std::move(slabs), opt);
+                 return std::make_shared<LayeredBSDF>(std::move(wavelengths), std::move(b), std::move(slabs),
+                                                      opt);
              }),
              py::arg("wavelengths"), py::arg("boundaries"), py::arg("thickness"), py::arg("sigma_a"),
              py::arg("sigma_s"), py::arg("phase_kind"), py::arg("phase_param"), py::arg("samples"),
              py::arg("seed"), py::arg("max_depth"), py::arg("nee"), py::arg("pdf_samples") = 1)
-        .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"),
-             py::arg("thickness"), py::arg("samples"), py::arg("seed"),
+        .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"), py::arg("thickness"),
+             py::arg("samples"), py::arg("seed"),
              "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed")
         .def_property_readonly("capped_walks", &LayeredBSDF::capped_walks,
                                "walks of eval(), sample() and pdf() cut by max_depth since construction")
         .def("delta_reflectance", &delta_reflectance_many, py::arg("wi"), py::arg("thickness") = py::none())
-        .def("scattered_part", [](const std::shared_ptr<LayeredBSDF> &self) {
-            return std::make_shared<ScatteredPart>(self);
-        }, "the model without its top boundary's own reflection (a stochastic BSDF)");
+        .def(
+            "scattered_part",
+            [](const std::shared_ptr<LayeredBSDF> &self) { return std::make_shared<ScatteredPart>(self); },
+            "the model without its top boundary's own reflection (a stochastic BSDF)");
 
     py::class_<ScatteredPart, BSDF, std::shared_ptr<ScatteredPart>>(m, "LayeredScatteredPart")
-        .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"),
-             py::arg("thickness"), py::arg("samples"), py::arg("seed"),
+        .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"), py::arg("thickness"),
+             py::arg("samples"), py::arg("seed"),
              "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed");
 }

@@ -10,10 +10,10 @@ using namespace bsdflab;
 void bind_measured(py::module_ &m) {
     py::class_<MeasuredBSDF, BSDF, std::shared_ptr<MeasuredBSDF>>(m, "MeasuredBSDF")
         .def(py::init([](std::vector<double> channel_ids, bool jacobian, std::vector<double> theta_i,
-                         std::vector<double> phi_i, std::vector<double> channel_nodes,
-                         std::vector<float> ndf, int ndf_h, int ndf_w, std::vector<float> sigma, int sigma_h,
-                         int sigma_w, std::vector<float> vndf, int vndf_h, int vndf_w,
-                         std::vector<float> luminance, std::vector<float> values, int n) {
+                         std::vector<double> phi_i, std::vector<double> channel_nodes, std::vector<float> ndf,
+                         int ndf_h, int ndf_w, std::vector<float> sigma, int sigma_h, int sigma_w,
+                         std::vector<float> vndf, int vndf_h, int vndf_w, std::vector<float> luminance,
+                         std::vector<float> values, int n) {
                  MeasuredArrays a;
                  a.jacobian = jacobian;
                  a.theta_i = std::move(theta_i);

@@ -20,15 +20,19 @@ static py::tuple lookup_many(const ScaleTexture &t, const Darr &u, const Darr &v
     const double *pu = u.data(), *pv = v.data();
     bool *pg = gap.mutable_data();
     uint64_t *pid = id.mutable_data();
-    double *psu = slope_u.mutable_data(), *psv = slope_v.mutable_data(),
-           *pt = thickness.mutable_data(), *pe = edge.mutable_data();
+    double *psu = slope_u.mutable_data(), *psv = slope_v.mutable_data(), *pt = thickness.mutable_data(),
+           *pe = edge.mutable_data();
     {
         py::gil_scoped_release nogil;
         parallel_for(n, kGrain, [&](std::size_t s, std::size_t e) {
             for (std::size_t i = s; i < e; ++i) {
                 ScaleSample r = t.lookup(pu[i], pv[i]);
-                pg[i] = r.gap; pid[i] = r.id; psu[i] = r.slope_u; psv[i] = r.slope_v;
-                pt[i] = r.thickness_factor; pe[i] = r.edge_distance;
+                pg[i] = r.gap;
+                pid[i] = r.id;
+                psu[i] = r.slope_u;
+                psv[i] = r.slope_v;
+                pt[i] = r.thickness_factor;
+                pe[i] = r.edge_distance;
             }
         });
     }
@@ -53,13 +57,14 @@ void bind_scales(py::module_ &m) {
         .def_property_readonly("params", &ScaleTexture::params)
         .def("lookup", &lookup_many, py::arg("u"), py::arg("v"),
              "(gap, id, slope_u, slope_v, thickness_factor, edge_distance), each shape (N,)")
-        .def("scale_centre",
-             [](const ScaleTexture &t, int64_t i, int64_t j) {
-                 double u, v;
-                 t.centre(i, j, u, v);
-                 return py::make_tuple(u, v);
-             },
-             py::arg("i"), py::arg("j"), "jittered centre (u, v) of the scale in row i, column j")
+        .def(
+            "scale_centre",
+            [](const ScaleTexture &t, int64_t i, int64_t j) {
+                double u, v;
+                t.centre(i, j, u, v);
+                return py::make_tuple(u, v);
+            },
+            py::arg("i"), py::arg("j"), "jittered centre (u, v) of the scale in row i, column j")
         .def("scale_id", &ScaleTexture::scale_id, py::arg("i"), py::arg("j"),
              "id of the scale in row i, column j");
 }

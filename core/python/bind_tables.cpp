@@ -26,19 +26,18 @@ static TableGrid make_grid(int n_lobes, int n_theta_i, int n_theta_o, int n_phi,
 
 void bind_tables(py::module_ &m) {
     py::class_<Tabulator, std::shared_ptr<Tabulator>>(m, "Tabulator")
-        .def(py::init([](std::shared_ptr<BSDF> model, int n_lobes, int n_theta_i, int n_theta_o,
-                         int n_phi, std::vector<double> thickness, std::vector<double> P, int rows,
-                         double rel_error, double floor, int min_samples, int max_samples,
-                         uint64_t seed, bool film_lookup) {
+        .def(py::init([](std::shared_ptr<BSDF> model, int n_lobes, int n_theta_i, int n_theta_o, int n_phi,
+                         std::vector<double> thickness, std::vector<double> P, int rows, double rel_error,
+                         double floor, int min_samples, int max_samples, uint64_t seed, bool film_lookup) {
                  TabulationSettings s{rel_error, floor, min_samples, max_samples, seed, film_lookup};
                  return std::make_shared<Tabulator>(
                      model, make_grid(n_lobes, n_theta_i, n_theta_o, n_phi, std::move(thickness)),
                      std::move(P), rows, s);
              }),
              py::arg("model"), py::arg("n_lobes"), py::arg("n_theta_i"), py::arg("n_theta_o"),
-             py::arg("n_phi"), py::arg("thickness"), py::arg("P"), py::arg("rows"),
-             py::arg("rel_error"), py::arg("floor"), py::arg("min_samples"), py::arg("max_samples"),
-             py::arg("seed"), py::arg("film_lookup") = true)
+             py::arg("n_phi"), py::arg("thickness"), py::arg("P"), py::arg("rows"), py::arg("rel_error"),
+             py::arg("floor"), py::arg("min_samples"), py::arg("max_samples"), py::arg("seed"),
+             py::arg("film_lookup") = true)
         .def_property_readonly("cells", &Tabulator::cells)
         .def_property_readonly("film_lookup_error", &Tabulator::film_lookup_error,
                                "largest measured error of the film lookups in use (-1: none)")
@@ -46,16 +45,21 @@ void bind_tables(py::module_ &m) {
         .def_property_readonly("stochastic", &Tabulator::stochastic)
         .def("floor_scale", &Tabulator::floor_scale, py::arg("lum"),
              "per-lobe mean |pilot luminance|, reduced in cell order")
-        .def("pilot_job", [](const std::shared_ptr<Tabulator> &t, std::vector<std::size_t> cells) {
-            return std::make_shared<TabulationStageJob>(t, TabulationStageJob::kPilot, std::move(cells));
-        }, py::arg("cells"))
-        .def("finish_job", [](const std::shared_ptr<Tabulator> &t, std::vector<std::size_t> cells,
-                              std::vector<double> pilot_lum, std::vector<double> pilot_error,
-                              std::vector<double> scale) {
-            return std::make_shared<TabulationStageJob>(t, TabulationStageJob::kFinish, std::move(cells),
-                                                        std::move(pilot_lum), std::move(pilot_error),
-                                                        std::move(scale));
-        }, py::arg("cells"), py::arg("pilot_lum"), py::arg("pilot_error"), py::arg("scale"));
+        .def(
+            "pilot_job",
+            [](const std::shared_ptr<Tabulator> &t, std::vector<std::size_t> cells) {
+                return std::make_shared<TabulationStageJob>(t, TabulationStageJob::kPilot, std::move(cells));
+            },
+            py::arg("cells"))
+        .def(
+            "finish_job",
+            [](const std::shared_ptr<Tabulator> &t, std::vector<std::size_t> cells,
+               std::vector<double> pilot_lum, std::vector<double> pilot_error, std::vector<double> scale) {
+                return std::make_shared<TabulationStageJob>(t, TabulationStageJob::kFinish, std::move(cells),
+                                                            std::move(pilot_lum), std::move(pilot_error),
+                                                            std::move(scale));
+            },
+            py::arg("cells"), py::arg("pilot_lum"), py::arg("pilot_error"), py::arg("scale"));
 
     auto doubles = [](const std::vector<double> &v) { return py::array_t<double>(v.size(), v.data()); };
     py::class_<TabulationStageJob, std::shared_ptr<TabulationStageJob>>(m, "TabulationStageJob")
@@ -66,46 +70,62 @@ void bind_tables(py::module_ &m) {
         .def_property_readonly("done", &TabulationStageJob::done)
         .def_property_readonly("total", &TabulationStageJob::total)
         .def_property_readonly("pilot_lum", [=](const TabulationStageJob &j) { return doubles(j.pilot.lum); })
-        .def_property_readonly("pilot_error", [=](const TabulationStageJob &j) { return doubles(j.pilot.lum_error); })
-        .def_property_readonly("pilot_nonfinite", [](const TabulationStageJob &j) { return j.pilot.nonfinite; })
-        .def_property_readonly("value", [=](const TabulationStageJob &j) { return doubles(j.finished.value); })
-        .def_property_readonly("error", [=](const TabulationStageJob &j) { return doubles(j.finished.error); })
-        .def_property_readonly("lum_value", [=](const TabulationStageJob &j) { return doubles(j.finished.lum); })
-        .def_property_readonly("lum_error", [=](const TabulationStageJob &j) { return doubles(j.finished.lum_error); })
-        .def_property_readonly("samples", [](const TabulationStageJob &j) {
-            return py::array_t<int>(j.finished.samples.size(), j.finished.samples.data());
-        })
+        .def_property_readonly("pilot_error",
+                               [=](const TabulationStageJob &j) { return doubles(j.pilot.lum_error); })
+        .def_property_readonly("pilot_nonfinite",
+                               [](const TabulationStageJob &j) { return j.pilot.nonfinite; })
+        .def_property_readonly("value",
+                               [=](const TabulationStageJob &j) { return doubles(j.finished.value); })
+        .def_property_readonly("error",
+                               [=](const TabulationStageJob &j) { return doubles(j.finished.error); })
+        .def_property_readonly("lum_value",
+                               [=](const TabulationStageJob &j) { return doubles(j.finished.lum); })
+        .def_property_readonly("lum_error",
+                               [=](const TabulationStageJob &j) { return doubles(j.finished.lum_error); })
+        .def_property_readonly("samples",
+                               [](const TabulationStageJob &j) {
+                                   return py::array_t<int>(j.finished.samples.size(),
+                                                           j.finished.samples.data());
+                               })
         .def_property_readonly("nonfinite", [](const TabulationStageJob &j) { return j.finished.nonfinite; });
 
     py::class_<TabulatedBSDF, BSDF, std::shared_ptr<TabulatedBSDF>>(m, "TabulatedBSDF")
         .def(py::init([](std::vector<double> channel_ids, int n_lobes, int n_theta_i, int n_theta_o,
                          int n_phi, std::vector<double> thickness, std::vector<float> values,
-                         std::vector<double> luminance, std::shared_ptr<BSDF> direct,
-                         std::vector<double> P, double default_thickness, double transmission_eta) {
+                         std::vector<double> luminance, std::shared_ptr<BSDF> direct, std::vector<double> P,
+                         double default_thickness, double transmission_eta) {
                  return std::make_shared<TabulatedBSDF>(
-                     std::move(channel_ids), make_grid(n_lobes, n_theta_i, n_theta_o, n_phi, std::move(thickness)),
-                     std::move(values), std::move(luminance), direct, std::move(P), default_thickness,
-                     transmission_eta);
+                     std::move(channel_ids),
+                     make_grid(n_lobes, n_theta_i, n_theta_o, n_phi, std::move(thickness)), std::move(values),
+                     std::move(luminance), direct, std::move(P), default_thickness, transmission_eta);
              }),
              py::arg("channel_ids"), py::arg("n_lobes"), py::arg("n_theta_i"), py::arg("n_theta_o"),
              py::arg("n_phi"), py::arg("thickness"), py::arg("values"), py::arg("luminance"),
-             py::arg("direct"), py::arg("P"), py::arg("default_thickness"), py::arg("transmission_eta") = 1.0);
+             py::arg("direct"), py::arg("P"), py::arg("default_thickness"),
+             py::arg("transmission_eta") = 1.0);
 
-    py::class_<ProjectedFresnelTerm, FresnelTerm, std::shared_ptr<ProjectedFresnelTerm>>(m, "ProjectedFresnelTerm")
-        .def(py::init<std::shared_ptr<const FresnelTerm>, std::vector<double>, int, double, double, double, int,
-                      int>(),
+    py::class_<ProjectedFresnelTerm, FresnelTerm, std::shared_ptr<ProjectedFresnelTerm>>(
+        m, "ProjectedFresnelTerm")
+        .def(py::init<std::shared_ptr<const FresnelTerm>, std::vector<double>, int, double, double, double,
+                      int, int>(),
              py::arg("exact"), py::arg("P"), py::arg("out_channels"), py::arg("thickness_lo"),
              py::arg("thickness_hi"), py::arg("default_thickness"), py::arg("n_cos"), py::arg("n_thickness"))
         .def_property_readonly("n_cos", &ProjectedFresnelTerm::n_cos)
         .def_property_readonly("n_thickness", &ProjectedFresnelTerm::n_thickness);
 
     py::class_<FilmLookupTerm, FresnelTerm, std::shared_ptr<FilmLookupTerm>>(m, "FilmLookupTerm")
-        .def_static("build", [](std::shared_ptr<const FresnelTerm> exact, double thickness, double max_error) {
-            // None when no lookup meets max_error (the caller keeps the exact term).
-            return std::const_pointer_cast<FilmLookupTerm>(FilmLookupTerm::build(std::move(exact), thickness, max_error));
-        }, py::arg("exact"), py::arg("thickness_nm"), py::arg("max_error") = FilmLookupTerm::kDefaultMaxError)
+        .def_static(
+            "build",
+            [](std::shared_ptr<const FresnelTerm> exact, double thickness, double max_error) {
+                // None when no lookup meets max_error (the caller keeps the exact term).
+                return std::const_pointer_cast<FilmLookupTerm>(
+                    FilmLookupTerm::build(std::move(exact), thickness, max_error));
+            },
+            py::arg("exact"), py::arg("thickness_nm"),
+            py::arg("max_error") = FilmLookupTerm::kDefaultMaxError)
         .def_property_readonly("measured_error", &FilmLookupTerm::measured_error)
         .def_property_readonly("intervals", &FilmLookupTerm::intervals)
         .def_property_readonly("thickness_nm", &FilmLookupTerm::thickness_nm)
-        .def("kink", &FilmLookupTerm::kink, py::arg("side"), "critical cosine of light from side 0 (above) or 1");
+        .def("kink", &FilmLookupTerm::kink, py::arg("side"),
+             "critical cosine of light from side 0 (above) or 1");
 }

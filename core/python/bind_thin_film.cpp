@@ -22,14 +22,19 @@ struct Outputs {
     double *pRs, *pRp, *pTs, *pTp;
 
     explicit Outputs(std::size_t n)
-        : r_s(n), r_p(n), t_s(n), t_p(n), R_s(n), R_p(n), T_s(n), T_p(n),
-          prs(r_s.mutable_data()), prp(r_p.mutable_data()), pts(t_s.mutable_data()),
-          ptp(t_p.mutable_data()), pRs(R_s.mutable_data()), pRp(R_p.mutable_data()),
-          pTs(T_s.mutable_data()), pTp(T_p.mutable_data()) {}
+        : r_s(n), r_p(n), t_s(n), t_p(n), R_s(n), R_p(n), T_s(n), T_p(n), prs(r_s.mutable_data()),
+          prp(r_p.mutable_data()), pts(t_s.mutable_data()), ptp(t_p.mutable_data()), pRs(R_s.mutable_data()),
+          pRp(R_p.mutable_data()), pTs(T_s.mutable_data()), pTp(T_p.mutable_data()) {}
 
     void store(std::size_t i, const FilmResponse &f) const {
-        prs[i] = f.r_s; prp[i] = f.r_p; pts[i] = f.t_s; ptp[i] = f.t_p;
-        pRs[i] = f.R_s; pRp[i] = f.R_p; pTs[i] = f.T_s; pTp[i] = f.T_p;
+        prs[i] = f.r_s;
+        prp[i] = f.r_p;
+        pts[i] = f.t_s;
+        ptp[i] = f.t_p;
+        pRs[i] = f.R_s;
+        pRp[i] = f.R_p;
+        pTs[i] = f.T_s;
+        pTp[i] = f.T_p;
     }
 
     py::tuple to_tuple() const { return py::make_tuple(r_s, r_p, t_s, t_p, R_s, R_p, T_s, T_p); }
@@ -51,8 +56,7 @@ template <typename A> std::size_t rows_of(const A &a, const char *name) {
 
 template <typename T, typename A> Column<T> column(const A &a, std::size_t n, const char *name) {
     std::size_t len = rows_of(a, name);
-    if (len != n && len != 1)
-        throw std::invalid_argument(std::string(name) + " must have length N or 1");
+    if (len != n && len != 1) throw std::invalid_argument(std::string(name) + " must have length N or 1");
     return {a.data(), len == 1 ? 0u : 1u};
 }
 
@@ -68,18 +72,21 @@ struct FilmColumns {
     Column<double> d, cos0, wl;
 };
 
-FilmColumns film_columns(const Carr &n0, const Carr &n1, const Carr &n2, const Darr &d_nm,
-                         const Darr &cos0, const Darr &wavelength_nm) {
-    std::size_t n = std::max({rows_of(n0, "n0"), rows_of(n1, "n1"), rows_of(n2, "n2"),
-                              rows_of(d_nm, "d_nm"), rows_of(cos0, "cos0"),
-                              rows_of(wavelength_nm, "wavelength_nm")});
-    return {n, column<cplx>(n0, n, "n0"), column<cplx>(n1, n, "n1"), column<cplx>(n2, n, "n2"),
-            column<double>(d_nm, n, "d_nm"), column<double>(cos0, n, "cos0"),
+FilmColumns film_columns(const Carr &n0, const Carr &n1, const Carr &n2, const Darr &d_nm, const Darr &cos0,
+                         const Darr &wavelength_nm) {
+    std::size_t n = std::max({rows_of(n0, "n0"), rows_of(n1, "n1"), rows_of(n2, "n2"), rows_of(d_nm, "d_nm"),
+                              rows_of(cos0, "cos0"), rows_of(wavelength_nm, "wavelength_nm")});
+    return {n,
+            column<cplx>(n0, n, "n0"),
+            column<cplx>(n1, n, "n1"),
+            column<cplx>(n2, n, "n2"),
+            column<double>(d_nm, n, "d_nm"),
+            column<double>(cos0, n, "cos0"),
             column<double>(wavelength_nm, n, "wavelength_nm")};
 }
 
-py::tuple thin_film_many(const Carr &n0, const Carr &n1, const Carr &n2, const Darr &d_nm,
-                         const Darr &cos0, const Darr &wavelength_nm) {
+py::tuple thin_film_many(const Carr &n0, const Carr &n1, const Carr &n2, const Darr &d_nm, const Darr &cos0,
+                         const Darr &wavelength_nm) {
     const FilmColumns c = film_columns(n0, n1, n2, d_nm, cos0, wavelength_nm);
     Outputs out(c.rows);
     {
@@ -92,9 +99,8 @@ py::tuple thin_film_many(const Carr &n0, const Carr &n1, const Carr &n2, const D
     return out.to_tuple();
 }
 
-py::tuple thin_film_reflectance_many(const Carr &n0, const Carr &n1, const Carr &n2,
-                                     const Darr &d_nm, const Darr &cos0,
-                                     const Darr &wavelength_nm) {
+py::tuple thin_film_reflectance_many(const Carr &n0, const Carr &n1, const Carr &n2, const Darr &d_nm,
+                                     const Darr &cos0, const Darr &wavelength_nm) {
     const FilmColumns c = film_columns(n0, n1, n2, d_nm, cos0, wavelength_nm);
     py::array_t<double> R_s(c.rows), R_p(c.rows);
     double *ps = R_s.mutable_data(), *pp = R_p.mutable_data();
@@ -138,12 +144,12 @@ py::tuple film_stack_many(const Carr &indices, const Darr &d_nm, const Darr &cos
 } // namespace
 
 void bind_thin_film(py::module_ &m) {
-    m.def("thin_film", &thin_film_many, py::arg("n0"), py::arg("n1"), py::arg("n2"),
-          py::arg("d_nm"), py::arg("cos0"), py::arg("wavelength_nm"),
+    m.def("thin_film", &thin_film_many, py::arg("n0"), py::arg("n1"), py::arg("n2"), py::arg("d_nm"),
+          py::arg("cos0"), py::arg("wavelength_nm"),
           "One film (Airy) per row; every argument 1-D of length N, or 1 for all rows.\n"
           "Returns (r_s, r_p, t_s, t_p, R_s, R_p, T_s, T_p).");
-    m.def("thin_film_reflectance", &thin_film_reflectance_many, py::arg("n0"), py::arg("n1"),
-          py::arg("n2"), py::arg("d_nm"), py::arg("cos0"), py::arg("wavelength_nm"),
+    m.def("thin_film_reflectance", &thin_film_reflectance_many, py::arg("n0"), py::arg("n1"), py::arg("n2"),
+          py::arg("d_nm"), py::arg("cos0"), py::arg("wavelength_nm"),
           "As thin_film, returning only (R_s, R_p).");
     m.def("film_stack", &film_stack_many, py::arg("indices"), py::arg("d_nm"), py::arg("cos0"),
           py::arg("wavelength_nm"),

@@ -45,8 +45,8 @@ std::vector<double> signed_cos(const std::vector<double> &mu, double sign) {
 }
 
 // An operator's kernel at (channel c, order m) from fourier_kernel's layout.
-std::vector<double> kernel_at(const std::vector<double> &coef, std::size_t rows, std::size_t cols,
-                              int C, int M, int c, int m) {
+std::vector<double> kernel_at(const std::vector<double> &coef, std::size_t rows, std::size_t cols, int C,
+                              int M, int c, int m) {
     std::vector<double> K(rows * cols);
     for (std::size_t p = 0; p < rows * cols; ++p) K[p] = coef[(p * C + c) * M + m];
     return K;
@@ -118,8 +118,8 @@ std::shared_ptr<AddingDoubling> AddingDoubling::with_top(std::shared_ptr<const B
 }
 
 AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
-                               std::vector<std::shared_ptr<const BSDF>> boundaries,
-                               std::vector<double> media, std::vector<ADSlab> slabs, ADSettings settings)
+                               std::vector<std::shared_ptr<const BSDF>> boundaries, std::vector<double> media,
+                               std::vector<ADSlab> slabs, ADSettings settings)
     : wavelengths_(std::move(wavelengths)), boundaries_(std::move(boundaries)), media_(std::move(media)),
       slabs_(std::move(slabs)), settings_(settings) {
     const std::size_t K = slabs_.size();
@@ -154,7 +154,8 @@ AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
     double alpha_min = 1.0;
     int M = 1;
     for (auto &s : slabs_)
-        if (s.sigma_s > 0 && s.thickness > 0) M = std::max(M, hg_orders_needed(s.g, settings_.order_tolerance));
+        if (s.sigma_s > 0 && s.thickness > 0)
+            M = std::max(M, hg_orders_needed(s.g, settings_.order_tolerance));
     for (std::size_t j = 0; j < boundaries_.size(); ++j) {
         double a = rough_alpha(*boundaries_[j]);
         if (a > 0) alpha_min = std::min(alpha_min, a);
@@ -250,7 +251,8 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
         const std::vector<double> fine_down = signed_cos(mu_f, -1.0);
         topRb = project(ad::fourier_kernel(top, fine_down, down, M, H), true, N, B, ratio, mw, nf, n, cm);
         topTd = project(ad::fourier_kernel(top, fine_down, in_cos, M, H), true, Qi, B, ratio, mw, nf, n, cm);
-        topTu = project(ad::fourier_kernel(top, out_cos, fine_down, M, H), false, Qo, B, ratio, mw, nf, n, cm);
+        topTu =
+            project(ad::fourier_kernel(top, out_cos, fine_down, M, H), false, Qo, B, ratio, mw, nf, n, cm);
     }
     // Phase-function coefficients per slab (orders beyond its own are unscattered).
     std::vector<int> slab_orders(K, 0);
@@ -258,7 +260,8 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
     for (std::size_t j = 0; j < K && !cached; ++j) {
         const ADSlab &s = slabs_[j];
         if (!(s.sigma_s > 0 && s.thickness > 0)) continue;
-        slab_orders[j] = settings_.orders > 0 ? M : std::min(M, hg_orders_needed(s.g, settings_.order_tolerance));
+        slab_orders[j] =
+            settings_.orders > 0 ? M : std::min(M, hg_orders_needed(s.g, settings_.order_tolerance));
         pr[j] = ad::hg_coefficients(s.g, grid, slab_orders[j], false);
         pt[j] = ad::hg_coefficients(s.g, grid, slab_orders[j], true);
     }
@@ -287,7 +290,8 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
             for (std::size_t i = 0; i < N; ++i)
                 for (std::size_t k = 0; k < N; ++k) {
                     double mo = grid[i], mi = grid[k];
-                    R.K[i * N + k] = omega * Pr[i * N + k] * -std::expm1(-delta * (1.0 / mo + 1.0 / mi)) / (mo + mi);
+                    R.K[i * N + k] =
+                        omega * Pr[i * N + k] * -std::expm1(-delta * (1.0 / mo + 1.0 / mi)) / (mo + mi);
                     double x = 1.0 / mi - 1.0 / mo;
                     double h = std::abs(delta * x) < 1e-8 ? delta * (1.0 - 0.5 * delta * x)
                                                           : -std::expm1(-delta * x) / x;
@@ -414,14 +418,16 @@ void AddingDoubling::eval(const double *wi_, const double *wo_, std::size_t coun
         Query q;
         for (std::size_t a = begin; a < end; ++a) {
             std::size_t p = active[a];
-            Vec3 wi{wi_[3 * p], wi_[3 * p + 1], wi_[3 * p + 2]}, wo{wo_[3 * p], wo_[3 * p + 1], wo_[3 * p + 2]};
+            Vec3 wi{wi_[3 * p], wi_[3 * p + 1], wi_[3 * p + 2]},
+                wo{wo_[3 * p], wo_[3 * p + 1], wo_[3 * p + 2]};
             double dphi = std::atan2(wi.y, wi.x) - std::atan2(wo.y, wo.x) - kPi;
             for (int m = 0; m < M; ++m) cm[m] = std::cos(m * dphi);
             if (!smooth_top_ && !scattered_only) top.eval(wi, wo, kAll, q, direct.data());
             std::size_t cell = io[a] * Qi + ii[a];
             for (int c = 0; c < C; ++c) {
                 double s = 0.0;
-                for (int m = 0; m < M; ++m) s += V[(static_cast<std::size_t>(c) * M + m) * Qo * Qi + cell] * cm[m];
+                for (int m = 0; m < M; ++m)
+                    s += V[(static_cast<std::size_t>(c) * M + m) * Qo * Qi + cell] * cm[m];
                 double v = s * scale[a * C + c] + (smooth_top_ || scattered_only ? 0.0 : direct[c]);
                 out[p * C + c] = std::isfinite(v) ? v : 0.0;
             }

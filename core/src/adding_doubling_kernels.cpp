@@ -63,8 +63,7 @@ static double panel_u(double a, double b, double mu) {
     return std::sqrt(std::max(0.0, (mu - a) * (mu + a) / ((b - a) * (b + a))));
 }
 
-void panel_nodes(int per_panel, std::vector<double> breaks, std::vector<double> &mu,
-                 std::vector<double> &w) {
+void panel_nodes(int per_panel, std::vector<double> breaks, std::vector<double> &mu, std::vector<double> &w) {
     std::vector<double> cuts = panel_cuts(std::move(breaks));
     std::vector<double> x, wx;
     gauss_legendre(per_panel, x, wx);
@@ -123,7 +122,8 @@ void product_nodes(int per_panel, std::vector<double> breaks, double h, std::vec
                     den += bary[i] / (v - u[i]);
                 }
                 for (int i = 0; i < per_panel; ++i)
-                    row[p * per_panel + i] = exact >= 0 ? (i == exact ? 1.0 : 0.0) : bary[i] / (v - u[i]) / den;
+                    row[p * per_panel + i] =
+                        exact >= 0 ? (i == exact ? 1.0 : 0.0) : bary[i] / (v - u[i]) / den;
                 B.insert(B.end(), row.begin(), row.end());
             }
     }
@@ -193,7 +193,8 @@ std::vector<double> hg_coefficients(double g, const std::vector<double> &mu, int
                 double ct = std::clamp(a + b * std::cos(kPi * k / H), -1.0, 1.0);
                 double d = 1.0 + g * g - 2.0 * g * ct;
                 double v = norm / (d * std::sqrt(d)) * table.wk[k];
-                for (int m = 0; m < M; ++m) out[(m * N + i) * N + j] += v * table.c[k * M + m] * (m ? 2.0 : 1.0);
+                for (int m = 0; m < M; ++m)
+                    out[(m * N + i) * N + j] += v * table.c[k * M + m] * (m ? 2.0 : 1.0);
             }
         }
     return out;

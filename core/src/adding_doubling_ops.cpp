@@ -31,7 +31,10 @@ void solve_in_place(std::vector<double> &A, int n, std::vector<double> &B, int c
         int p = k;
         double best = std::abs(A[k * n + k]);
         for (int i = k + 1; i < n; ++i)
-            if (std::abs(A[i * n + k]) > best) { best = std::abs(A[i * n + k]); p = i; }
+            if (std::abs(A[i * n + k]) > best) {
+                best = std::abs(A[i * n + k]);
+                p = i;
+            }
         if (!(best > 0) || !std::isfinite(best))
             throw std::runtime_error("adding-doubling: singular system (an energy-conserving loop "
                                      "without loss?)");
@@ -67,8 +70,8 @@ Op mul(const Op &a, const Op &b, const Grid &g) {
         r.D.resize(N);
         for (int i = 0; i < N; ++i) r.D[i] = a.D[i] * b.D[i];
     }
-    bool any = (!a.D.empty() && !b.K.empty()) || (!a.K.empty() && !b.D.empty()) ||
-               (!a.K.empty() && !b.K.empty());
+    bool any =
+        (!a.D.empty() && !b.K.empty()) || (!a.K.empty() && !b.D.empty()) || (!a.K.empty() && !b.K.empty());
     if (!any) return r;
     r.K.assign(static_cast<std::size_t>(N) * N, 0.0);
     if (!a.D.empty() && !b.K.empty())

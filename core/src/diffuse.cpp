@@ -11,12 +11,14 @@ Diffuse::Diffuse(std::vector<double> wavelengths, std::vector<double> reflectanc
 
 // Maps a configuration to the upper hemisphere when two-sided; false if not reflective.
 static bool upper_pair(Vec3 &wi, Vec3 &wo, bool two_sided) {
-    if (two_sided && wi.z < 0) { wi.z = -wi.z; wo.z = -wo.z; }
+    if (two_sided && wi.z < 0) {
+        wi.z = -wi.z;
+        wo.z = -wo.z;
+    }
     return wi.z > 0 && wo.z > 0;
 }
 
-void Diffuse::eval(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, const Query &,
-                   double *out) const {
+void Diffuse::eval(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, const Query &, double *out) const {
     Vec3 wi = wi_, wo = wo_;
     if (!(lobes & kDiffuseReflection) || !usable_direction(wi) || !usable_direction(wo) ||
         !upper_pair(wi, wo, two_sided_)) {
@@ -34,8 +36,8 @@ double Diffuse::pdf(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, const Quer
     return cosine_hemisphere_pdf(wo);
 }
 
-BSDFSample Diffuse::sample(const Vec3 &wi, double, double u2x, double u2y, uint32_t lobes,
-                           const Query &, double *weight) const {
+BSDFSample Diffuse::sample(const Vec3 &wi, double, double u2x, double u2y, uint32_t lobes, const Query &,
+                           double *weight) const {
     BSDFSample s;
     zero(weight);
     if (!(lobes & kDiffuseReflection) || !usable_direction(wi)) return s;

@@ -17,9 +17,8 @@ constexpr std::size_t kFilmEvalsPerThread = 4000; // ~0.5 ms of work
 bool finite_params(const double *p) {
     for (int i = 0; i < kParamCount; ++i)
         if (!std::isfinite(p[i])) return false;
-    return p[kThickness] >= 0 && p[kSpread] >= 0 && p[kExterior] > 0 &&
-           p[kSubstrate] > p[kExterior] && p[kSigma550] >= 0 && p[kSlabUm] >= 0 &&
-           p[kAlbedo] >= 0 && p[kAlbedo] <= 1;
+    return p[kThickness] >= 0 && p[kSpread] >= 0 && p[kExterior] > 0 && p[kSubstrate] > p[kExterior] &&
+           p[kSigma550] >= 0 && p[kSlabUm] >= 0 && p[kAlbedo] >= 0 && p[kAlbedo] <= 1;
 }
 
 // Unpolarised film powers for light from the exterior at cosine c.
@@ -35,11 +34,10 @@ Powers film_powers(double n_e, double n_f, double n_s, double d, double c, doubl
 } // namespace
 
 ForwardModel::ForwardModel(std::vector<double> wavelengths_nm, std::vector<Observation> rows,
-                           std::vector<double> gh_x, std::vector<double> gh_w,
-                           std::vector<double> gl_x, std::vector<double> gl_w)
-    : wavelengths_(std::move(wavelengths_nm)), rows_(std::move(rows)),
-      rows_at_(wavelengths_.size()), hemisphere_at_(wavelengths_.size(), false),
-      gh_x_(std::move(gh_x)), gh_w_(std::move(gh_w)) {
+                           std::vector<double> gh_x, std::vector<double> gh_w, std::vector<double> gl_x,
+                           std::vector<double> gl_w)
+    : wavelengths_(std::move(wavelengths_nm)), rows_(std::move(rows)), rows_at_(wavelengths_.size()),
+      hemisphere_at_(wavelengths_.size(), false), gh_x_(std::move(gh_x)), gh_w_(std::move(gh_w)) {
     if (gh_x_.empty() || gh_x_.size() != gh_w_.size())
         throw std::invalid_argument("Gauss-Hermite nodes and weights must be non-empty, same length");
     if (gl_x.empty() || gl_x.size() != gl_w.size())
@@ -58,7 +56,8 @@ ForwardModel::ForwardModel(std::vector<double> wavelengths_nm, std::vector<Obser
             throw std::invalid_argument("observation wavelength index out of range");
         if (o.geometry < kSpecular || o.geometry > kTotal)
             throw std::invalid_argument("observation geometry must be 0, 1 or 2");
-        if (!(o.cos_in > 0 && o.cos_in <= 1) || (o.geometry == kDiffuse && !(o.cos_out > 0 && o.cos_out <= 1)))
+        if (!(o.cos_in > 0 && o.cos_in <= 1) ||
+            (o.geometry == kDiffuse && !(o.cos_out > 0 && o.cos_out <= 1)))
             throw std::invalid_argument("observation cosines must lie in (0, 1]");
         rows_at_[o.wavelength].push_back(r);
         if (o.geometry != kSpecular) hemisphere_at_[o.wavelength] = true;
@@ -70,7 +69,8 @@ void ForwardModel::evaluate(const double *params, std::size_t count, double *out
     // Film evaluations per (set, wavelength) at most; threads only pay off for a few
     // hundred microseconds of work per thread (starting them costs ~tens of microseconds).
     const std::size_t per_item = gh_x_.size() * (c_.size() + 2 * nr / std::max<std::size_t>(nw, 1) + 1);
-    const std::size_t grain = std::max<std::size_t>(1, kFilmEvalsPerThread / std::max<std::size_t>(per_item, 1));
+    const std::size_t grain =
+        std::max<std::size_t>(1, kFilmEvalsPerThread / std::max<std::size_t>(per_item, 1));
     parallel_for(count * nw, grain, [&](std::size_t s, std::size_t e) {
         for (std::size_t i = s; i < e; ++i) {
             std::size_t set = i / nw;
@@ -108,8 +108,8 @@ void ForwardModel::evaluate_wavelength(const double *p, std::size_t j, double *o
     const bool spread = p[kSpread] > 0;
     const std::size_t nodes = spread ? gh_x_.size() : 1;
     for (std::size_t k = 0; k < nodes; ++k) {
-        const double d = spread ? std::max(0.0, p[kThickness] + std::sqrt(2.0) * p[kSpread] * gh_x_[k])
-                                : p[kThickness];
+        const double d =
+            spread ? std::max(0.0, p[kThickness] + std::sqrt(2.0) * p[kSpread] * gh_x_[k]) : p[kThickness];
         const double w = spread ? gh_w_[k] : 1.0;
         double gamma = gamma_tir, leaving = 0.0;
         if (hemisphere_at_[j]) {

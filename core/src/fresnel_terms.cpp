@@ -11,7 +11,10 @@ DielectricTerm::DielectricTerm(int channels, double int_ior, double ext_ior)
 
 void DielectricTerm::eval(double cos_i, const Query &, double *R, double *T) const {
     double r = fresnel_dielectric(cos_i, eta_).R;
-    for (int c = 0; c < channels_; ++c) { R[c] = r; T[c] = 1.0 - r; }
+    for (int c = 0; c < channels_; ++c) {
+        R[c] = r;
+        T[c] = 1.0 - r;
+    }
 }
 
 ConductorTerm::ConductorTerm(std::vector<std::complex<double>> n_int, double ext_ior)
@@ -26,9 +29,8 @@ void ConductorTerm::eval(double cos_i, const Query &, double *R, double *T) cons
 }
 
 FilmTerm::FilmTerm(std::vector<double> wavelengths, double ext_ior,
-                   std::vector<std::vector<std::complex<double>>> layer_n,
-                   std::vector<double> layer_d_nm, std::vector<std::complex<double>> n_substrate,
-                   bool substrate_transmits)
+                   std::vector<std::vector<std::complex<double>>> layer_n, std::vector<double> layer_d_nm,
+                   std::vector<std::complex<double>> n_substrate, bool substrate_transmits)
     : FresnelTerm(static_cast<int>(wavelengths.size()),
                   substrate_transmits && !n_substrate.empty() ? n_substrate[0].real() / ext_ior : 0.0),
       wavelengths_(std::move(wavelengths)), ext_ior_(ext_ior), layer_n_(std::move(layer_n)),
@@ -53,7 +55,11 @@ void FilmTerm::eval(double cos_i, const Query &q, double *R, double *T) const {
     cplx n[kMaxLayers + 2];
     double d[kMaxLayers];
     for (int c = 0; c < channels_; ++c) {
-        if (!from_above && !transmits_) { R[c] = 0.0; T[c] = 0.0; continue; }
+        if (!from_above && !transmits_) {
+            R[c] = 0.0;
+            T[c] = 0.0;
+            continue;
+        }
         // Media in the order the light meets them.
         n[0] = from_above ? cplx(ext_ior_, 0.0) : n_sub_[c];
         n[L + 1] = from_above ? n_sub_[c] : cplx(ext_ior_, 0.0);

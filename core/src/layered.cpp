@@ -63,9 +63,7 @@ struct LayeredBSDF::Walk {
     double *contrib;                      // this walk's contribution, per channel
 };
 
-std::size_t LayeredBSDF::walk_doubles() const {
-    return (6 * slabs_.size() + 8) * std::size_t(channels());
-}
+std::size_t LayeredBSDF::walk_doubles() const { return (6 * slabs_.size() + 8) * std::size_t(channels()); }
 
 LayeredBSDF::Walk LayeredBSDF::bind_walk(EstimateWorkspace &ws, std::size_t offset) const {
     const std::size_t C = channels(), K = slabs_.size();
@@ -86,9 +84,8 @@ LayeredBSDF::Walk LayeredBSDF::bind_walk(EstimateWorkspace &ws, std::size_t offs
     return wk;
 }
 
-LayeredBSDF::LayeredBSDF(std::vector<double> wavelengths,
-                         std::vector<std::shared_ptr<const BSDF>> boundaries, std::vector<Slab> slabs,
-                         LayeredOptions options)
+LayeredBSDF::LayeredBSDF(std::vector<double> wavelengths, std::vector<std::shared_ptr<const BSDF>> boundaries,
+                         std::vector<Slab> slabs, LayeredOptions options)
     : BSDF(std::move(wavelengths)), boundaries_(std::move(boundaries)), slabs_(std::move(slabs)),
       options_(options) {
     if (slabs_.empty() || slabs_.size() > static_cast<std::size_t>(kMaxSlabs))
@@ -121,8 +118,7 @@ uint32_t LayeredBSDF::lobes() const {
     return l;
 }
 
-double LayeredBSDF::fly(const Slab &S, double room, double cz, PCG32 &rng, double *beta,
-                        double *tr) const {
+double LayeredBSDF::fly(const Slab &S, double room, double cz, PCG32 &rng, double *beta, double *tr) const {
     const int C = channels();
     const double length = room / cz;
     if (!(S.sigma_s > 0)) { // pure absorption: attenuate deterministically
@@ -241,7 +237,8 @@ void LayeredBSDF::solve_delta_region(int exit, const Query &q, Walk &ch) const {
         if (k + 1 == m) continue;
         const int j2 = order[k + 1];
         // Back across N_j from slab j2, toward the exit.
-        BSDFSample t = boundaries_[nb(j)]->sample(-mirror(ch.u[j2]), 0.5, 0.5, 0.5, kDeltaTransmission, q, t_up);
+        BSDFSample t =
+            boundaries_[nb(j)]->sample(-mirror(ch.u[j2]), 0.5, 0.5, 0.5, kDeltaTransmission, q, t_up);
         if (!(t.lobe & kDeltaTransmission)) continue;
         const double cu2 = std::abs(ch.u[j2].z);
         for (int c = 0; c < C; ++c) {
@@ -283,8 +280,7 @@ void LayeredBSDF::solve_delta_region(int exit, const Query &q, Walk &ch) const {
     }
 }
 
-bool LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng,
-                           Walk &wk) const {
+bool LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng, Walk &wk) const {
     const int K = static_cast<int>(slabs_.size()), C = channels();
     double *beta = wk.beta, *tmp = wk.tmp, *tr = wk.tr, *wgt = wk.wgt, *contrib = wk.contrib;
     std::fill(beta, beta + C, 1.0); // the entry vertex connects before its own sample
@@ -333,8 +329,7 @@ bool LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
         if (nee && mis) wB = power_heuristic(p_sampled, X.pdf(L, -w, kTransmission, q));
         transmittance(j, depth / std::abs(w.z), tr);
         double inv_cos = 1.0 / std::abs(L.z);
-        for (int c = 0; c < C; ++c)
-            contrib[c] += beta[c] * tr[c] * tmp[c] * inv_cos * wk.B[j * C + c] * wB;
+        for (int c = 0; c < C; ++c) contrib[c] += beta[c] * tr[c] * tmp[c] * inv_cos * wk.B[j * C + c] * wB;
     };
     // `covered`: while the walk heads toward the exit, whether the straight continuation
     // from its last non-delta vertex (through delta exit-side boundaries) is counted by
@@ -444,10 +439,9 @@ bool LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
     return true; // cut by the depth cap
 }
 
-std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_t lobes,
-                                         const Query &q, const EstimateRequest &req,
-                                         bool include_direct, EstimateWorkspace &ws, double *out,
-                                         double *err) const {
+std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                                         const EstimateRequest &req, bool include_direct,
+                                         EstimateWorkspace &ws, double *out, double *err) const {
     const int C = channels(), K = static_cast<int>(slabs_.size());
     const int R = req.out_rows(C);
     const int samples = req.samples;
@@ -504,22 +498,20 @@ std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_
 }
 
 std::uint64_t LayeredBSDF::estimate(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                                    const EstimateRequest &request, EstimateWorkspace &ws,
-                                    double *mean, double *err) const {
+                                    const EstimateRequest &request, EstimateWorkspace &ws, double *mean,
+                                    double *err) const {
     return estimate_impl(wi, wo, lobes, q, request, true, ws, mean, err);
 }
 
-std::uint64_t LayeredBSDF::estimate_scattered(const Vec3 &wi, const Vec3 &wo, uint32_t lobes,
-                                              const Query &q, const EstimateRequest &request,
-                                              EstimateWorkspace &ws, double *mean,
-                                              double *err) const {
+std::uint64_t LayeredBSDF::estimate_scattered(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                                              const EstimateRequest &request, EstimateWorkspace &ws,
+                                              double *mean, double *err) const {
     return estimate_impl(wi, wo, lobes, q, request, false, ws, mean, err);
 }
 
 // eval() at the model's own effort and seed, on leased workspaces: one for the walks, one
 // for the standard errors nobody asked for.
-void LayeredBSDF::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                       double *out) const {
+void LayeredBSDF::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const {
     ThreadWorkspace walks, errors;
     EstimateRequest req{options_.samples, options_.seed};
     estimate(wi, wo, lobes, q, req, walks.get(), out, errors.get().doubles(channels()));
@@ -530,8 +522,7 @@ ScatteredPart::ScatteredPart(std::shared_ptr<const LayeredBSDF> model)
     if (!model_) throw std::invalid_argument("ScatteredPart needs a layered model");
 }
 
-void ScatteredPart::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                         double *out) const {
+void ScatteredPart::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const {
     ThreadWorkspace walks, errors;
     EstimateRequest req{model_->options().samples, model_->options().seed};
     estimate(wi, wo, lobes, q, req, walks.get(), out, errors.get().doubles(channels()));
@@ -549,7 +540,8 @@ std::shared_ptr<const BSDF> LayeredBSDF::with_film_lookup(double thickness_nm, F
     return std::make_shared<LayeredBSDF>(wavelengths_, std::move(boundaries), slabs_, options_);
 }
 
-std::shared_ptr<const BSDF> ScatteredPart::with_film_lookup(double thickness_nm, FilmLookupStats &stats) const {
+std::shared_ptr<const BSDF> ScatteredPart::with_film_lookup(double thickness_nm,
+                                                            FilmLookupStats &stats) const {
     auto fast = std::dynamic_pointer_cast<const LayeredBSDF>(model_->with_film_lookup(thickness_nm, stats));
     return fast ? std::make_shared<ScatteredPart>(fast) : nullptr;
 }
@@ -616,8 +608,8 @@ double LayeredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Qu
     const BSDF &X = *boundaries_[x];
     double *t = buf + C;
     if (!(X.sample(wo, 0.5, 0.5, 0.5, kDeltaTransmission, q, t).lobe & kDeltaTransmission)) return p;
-    const BSDFSample normal = X.sample(Vec3{0.0, 0.0, wo.z > 0 ? 1.0 : -1.0}, 0.5, 0.5, 0.5,
-                                       kDeltaTransmission, q, t);
+    const BSDFSample normal =
+        X.sample(Vec3{0.0, 0.0, wo.z > 0 ? 1.0 : -1.0}, 0.5, 0.5, 0.5, kDeltaTransmission, q, t);
     // sin^2 of the critical angle on wo's side (1: no critical angle)
     const double cone = normal.lobe ? std::min(1.0, normal.eta * normal.eta) : 1.0;
     const double share = (left_through_x + 1.0) / (n + 2.0);
@@ -729,10 +721,8 @@ BSDFSample LayeredBSDF::walk(const Vec3 &wi, BSDFSample s, const Query &q, PCG32
                 BSDFSample out;
                 out.wo = dir;
                 const bool reflected = wi.z * dir.z > 0;
-                if (all_delta)
-                    out.lobe = reflected ? kDeltaReflection : kDeltaTransmission;
-                else
-                    out.lobe = reflected ? kGlossyReflection : kGlossyTransmission;
+                if (all_delta) out.lobe = reflected ? kDeltaReflection : kDeltaTransmission;
+                else out.lobe = reflected ? kGlossyReflection : kGlossyTransmission;
                 out.pdf = all_delta ? delta_prob : 0.0; // non-delta: the caller's pdf()
                 out.eta = reflected ? 1.0 : eta;
                 return out;

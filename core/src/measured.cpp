@@ -129,7 +129,8 @@ double Warp2D::eval(double x, double y, const double *param) const {
 double Warp2D::segment(double u, double inv_width, double v0, double v1) const {
     bool non_const = std::abs(v0 - v1) > 1e-4 * (v0 + v1);
     double s = u * 2.0 * inv_width;
-    double t = non_const ? (v0 - std::sqrt(std::max(v0 * v0 + s * (v1 - v0), 0.0))) / (v0 - v1) : s / (v0 + v1);
+    double t =
+        non_const ? (v0 - std::sqrt(std::max(v0 * v0 + s * (v1 - v0), 0.0))) / (v0 - v1) : s / (v0 + v1);
     return std::isfinite(t) ? t : 0.0;
 }
 
@@ -151,7 +152,8 @@ double Warp2D::sample(double ux, double uy, const double *param, double &x, doub
     int lo = 0, hi = w_ - 2;
     while (lo < hi) {
         int mid = (lo + hi) / 2;
-        if (cdf(mid) < ux) lo = mid + 1; else hi = mid;
+        if (cdf(mid) < ux) lo = mid + 1;
+        else hi = mid;
     }
     int col = lo;
     if (col > 0) ux -= cdf(col - 1);
@@ -190,8 +192,8 @@ double Warp2D::invert(double x, double y, const double *param, double &ux, doubl
 }
 
 MeasuredBSDF::MeasuredBSDF(std::vector<double> channel_ids, const MeasuredArrays &a)
-    : BSDF(std::move(channel_ids)), jacobian_(a.jacobian),
-      ndf_(a.ndf, a.ndf_w, a.ndf_h, {}, false), sigma_(a.sigma, a.sigma_w, a.sigma_h, {}, false),
+    : BSDF(std::move(channel_ids)), jacobian_(a.jacobian), ndf_(a.ndf, a.ndf_w, a.ndf_h, {}, false),
+      sigma_(a.sigma, a.sigma_w, a.sigma_h, {}, false),
       vndf_(a.vndf, a.vndf_w, a.vndf_h, {a.phi_i, a.theta_i}, true),
       luminance_(a.luminance, a.n, a.n, {a.phi_i, a.theta_i}, true),
       values_(a.values, a.n, a.n, {a.phi_i, a.theta_i, a.channel_nodes}, false) {}
@@ -260,8 +262,8 @@ double MeasuredBSDF::pdf(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, const
     return std::isfinite(p) && p > 0 ? p : 0.0;
 }
 
-BSDFSample MeasuredBSDF::sample(const Vec3 &wi_, double, double u2x, double u2y, uint32_t lobes, const Query &,
-                                double *weight) const {
+BSDFSample MeasuredBSDF::sample(const Vec3 &wi_, double, double u2x, double u2y, uint32_t lobes,
+                                const Query &, double *weight) const {
     BSDFSample s;
     zero(weight);
     Vec3 wi;

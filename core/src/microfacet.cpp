@@ -11,8 +11,7 @@ const double kSqrtPi = std::sqrt(kPi);
 
 // Root of an increasing function f on [lo, hi] (f(lo) <= 0 <= f(hi)) by Newton steps
 // that fall back to bisection when they leave the bracket: double precision in ~10 steps.
-template <class F>
-double increasing_root(F f, double lo, double hi, double x) {
+template <class F> double increasing_root(F f, double lo, double hi, double x) {
     for (int i = 0; i < 200; ++i) {
         double value, slope;
         f(x, value, slope);
@@ -106,8 +105,7 @@ double Microfacet::pdf_visible(const Vec3 &v, const Vec3 &m) const {
 }
 
 Vec3 Microfacet::sample_visible(const Vec3 &v, double u1, double u2) const {
-    return type_ == MicrofacetType::GGX ? sample_visible_ggx(v, u1, u2)
-                                        : sample_visible_beckmann(v, u1, u2);
+    return type_ == MicrofacetType::GGX ? sample_visible_ggx(v, u1, u2) : sample_visible_beckmann(v, u1, u2);
 }
 
 Vec3 Microfacet::sample_visible_ggx(const Vec3 &v, double u1, double u2) const {

@@ -20,7 +20,8 @@ unsigned worker_count() {
 void parallel_for(std::size_t n, std::size_t grain,
                   const std::function<void(std::size_t, std::size_t)> &body) {
     if (n == 0) return;
-    std::size_t workers = std::min<std::size_t>(worker_count(), (n + grain - 1) / std::max<std::size_t>(grain, 1));
+    std::size_t workers =
+        std::min<std::size_t>(worker_count(), (n + grain - 1) / std::max<std::size_t>(grain, 1));
     if (workers <= 1) {
         body(0, n);
         return;

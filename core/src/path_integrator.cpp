@@ -45,7 +45,8 @@ template <> struct PathColour<3> {
     static void light(const RenderScene &, const double rgb[3], double out[3]) {
         for (int c = 0; c < 3; ++c) out[c] = rgb[c];
     }
-    static void add_emitted(const RenderScene &, double L[3], const double beta[3], double w, const double Le[3]) {
+    static void add_emitted(const RenderScene &, double L[3], const double beta[3], double w,
+                            const double Le[3]) {
         for (int c = 0; c < 3; ++c) L[c] += beta[c] * w * Le[c];
     }
     static void add_connected(const RenderScene &, double L[3], const double beta[3], const double f[3],
@@ -66,7 +67,8 @@ template <> struct PathColour<kSpectralBins> {
             L[r] += s;
         }
     }
-    static void add_emitted(const RenderScene &scene, double L[3], const double beta[N], double w, const double Le[N]) {
+    static void add_emitted(const RenderScene &scene, double L[3], const double beta[N], double w,
+                            const double Le[N]) {
         double v[N];
         for (int l = 0; l < N; ++l) v[l] = beta[l] * w * Le[l];
         sense(scene, L, v);
@@ -82,7 +84,12 @@ template <> struct PathColour<kSpectralBins> {
 void RenderJob::RayLog::add(const Vec3 &o, const Vec3 &d, double tmax, bool shadow) {
     ++rays;
     if (!record || record->size() >= 8 * max_record) return;
-    const float r[8] = {float(o.x), float(o.y), float(o.z), float(d.x), float(d.y), float(d.z),
+    const float r[8] = {float(o.x),
+                        float(o.y),
+                        float(o.z),
+                        float(d.x),
+                        float(d.y),
+                        float(d.z),
                         std::isinf(tmax) ? std::numeric_limits<float>::infinity() : float(tmax),
                         shadow ? 1.0f : 0.0f};
     record->insert(record->end(), r, r + 8);
@@ -102,8 +109,8 @@ void RenderJob::trace_path(double px, double py, uint64_t sample_seed, double L[
 // three uniforms of `rng`, trace the shadow ray, and add the light it connects to L, weighted
 // by the path throughput `beta`, the BSDF and (with MIS) the power heuristic.
 template <int N>
-void RenderJob::sample_direct(const SurfaceHit &hit, const ShadingPoint &sp, const Vec3 &wi, const double *beta,
-                              double L[3], PCG32 &rng, double *buf, RayLog &log) const {
+void RenderJob::sample_direct(const SurfaceHit &hit, const ShadingPoint &sp, const Vec3 &wi,
+                              const double *beta, double L[3], PCG32 &rng, double *buf, RayLog &log) const {
     using Colour = PathColour<N>;
     const RenderScene &scene = *scene_;
     const RenderBSDF *rb = sp.bsdf;
@@ -134,8 +141,10 @@ void RenderJob::sample_direct(const SurfaceHit &hit, const ShadingPoint &sp, con
             }
             if (aimed) log.add(origin, dir, tmax, true);
             if (aimed && !scene.occluded(origin, dir, tmax)) {
-                double w = (s_.strategy == LightStrategy::kMIS ? power_heuristic(es.pdf, bsdf.pdf(wi, wo, kAll, q))
-                                                                : 1.0) / es.pdf;
+                double w =
+                    (s_.strategy == LightStrategy::kMIS ? power_heuristic(es.pdf, bsdf.pdf(wi, wo, kAll, q))
+                                                        : 1.0) /
+                    es.pdf;
                 double Le[N];
                 Colour::light(scene, es.radiance, Le);
                 Colour::add_connected(scene, L, beta, f, Le, w);

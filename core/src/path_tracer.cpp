@@ -74,7 +74,8 @@ void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
     const int x1 = std::min(x0 + s_.tile, W), y1 = std::min(y0 + s_.tile, H);
     const std::size_t first = (std::size_t(y0) * W + x0) * 3;
     RayLog log;
-    invalid_ += render_rect(x0, y0, x1, y1, pass, spp, pass_sum_.data() + first, pass_sq_.data() + first, W, log);
+    invalid_ +=
+        render_rect(x0, y0, x1, y1, pass, spp, pass_sum_.data() + first, pass_sq_.data() + first, W, log);
     rays_ += log.rays;
 }
 
@@ -83,7 +84,8 @@ int RenderJob::pass_samples(int pass) const {
     return std::min(s_.pass_spp, s_.spp - pass * s_.pass_spp);
 }
 
-std::size_t RenderJob::render_window(int x0, int y0, int x1, int y1, int pass, double *sum, double *sq) const {
+std::size_t RenderJob::render_window(int x0, int y0, int x1, int y1, int pass, double *sum,
+                                     double *sq) const {
     if (x0 < 0 || y0 < 0 || x1 > width() || y1 > height() || x0 >= x1 || y0 >= y1)
         throw std::invalid_argument("render: the window must be a non-empty part of the image");
     if (pass < 0 || std::size_t(pass) >= passes_) throw std::invalid_argument("render: no such pass");

@@ -17,8 +17,7 @@ double PhaseFunction::eval_cos(double c) const {
         // kappa / (4 pi sinh kappa) e^{kappa c}, written to stay finite for large kappa
         return k / (2.0 * kPi * (1.0 - std::exp(-2.0 * k))) * std::exp(k * (c - 1.0));
     }
-    default:
-        return 1.0 / (4.0 * kPi);
+    default: return 1.0 / (4.0 * kPi);
     }
 }
 
@@ -35,8 +34,7 @@ double PhaseFunction::sample_cos(double u) const {
         if (k < 1e-6) return 1.0 - 2.0 * u;
         return std::clamp(1.0 + std::log(u + (1.0 - u) * std::exp(-2.0 * k)) / k, -1.0, 1.0);
     }
-    default:
-        return 1.0 - 2.0 * u;
+    default: return 1.0 - 2.0 * u;
     }
 }
 

@@ -14,10 +14,12 @@ ProjectedFresnelTerm::ProjectedFresnelTerm(std::shared_ptr<const FresnelTerm> ex
       n_thickness_(thickness_lo < 0 ? 1 : n_thickness) {
     if (!exact_) throw std::invalid_argument("projected term: no exact term");
     const int K = out_channels, C = exact_->channels();
-    if (K < 1 || P_.size() != std::size_t(K) * C) throw std::invalid_argument("projected term: P must be (K x C)");
+    if (K < 1 || P_.size() != std::size_t(K) * C)
+        throw std::invalid_argument("projected term: P must be (K x C)");
     if (n_cos_ < 2 || n_thickness_ < 1) throw std::invalid_argument("projected term: need >= 2 cosine nodes");
     if (lo_ >= 0 && !(hi_ >= lo_)) throw std::invalid_argument("projected term: thickness_hi < thickness_lo");
-    if (lo_ >= 0 && hi_ > lo_ && n_thickness_ < 2) throw std::invalid_argument("projected term: need >= 2 thickness nodes");
+    if (lo_ >= 0 && hi_ > lo_ && n_thickness_ < 2)
+        throw std::invalid_argument("projected term: need >= 2 thickness nodes");
     if (hi_ == lo_) n_thickness_ = 1;
     table_.resize(std::size_t(n_thickness_) * n_cos_ * 2 * K);
     // Nodes are independent (and the exact term is thread-safe): build them on all cores.
@@ -25,7 +27,8 @@ ProjectedFresnelTerm::ProjectedFresnelTerm(std::shared_ptr<const FresnelTerm> ex
         std::vector<double> R(C), T(C);
         for (int t = int(t_begin); t < int(t_end); ++t) {
             Query q;
-            q.film_thickness_nm = lo_ < 0 ? -1.0 : (n_thickness_ > 1 ? lo_ + (hi_ - lo_) * t / (n_thickness_ - 1) : lo_);
+            q.film_thickness_nm =
+                lo_ < 0 ? -1.0 : (n_thickness_ > 1 ? lo_ + (hi_ - lo_) * t / (n_thickness_ - 1) : lo_);
             for (int c = 0; c < n_cos_; ++c) {
                 // The grazing node (cos 0) is evaluated just inside: a term may be undefined at 0.
                 double cos_i = std::max(double(c) / (n_cos_ - 1), 1e-9);

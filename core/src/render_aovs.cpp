@@ -31,9 +31,14 @@ void RenderJob::aovs(int samples, double *albedo, double *normal, int *mesh_id) 
             if (!scene.intersect(scene.camera().origin(), d, kInf, hit)) continue;
             mesh_id[pixel] = hit.mesh;
             const Material *mat = scene.material_of(hit.mesh);
-            if (!mat) { a[0] = a[1] = a[2] = 1; continue; } // emitters: white albedo
+            if (!mat) {
+                a[0] = a[1] = a[2] = 1;
+                continue;
+            } // emitters: white albedo
             const ShadingPoint sp = mat->shade(hit);
-            n[0] = sp.frame.n.x; n[1] = sp.frame.n.y; n[2] = sp.frame.n.z;
+            n[0] = sp.frame.n.x;
+            n[1] = sp.frame.n.y;
+            n[2] = sp.frame.n.z;
             const Vec3 wi = sp.frame.to_local(-d);
             PCG32 rng(mix64(pixel) ^ 0xa0a5ULL);
             for (int k = 0; k < samples; ++k) {

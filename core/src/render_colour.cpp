@@ -34,7 +34,8 @@ void RenderBSDF::to_spectrum(const double *channels, double out[kSpectralBins]) 
 }
 
 void RenderScene::set_spectral(std::vector<double> U, std::vector<double> W) {
-    if (committed_) throw std::logic_error("scene already committed: set the spectral matrices before commit()");
+    if (committed_)
+        throw std::logic_error("scene already committed: set the spectral matrices before commit()");
     if (U.size() != 3u * kSpectralBins || W.size() != 3u * kSpectralBins)
         throw std::invalid_argument("spectral matrices must be (81 x 3) and (3 x 81)");
     U_ = std::move(U);

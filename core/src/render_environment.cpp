@@ -29,7 +29,8 @@ Environment Environment::constant(const double rgb[3]) {
 Environment Environment::latlong(int width, int height, std::vector<float> rgb, double scale) {
     if (width < 1 || height < 1 || rgb.size() != std::size_t(width) * height * 3)
         throw std::invalid_argument("environment map: expected an H x W x 3 image");
-    if (!(std::isfinite(scale) && scale > 0)) throw std::invalid_argument("environment map: scale must be > 0");
+    if (!(std::isfinite(scale) && scale > 0))
+        throw std::invalid_argument("environment map: scale must be > 0");
     Environment e;
     e.kind_ = Kind::kMap;
     e.width_ = width;

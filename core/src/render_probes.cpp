@@ -56,9 +56,11 @@ double RenderScene::trace_recorded(const float *rays, std::size_t n, int packet)
                     } else {
                         alignas(64) RTCRayHit16 rh;
                         if (pack16(rays, i, j, false, rh.ray, valid)) {
-                            for (int k = 0; k < 16; ++k) rh.hit.geomID[k] = rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+                            for (int k = 0; k < 16; ++k)
+                                rh.hit.geomID[k] = rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
                             rtcIntersect16(valid, embree_->scene, &ctx, &rh);
-                            for (int k = 0; k < 16; ++k) local += valid[k] && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+                            for (int k = 0; k < 16; ++k)
+                                local += valid[k] && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
                         }
                     }
                     i = j;
@@ -66,7 +68,8 @@ double RenderScene::trace_recorded(const float *rays, std::size_t n, int packet)
             }
             hits += local;
         });
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         return hits.load() > n ? -1.0 : seconds;
     }
     parallel_for(n, 4096, [&](std::size_t begin, std::size_t end) {
@@ -109,7 +112,8 @@ void RenderScene::first_hits(const float *rays, std::size_t n, int *mesh) const 
         for (std::size_t i = begin; i < end; ++i) {
             const float *r = &rays[6 * i];
             SurfaceHit hit;
-            mesh[i] = intersect({r[0], r[1], r[2]}, {r[3], r[4], r[5]}, std::numeric_limits<double>::infinity(), hit)
+            mesh[i] = intersect({r[0], r[1], r[2]}, {r[3], r[4], r[5]},
+                                std::numeric_limits<double>::infinity(), hit)
                           ? hit.mesh
                           : -1;
         }

@@ -61,15 +61,18 @@ int RenderScene::add_mesh(MeshInput m) {
     const std::size_t V = m.positions.size() / 3, F = m.indices.size() / 3;
     if (m.positions.size() != 3 * V || m.indices.size() != 3 * F || V == 0 || F == 0)
         throw std::invalid_argument("mesh: positions must be (V, 3) and indices (F, 3), both non-empty");
-    if (!m.normals.empty() && m.normals.size() != 3 * V) throw std::invalid_argument("mesh: normals must be (V, 3)");
+    if (!m.normals.empty() && m.normals.size() != 3 * V)
+        throw std::invalid_argument("mesh: normals must be (V, 3)");
     if (!m.uvs.empty() && m.uvs.size() != 2 * V) throw std::invalid_argument("mesh: uvs must be (V, 2)");
     for (uint32_t i : m.indices)
         if (i >= V) throw std::invalid_argument("mesh: index out of range");
     for (float x : m.positions)
         if (!std::isfinite(x)) throw std::invalid_argument("mesh: non-finite vertex position");
-    if (m.material < -1 || m.material >= int(materials_.size())) throw std::invalid_argument("mesh: unknown material");
+    if (m.material < -1 || m.material >= int(materials_.size()))
+        throw std::invalid_argument("mesh: unknown material");
     for (double e : m.emission)
-        if (!(std::isfinite(e) && e >= 0)) throw std::invalid_argument("mesh: emission must be finite and >= 0");
+        if (!(std::isfinite(e) && e >= 0))
+            throw std::invalid_argument("mesh: emission must be finite and >= 0");
 
     Mesh mesh;
     mesh.in = std::move(m);
@@ -84,10 +87,10 @@ int RenderScene::add_mesh(MeshInput m) {
     }
 
     RTCGeometry g = rtcNewGeometry(embree_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto *vb = static_cast<float *>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                            3 * sizeof(float), V));
-    auto *ib = static_cast<uint32_t *>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                               3 * sizeof(uint32_t), F));
+    auto *vb = static_cast<float *>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), V));
+    auto *ib = static_cast<uint32_t *>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), F));
     if (!vb || !ib) {
         rtcReleaseGeometry(g);
         throw std::runtime_error("Embree could not allocate a mesh: " + embree_->last_error);
@@ -114,7 +117,8 @@ void RenderScene::set_environment(Environment e) {
 }
 
 void RenderScene::set_robust(bool robust) {
-    if (committed_) throw std::logic_error("scene already committed: choose robust traversal before commit()");
+    if (committed_)
+        throw std::logic_error("scene already committed: choose robust traversal before commit()");
     robust_ = robust;
 }
 
@@ -158,7 +162,8 @@ void RenderScene::fill_hit(int mesh, uint32_t prim, double b1, double b2, Surfac
     auto vertex = [&](const std::vector<float> &a, int k, uint32_t i) {
         return Vec3{a[k * i], a[k * i + 1], k == 3 ? double(a[k * i + 2]) : 0.0};
     };
-    Vec3 p0 = vertex(m.positions, 3, t[0]), p1 = vertex(m.positions, 3, t[1]), p2 = vertex(m.positions, 3, t[2]);
+    Vec3 p0 = vertex(m.positions, 3, t[0]), p1 = vertex(m.positions, 3, t[1]),
+         p2 = vertex(m.positions, 3, t[2]);
     hit.mesh = mesh;
     hit.prim = prim;
     hit.p = p0 * b0 + p1 * b1 + p2 * b2;
@@ -199,7 +204,8 @@ bool RenderScene::intersect(const Vec3 &o, const Vec3 &d, double tmax, SurfaceHi
     rh.ray.dir_y = float(d.y);
     rh.ray.dir_z = float(d.z);
     rh.ray.tnear = 0.0f;
-    rh.ray.tfar = tmax < std::numeric_limits<float>::max() ? float(tmax) : std::numeric_limits<float>::infinity();
+    rh.ray.tfar =
+        tmax < std::numeric_limits<float>::max() ? float(tmax) : std::numeric_limits<float>::infinity();
     rh.ray.time = 0.0f;
     rh.ray.mask = 0xffffffffu;
     rh.ray.id = 0;

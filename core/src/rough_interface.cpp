@@ -24,9 +24,8 @@ double *lobe_buffer(int n) {
 }
 } // namespace
 
-RoughInterface::RoughInterface(std::vector<double> wavelengths,
-                               std::shared_ptr<const FresnelTerm> term, double alpha, bool two_sided,
-                               MicrofacetType type, bool multiscatter)
+RoughInterface::RoughInterface(std::vector<double> wavelengths, std::shared_ptr<const FresnelTerm> term,
+                               double alpha, bool two_sided, MicrofacetType type, bool multiscatter)
     : BSDF(std::move(wavelengths)), term_(std::move(term)), mf_(type, alpha), two_sided_(two_sided) {
     if (!term_ || term_->channels() != channels())
         throw std::invalid_argument("the Fresnel term must have one channel per wavelength");
@@ -48,7 +47,10 @@ uint32_t RoughInterface::lobes() const {
 
 bool RoughInterface::fold(Vec3 &wi, Vec3 &wo) const {
     if (term_->transmissive()) return true;
-    if (two_sided_ && wi.z < 0 && wo.z < 0) { wi.z = -wi.z; wo.z = -wo.z; }
+    if (two_sided_ && wi.z < 0 && wo.z < 0) {
+        wi.z = -wi.z;
+        wo.z = -wo.z;
+    }
     return wi.z > 0 && wo.z > 0;
 }
 
@@ -132,8 +134,7 @@ double RoughInterface::pdf(const Vec3 &wi_, const Vec3 &wo_, uint32_t lobes, con
     return std::isfinite(mixed) ? mixed : 0.0;
 }
 
-double RoughInterface::pdf_single(const Vec3 &wi, const Vec3 &wo, uint32_t lobes,
-                                  const Query &q) const {
+double RoughInterface::pdf_single(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const {
     Vec3 m;
     bool reflect;
     double eta_rel;
@@ -154,8 +155,8 @@ double RoughInterface::pdf_single(const Vec3 &wi, const Vec3 &wo, uint32_t lobes
     return std::isfinite(p) ? p : 0.0;
 }
 
-BSDFSample RoughInterface::sample(const Vec3 &wi_, double u1, double u2x, double u2y,
-                                  uint32_t lobes, const Query &q, double *weight) const {
+BSDFSample RoughInterface::sample(const Vec3 &wi_, double u1, double u2x, double u2y, uint32_t lobes,
+                                  const Query &q, double *weight) const {
     if (matched_) return matched_->sample(wi_, u1, u2x, u2y, lobes, q, weight);
     if (!ms_) return sample_single(wi_, u1, u2x, u2y, lobes, q, weight);
     zero(weight);
@@ -183,17 +184,23 @@ BSDFSample RoughInterface::sample(const Vec3 &wi_, double u1, double u2x, double
     }
     // The weight of the mixture: eval / pdf of the sum at the drawn direction.
     s.pdf = pdf(wi_, s.wo, lobes, q);
-    if (!(s.pdf > 0)) { zero(weight); return {}; }
+    if (!(s.pdf > 0)) {
+        zero(weight);
+        return {};
+    }
     eval(wi_, s.wo, lobes, q, weight);
     for (int c = 0; c < channels(); ++c) {
         weight[c] /= s.pdf;
-        if (!std::isfinite(weight[c])) { zero(weight); return {}; }
+        if (!std::isfinite(weight[c])) {
+            zero(weight);
+            return {};
+        }
     }
     return s;
 }
 
-BSDFSample RoughInterface::sample_single(const Vec3 &wi_, double u1, double u2x, double u2y,
-                                         uint32_t lobes, const Query &q, double *weight) const {
+BSDFSample RoughInterface::sample_single(const Vec3 &wi_, double u1, double u2x, double u2y, uint32_t lobes,
+                                         const Query &q, double *weight) const {
     zero(weight);
     if (!usable_direction(wi_)) return {};
     const bool transmits = term_->transmissive();
@@ -246,13 +253,17 @@ BSDFSample RoughInterface::sample_single(const Vec3 &wi_, double u1, double u2x,
     if (!(s.pdf > 0) || !std::isfinite(s.pdf)) return {};
     for (int c = 0; c < C; ++c) {
         weight[c] = F[c] / prob * g1 * scale;
-        if (!std::isfinite(weight[c])) { zero(weight); return {}; }
+        if (!std::isfinite(weight[c])) {
+            zero(weight);
+            return {};
+        }
     }
     if (flipped) s.wo.z = -s.wo.z;
     return s;
 }
 
-std::shared_ptr<const BSDF> RoughInterface::with_film_lookup(double thickness_nm, FilmLookupStats &stats) const {
+std::shared_ptr<const BSDF> RoughInterface::with_film_lookup(double thickness_nm,
+                                                             FilmLookupStats &stats) const {
     if (matched_ || ms_) return nullptr;
     auto lookup = film_lookup_for(term_, thickness_nm, stats);
     if (!lookup) return nullptr;

@@ -19,7 +19,9 @@ double *ms_buffer(int slot, int n) {
 
 // Gauss-Legendre nodes / weights on [0, 1] (3 points: exact for degree 5; 24 points for
 // the smooth Fresnel averages, whose film interference varies slowly with angle).
-struct Rule { std::vector<double> x, w; };
+struct Rule {
+    std::vector<double> x, w;
+};
 Rule gauss_legendre(int n) {
     Rule r{std::vector<double>(n), std::vector<double>(n)};
     for (int i = 0; i < n; ++i) {
@@ -28,7 +30,8 @@ Rule gauss_legendre(int n) {
             double p0 = 1.0, p1 = x;
             for (int k = 2; k <= n; ++k) {
                 double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
-                p0 = p1; p1 = p2;
+                p0 = p1;
+                p1 = p2;
             }
             dp = n * (x * p1 - p0) / (x * x - 1.0);
             double dx = p1 / dp;
@@ -107,7 +110,8 @@ MultiScatter::MultiScatter(const Microfacet &mf, std::shared_ptr<const FresnelTe
             for (int j = 0; j < 3; ++j) {
                 double t = (k + g.x[j]) * h;
                 for (int c = 0; c < C; ++c) {
-                    double e = (1 - g.x[j]) * table_[side][k * C + c] + g.x[j] * table_[side][(k + 1) * C + c];
+                    double e =
+                        (1 - g.x[j]) * table_[side][k * C + c] + g.x[j] * table_[side][(k + 1) * C + c];
                     avg_[side][c] += g.w[j] * h * e * 4.0 * t * t * t;
                 }
             }
@@ -130,7 +134,10 @@ MultiScatter::MultiScatter(const Microfacet &mf, std::shared_ptr<const FresnelTe
             double tl = std::clamp(t_avg[c], 0.0, 1.0), td = 0.0;
             if (loss_d > 1e-12 && loss_l > 1e-12) {
                 td = tl * loss_l / (eta2 * loss_d);
-                if (td > 1.0) { td = 1.0; tl = eta2 * loss_d / loss_l; }
+                if (td > 1.0) {
+                    td = 1.0;
+                    tl = eta2 * loss_d / loss_l;
+                }
             } else {
                 tl = 0.0; // no loss on one side: no lobe through the interface
             }
@@ -171,8 +178,7 @@ double MultiScatter::albedo(int side, double mu, int c) const {
     return interpolate(table_[s], mu, std::clamp(c, 0, channels_ - 1));
 }
 
-void MultiScatter::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                        double *out) const {
+void MultiScatter::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const {
     const int C = channels_;
     for (int c = 0; c < C; ++c) out[c] = 0.0;
     const bool reflect = wi.z * wo.z > 0;
@@ -189,8 +195,8 @@ void MultiScatter::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Qu
         }
         const double loss = 1.0 - avg_[0][0];
         if (!(loss > 1e-12)) return;
-        double k = (1.0 - interpolate(table_[0], mi, 0)) * (1.0 - interpolate(table_[0], mo, 0)) * mo /
-                   (kPi * loss);
+        double k =
+            (1.0 - interpolate(table_[0], mi, 0)) * (1.0 - interpolate(table_[0], mo, 0)) * mo / (kPi * loss);
         for (int c = 0; c < C; ++c) out[c] = tint[c] * k;
         return;
     }
@@ -207,8 +213,7 @@ void MultiScatter::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Qu
     }
 }
 
-void MultiScatter::probabilities(const Vec3 &wi, uint32_t lobes, double &p_lobe,
-                                 double &p_reflect) const {
+void MultiScatter::probabilities(const Vec3 &wi, uint32_t lobes, double &p_lobe, double &p_reflect) const {
     p_lobe = 0.0;
     p_reflect = 0.0;
     const bool want_r = lobes & kGlossyReflection, want_t = transmits_ && (lobes & kGlossyTransmission);

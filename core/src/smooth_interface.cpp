@@ -7,8 +7,8 @@
 
 namespace bsdflab {
 
-SmoothInterface::SmoothInterface(std::vector<double> wavelengths,
-                                 std::shared_ptr<const FresnelTerm> term, bool two_sided)
+SmoothInterface::SmoothInterface(std::vector<double> wavelengths, std::shared_ptr<const FresnelTerm> term,
+                                 bool two_sided)
     : BSDF(std::move(wavelengths)), term_(std::move(term)), two_sided_(two_sided) {
     if (!term_ || term_->channels() != channels())
         throw std::invalid_argument("the Fresnel term must have one channel per wavelength");
@@ -18,8 +18,8 @@ uint32_t SmoothInterface::lobes() const {
     return kDeltaReflection | (term_->transmissive() ? kDeltaTransmission : 0u);
 }
 
-BSDFSample SmoothInterface::sample(const Vec3 &wi, double u1, double, double, uint32_t lobes,
-                                   const Query &q, double *weight) const {
+BSDFSample SmoothInterface::sample(const Vec3 &wi, double u1, double, double, uint32_t lobes, const Query &q,
+                                   double *weight) const {
     zero(weight);
     const int C = channels();
     const bool transmits = term_->transmissive();
@@ -47,7 +47,10 @@ BSDFSample SmoothInterface::sample(const Vec3 &wi, double u1, double, double, ui
         return s;
     }
     DielectricFresnel f = fresnel_dielectric(wi.z, term_->eta());
-    if (f.cos_theta_t == 0.0) { zero(weight); return {}; } // total internal reflection
+    if (f.cos_theta_t == 0.0) {
+        zero(weight);
+        return {};
+    } // total internal reflection
     s.wo = refract(wi, f.cos_theta_t, f.eta_ti);
     s.lobe = kDeltaTransmission;
     s.eta = f.eta_it;
@@ -56,7 +59,8 @@ BSDFSample SmoothInterface::sample(const Vec3 &wi, double u1, double, double, ui
     return s;
 }
 
-std::shared_ptr<const BSDF> SmoothInterface::with_film_lookup(double thickness_nm, FilmLookupStats &stats) const {
+std::shared_ptr<const BSDF> SmoothInterface::with_film_lookup(double thickness_nm,
+                                                              FilmLookupStats &stats) const {
     auto lookup = film_lookup_for(term_, thickness_nm, stats);
     return lookup ? std::make_shared<SmoothInterface>(wavelengths_, lookup, two_sided_) : nullptr;
 }

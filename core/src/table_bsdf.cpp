@@ -29,8 +29,10 @@ TabulatedBSDF::TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, st
         throw std::invalid_argument("transmission_eta must be finite and > 0");
     const int C = channels();
     if (grid_.thickness.empty()) grid_.thickness = {-1.0};
-    if (values_.size() != grid_.cells() * C) throw std::invalid_argument("table values do not match the grid");
-    if (static_cast<int>(luminance_.size()) != C) throw std::invalid_argument("luminance needs one weight per channel");
+    if (values_.size() != grid_.cells() * C)
+        throw std::invalid_argument("table values do not match the grid");
+    if (static_cast<int>(luminance_.size()) != C)
+        throw std::invalid_argument("luminance needs one weight per channel");
     if (direct_ && P_.size() != std::size_t(C) * direct_->channels())
         throw std::invalid_argument("P must map the direct model's channels to the table's");
 
@@ -86,11 +88,13 @@ TabulatedBSDF::TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, st
             for (int n = 0; n < kDirectAlbedoSamples; ++n) {
                 // Named draws: argument evaluation order is unspecified (GCC and Clang differ).
                 const double u1 = rng.uniform(), u2x = rng.uniform(), u2y = rng.uniform();
-                BSDFSample s = direct_->sample(wi, u1, u2x, u2y, kGlossyReflection | kDiffuseReflection, q, wd.data());
+                BSDFSample s =
+                    direct_->sample(wi, u1, u2x, u2y, kGlossyReflection | kDiffuseReflection, q, wd.data());
                 if (!s.lobe) continue;
                 for (int c = 0; c < C; ++c) {
                     double proj = 0;
-                    for (int d = 0; d < direct_->channels(); ++d) proj += P_[c * direct_->channels() + d] * wd[d];
+                    for (int d = 0; d < direct_->channels(); ++d)
+                        proj += P_[c * direct_->channels() + d] * wd[d];
                     sum += luminance_[c] * proj;
                 }
             }
@@ -172,8 +176,8 @@ void TabulatedBSDF::table_eval(const Vec3 &wi, const Vec3 &wo, const Query &q, d
         for (int b = 0; b < 2; ++b)
             for (int d = 0; d < 2; ++d)
                 for (int e = 0; e < 2; ++e) {
-                    double w = (a ? wt.w1 : 1 - wt.w1) * (b ? wa.w1 : 1 - wa.w1) *
-                               (d ? wb.w1 : 1 - wb.w1) * (e ? wp.w1 : 1 - wp.w1);
+                    double w = (a ? wt.w1 : 1 - wt.w1) * (b ? wa.w1 : 1 - wa.w1) * (d ? wb.w1 : 1 - wb.w1) *
+                               (e ? wp.w1 : 1 - wp.w1);
                     if (w == 0) continue;
                     std::size_t cell = grid_.cell_index(lobe, a ? wt.i1 : wt.i0, b ? wa.i1 : wa.i0,
                                                         d ? wb.i1 : wb.i0, e ? wp.i1 : wp.i0);
@@ -196,8 +200,7 @@ void TabulatedBSDF::direct_eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, 
     }
 }
 
-void TabulatedBSDF::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                         double *out) const {
+void TabulatedBSDF::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const {
     zero(out);
     if (!usable_direction(wi) || !usable_direction(wo) || wi.z <= 0) return;
     uint32_t lobe = wo.z > 0 ? kGlossyReflection : kGlossyTransmission;
@@ -241,7 +244,8 @@ void TabulatedBSDF::mixture(const Vec3 &wi, const Query &q, double &p_delta, dou
                             double *delta_weight) const {
     const int C = channels();
     double a_delta = 0, a_direct = 0;
-    if (delta_weight) for (int c = 0; c < C; ++c) delta_weight[c] = 0.0;
+    if (delta_weight)
+        for (int c = 0; c < C; ++c) delta_weight[c] = 0.0;
     if (direct_) {
         if (direct_->lobes() & kDeltaReflection) {
             double *r = scratch(2, direct_->channels());
@@ -261,7 +265,11 @@ void TabulatedBSDF::mixture(const Vec3 &wi, const Query &q, double &p_delta, dou
     }
     double a_table = table_albedo(wi, q);
     double total = std::max(a_delta, 0.0) + a_direct + a_table;
-    if (!(total > 0)) { p_delta = 0; p_direct = 0; return; }
+    if (!(total > 0)) {
+        p_delta = 0;
+        p_direct = 0;
+        return;
+    }
     p_delta = std::max(a_delta, 0.0) / total;
     p_direct = a_direct / total;
 }

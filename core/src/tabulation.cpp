@@ -12,8 +12,8 @@ namespace bsdflab {
 
 Tabulator::Tabulator(std::shared_ptr<const BSDF> model, TableGrid grid, std::vector<double> P, int rows,
                      TabulationSettings settings)
-    : model_(std::move(model)), estimator_(model_ ? model_->stochastic() : nullptr),
-      grid_(std::move(grid)), P_(std::move(P)), rows_(rows), settings_(settings) {
+    : model_(std::move(model)), estimator_(model_ ? model_->stochastic() : nullptr), grid_(std::move(grid)),
+      P_(std::move(P)), rows_(rows), settings_(settings) {
     if (!model_) throw std::invalid_argument("no model to tabulate");
     if (rows_ < 2 || P_.size() != std::size_t(rows_) * model_->channels())
         throw std::invalid_argument("P must have (output channels + 1) x model channels entries");
@@ -42,8 +42,7 @@ uint64_t Tabulator::cell_seed(std::size_t cell, uint64_t stage) const {
     return mix64(settings_.seed ^ mix64(cell * 8 + stage));
 }
 
-std::uint64_t Tabulator::estimate(std::size_t cell, int n, uint64_t seed, double *mean,
-                                  double *err) const {
+std::uint64_t Tabulator::estimate(std::size_t cell, int n, uint64_t seed, double *mean, double *err) const {
     Vec3 wi, wo;
     int lobe, t;
     grid_.cell_directions(cell, wi, wo, lobe, t);
@@ -108,8 +107,8 @@ int Tabulator::effort(std::size_t cell, double pilot_lum, double pilot_error,
                       const std::vector<double> &scale) const {
     if (!estimator_) return 1;
     const std::size_t per_lobe = grid_.cells() / grid_.n_lobes;
-    const double target = settings_.rel_error * std::max(std::abs(pilot_lum),
-                                                         settings_.floor * scale.at(cell / per_lobe));
+    const double target =
+        settings_.rel_error * std::max(std::abs(pilot_lum), settings_.floor * scale.at(cell / per_lobe));
     const int n0 = settings_.min_samples;
     if (!(target > 0) || !(pilot_error > target)) return n0;
     // 10 % above the estimated need: the pilot's error estimate is itself noisy.
@@ -142,7 +141,8 @@ FinishedCells Tabulator::finish(const std::vector<std::size_t> &cells, const std
         efforts[i] = effort(cells[i], pilot_lum[i], pilot_error[i], scale);
         order[i] = i;
     }
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return efforts[a] > efforts[b]; });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return efforts[a] > efforts[b]; });
     parallel_for_each(cells.size(), [&](std::size_t k) {
         if (ctl.stop()) return;
         const std::size_t i = order[k], cell = cells[i];

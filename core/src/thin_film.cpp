@@ -83,8 +83,7 @@ Interface interface(const Medium &a, const Medium &b) {
     Z inv_s = reciprocal(a.q + b.q);
     Z pa = b.eps * a.q, pb = a.eps * b.q;
     Z inv_p = reciprocal(pa + pb);
-    return {(a.q - b.q) * inv_s, (pa - pb) * inv_p, 2.0 * a.q * inv_s,
-            2.0 * (a.n * b.n * a.q) * inv_p};
+    return {(a.q - b.q) * inv_s, (pa - pb) * inv_p, 2.0 * a.q * inv_s, 2.0 * (a.n * b.n * a.q) * inv_p};
 }
 
 // e^{i delta} for one pass through a layer; |e| <= 1 on the forward branch.
@@ -117,9 +116,7 @@ FilmResponse with_power(Z r_s, Z r_p, Z t_s, Z t_p, const Medium &in, const Medi
 }
 
 // The limit cos0 -> 0: every interface reflects r = -1 and nothing enters.
-FilmResponse grazing() {
-    return {cplx(-1.0), cplx(-1.0), cplx(0.0), cplx(0.0), 1.0, 1.0, 0.0, 0.0};
-}
+FilmResponse grazing() { return {cplx(-1.0), cplx(-1.0), cplx(0.0), cplx(0.0), 1.0, 1.0, 0.0, 0.0}; }
 
 // One film by the Airy sums with r01, r12, t01, t12 written as fractions and the fractions
 // cleared: r = (m01 p12 + p01 m12 e2) / D, t = (numerators of t01 t12) e / D, where
@@ -147,8 +144,8 @@ FilmResponse one_film(Z n0, Z n1, Z n2, double d_nm, double cos0, double wavelen
     } else {
         const Z inv_s = reciprocal(den_s), inv_p = reciprocal(den_p);
         const Z w = 4.0 * (m0.q * film.q * e); // shared by t_s and t_p
-        return with_power(num_s * inv_s, num_p * inv_p, w * inv_s,
-                          w * (m0.n * exit.n * film.eps) * inv_p, m0, exit);
+        return with_power(num_s * inv_s, num_p * inv_p, w * inv_s, w * (m0.n * exit.n * film.eps) * inv_p, m0,
+                          exit);
     }
 }
 

@@ -27,10 +27,15 @@ Every function returns linear sRGB (D65) reflectance, shape (..., 3), for unpola
 so the colour-difference study (``study.py``) compares them all in the same space.
 """
 from bsdflab.reference.approximations._optics import XYZ_TO_SRGB  # the shared sRGB matrix
-from bsdflab.reference.approximations.belcour_barla import belcour_barla_rgb, belcour_barla_xyz, xyz_sensitivity_exact, xyz_sensitivity_gaussian
+from bsdflab.reference.approximations.belcour_barla import (
+    belcour_barla_rgb,
+    belcour_barla_xyz,
+    xyz_sensitivity_exact,
+    xyz_sensitivity_gaussian,
+)
 from bsdflab.reference.approximations.cycles import cycles_thin_film_rgb
-from bsdflab.reference.approximations.gltf import gltf_iridescence_rgb
 from bsdflab.reference.approximations.double_phase_film import double_phase_reflectance, double_phase_rgb
+from bsdflab.reference.approximations.gltf import gltf_iridescence_rgb
 
 MATERIALX = "Belcour-Barla as MaterialX computes it (MaterialX, OpenPBR, Standard Surface)"
 CYCLES = "Cycles thin film (Blender >= 4.2: CIE tables, 3 terms)"
@@ -43,6 +48,6 @@ MODELS = {
     "Padrón-Griffe et al. 2023 code (double phase, 3 wavelengths)": double_phase_rgb,
 }
 
-__all__ = ["CYCLES", "MATERIALX", "MODELS", "XYZ_TO_SRGB", "belcour_barla_rgb", "belcour_barla_xyz", "cycles_thin_film_rgb",
-           "double_phase_reflectance", "double_phase_rgb", "gltf_iridescence_rgb", "xyz_sensitivity_exact",
-           "xyz_sensitivity_gaussian"]
+__all__ = ["CYCLES", "MATERIALX", "MODELS", "XYZ_TO_SRGB", "belcour_barla_rgb", "belcour_barla_xyz",
+           "cycles_thin_film_rgb", "double_phase_reflectance", "double_phase_rgb", "gltf_iridescence_rgb",
+           "xyz_sensitivity_exact", "xyz_sensitivity_gaussian"]

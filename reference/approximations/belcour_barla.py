@@ -60,7 +60,8 @@ def xyz_sensitivity_gaussian(opd_nm, shift) -> np.ndarray:
     xyz = (_GAUSS_VAL * np.sqrt(2.0 * np.pi * _GAUSS_VAR) * np.cos(_GAUSS_POS * phase + shift)
            * np.exp(-_GAUSS_VAR * phase**2))
     v, pos, var = _X2
-    x2 = v * np.sqrt(2.0 * np.pi * var) * np.cos(pos * phase[..., 0] + shift[..., 0]) * np.exp(-var * phase[..., 0] ** 2)
+    x2 = (v * np.sqrt(2.0 * np.pi * var) * np.cos(pos * phase[..., 0] + shift[..., 0])
+          * np.exp(-var * phase[..., 0] ** 2))
     xyz = xyz + np.stack([x2, np.zeros_like(x2), np.zeros_like(x2)], axis=-1)
     return xyz / _NORMALISATION
 

@@ -14,9 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from bsdflab.spectra.three_wavelength import THREE_WAVELENGTHS_NM, three_wavelength_rgb
-
 from bsdflab.reference.approximations._optics import dielectric_amplitudes, refracted_cos
+from bsdflab.spectra.three_wavelength import THREE_WAVELENGTHS_NM, three_wavelength_rgb
 
 
 def double_phase_reflectance(n0, n1, n2, thickness_nm, wavelength_nm, cos_theta) -> np.ndarray:

@@ -6,8 +6,8 @@ simplifications of Belcour & Barla 2017 (see belcour_barla.py): Schlick's approx
 F0 + (1 - F0)(1 - cos)^5 for both interfaces, unpolarised; reflection phases 0 or pi from
 comparing indices; the base's index recovered from its F0 = ((n - 1) / (n + 1))^2
 (KHR_materials_ior, outside index 1); the film's index blended towards the outside's for
-thicknesses below 0.03 (the spec's smoothstep(0, 0.03, thickness), thickness in nm); the same Gaussian XYZ fit, two harmonics, R12 R23 clamped to
-[1e-5, 0.9999] and negative colours clamped to 0; total internal reflection in the film
+thicknesses below 0.03 (the spec's smoothstep(0, 0.03, thickness), thickness in nm); the same Gaussian XYZ fit, two
+harmonics, R12 R23 clamped to [1e-5, 0.9999] and negative colours clamped to 0; total internal reflection in the film
 gives 1.
 """
 from __future__ import annotations

@@ -21,11 +21,13 @@ STANDARDS = {
     "OpenPBR Surface 1.x": {
         "thickness_nm": (0.0, math.inf), "thickness_note": "thin_film_thickness in micrometres (soft 0-1 um)",
         "film_ior": (1.0, math.inf), "film_note": "thin_film_ior (soft 1-3)",
-        "base": "specular_ior", "model": "Belcour-Barla as MaterialX computes it (MaterialX, OpenPBR, Standard Surface)"},
+        "base": "specular_ior",
+        "model": "Belcour-Barla as MaterialX computes it (MaterialX, OpenPBR, Standard Surface)"},
     "Autodesk Standard Surface 1.0": {
         "thickness_nm": (0.0, math.inf), "thickness_note": "thin_film_thickness in nm (soft 0-2000 nm)",
         "film_ior": (1.0, math.inf), "film_note": "thin_film_IOR (soft 1-3)",
-        "base": "specular_IOR", "model": "Belcour-Barla as MaterialX computes it (MaterialX, OpenPBR, Standard Surface)"},
+        "base": "specular_IOR",
+        "model": "Belcour-Barla as MaterialX computes it (MaterialX, OpenPBR, Standard Surface)"},
     "MaterialX thin_film_bsdf": {
         "thickness_nm": (0.0, math.inf), "thickness_note": "thickness in nm", "film_ior": (1.0, math.inf),
         "film_note": "ior", "base": "the layered dielectric/conductor BSDF's ior",

@@ -18,14 +18,13 @@ from fastapi import APIRouter, HTTPException, Query, Request
 from fastapi.responses import Response
 
 from bsdflab import slices as lobe_views
-from bsdflab.requests import ModelCache
 from bsdflab.plots.lobe import lobe_figure
-
+from bsdflab.requests import ModelCache
 from bsdflab.service import artefact_refs
 from bsdflab.service.deps import HeavyDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, over_limit
 from bsdflab.service.heavy import check_cancelled, evaluate_in_chunks
-from bsdflab.service.schemas import (EvalRequest, EvalResponse, HemisphereView, LobeRequest, LobeResponse, PlaneView)
+from bsdflab.service.schemas import EvalRequest, EvalResponse, HemisphereView, LobeRequest, LobeResponse, PlaneView
 from bsdflab.service.settings import Settings, limit_variable
 
 MODELS = ModelCache(32)   # recently asked-for models, their core objects built
@@ -116,7 +115,8 @@ EVAL_RESPONSES = {200: {"content": {NPY_TYPE: {"schema": {"type": "string", "for
                                        "X-Layout"}}
 
 
-@router.post("/eval", response_model=EvalResponse, responses=EVAL_RESPONSES, summary="Evaluate a BSDF at direction pairs")
+@router.post("/eval", response_model=EvalResponse, responses=EVAL_RESPONSES,
+             summary="Evaluate a BSDF at direction pairs")
 async def evaluate(body: EvalRequest, request: Request, settings: SettingsDep, jobs: JobsDep, heavy: HeavyDep):
     """f(wi, wo) |cos theta_o| (Mitsuba's convention) for every pair, in linear sRGB (D65) or
     at the given wavelengths, with standard errors for stochastic (layered) models. The
@@ -244,7 +244,8 @@ async def lobe_png(body: LobeRequest, request: Request, settings: SettingsDep, j
 @router.get("/lobe.png", response_class=Response, responses=PNG, summary="The lobe figure (PNG), by query")
 async def lobe_png_query(request: Request, settings: SettingsDep, jobs: JobsDep, heavy: HeavyDep,
                    preset: Annotated[str | None, Query(min_length=1, description="a preset name")] = None,
-                   overrides: Annotated[str | None, Query(min_length=1, description="the preset's overrides as JSON")] = None,
+                   overrides: Annotated[str | None,
+                                        Query(min_length=1, description="the preset's overrides as JSON")] = None,
                    model: Annotated[str | None, Query(min_length=1, description="a BSDF dict as JSON")] = None,
                    theta_i: Annotated[float, Query(description="incidence angle in degrees")] = 30.0,
                    samples: Annotated[int, Query(ge=1, le=1 << 24)] = FIGURE_SAMPLES,

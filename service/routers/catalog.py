@@ -5,10 +5,9 @@ import inspect
 
 from fastapi import APIRouter
 
-from bsdflab.requests import keyword_defaults, preset_parameters
 from bsdflab.presets import PRESETS
+from bsdflab.requests import keyword_defaults, preset_parameters
 from bsdflab.scenes import SCENES
-
 from bsdflab.service.schemas import PresetInfo, SceneInfo
 
 router = APIRouter(prefix="/v1", tags=["catalogue"])

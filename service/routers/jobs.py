@@ -11,7 +11,6 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.sse import EventSourceResponse, ServerSentEvent
 
 from bsdflab.jobs import FINISHED
-
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep
 from bsdflab.service.errors import NOT_FOUND
 from bsdflab.service.schemas import JOB_ID_PATTERN, JobInfo, JobList

@@ -8,7 +8,6 @@ from fastapi import APIRouter
 
 import bsdflab
 from bsdflab import _core
-
 from bsdflab.service.deps import KEY, JobsDep, SettingsDep
 from bsdflab.service.errors import KEY_ERRORS
 from bsdflab.service.schemas import Health, VersionInfo

@@ -10,9 +10,9 @@ from bsdflab.service import render_checks
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
 from bsdflab.service.job_service import JobService
+from bsdflab.service.routers.tables import QUEUED
 from bsdflab.service.schemas import HASH_PATTERN, RenderInfo, RenderRequest
 from bsdflab.service.views import job_info
-from bsdflab.service.routers.tables import QUEUED
 
 router = APIRouter(prefix="/v1/renders", tags=["renders"])
 Hash = Annotated[str, Path(pattern=HASH_PATTERN, description="the render's content hash (64 hex digits)")]

@@ -6,14 +6,13 @@ import numpy as np
 from fastapi import APIRouter, Request
 from fastapi.responses import Response
 
-from bsdflab.util import args as check
 from bsdflab.optics import film_reflectance, film_transmittance
 from bsdflab.plots.film_colour import display_exposure, display_srgb, spectral_rgb
-
 from bsdflab.service.deps import HeavyDep, SettingsDep
 from bsdflab.service.errors import ERRORS, over_limit
 from bsdflab.service.schemas import ThinFilmRequest, ThinFilmResponse
 from bsdflab.service.settings import Settings
+from bsdflab.util import args as check
 
 router = APIRouter(prefix="/v1/thinfilm", tags=["thin film"], responses=ERRORS)
 DEFAULT_ANGLES = np.arange(0.0, 86.0, 5.0)

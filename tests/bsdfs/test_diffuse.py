@@ -4,8 +4,14 @@ import pytest
 
 import bsdflab as bl
 from bsdflab import Lobe
-from bsdflab.testing import (albedo_sampled, albedo_uniform, bsdf_chi2, eval_pdf_consistency,
-                             random_unit_vectors, reciprocity_error)
+from bsdflab.testing import (
+    albedo_sampled,
+    albedo_uniform,
+    bsdf_chi2,
+    eval_pdf_consistency,
+    random_unit_vectors,
+    reciprocity_error,
+)
 from support.directions import directions_at
 
 SIGNIFICANCE = 0.01  # family-wise false-alarm rate of the statistical tests in this file

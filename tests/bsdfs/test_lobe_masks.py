@@ -62,7 +62,7 @@ def _layered_clear_smooth():
                       samples=4, seed=5)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _table():
     model = bl.Layered([bl.RoughDielectric(0.3, 1.5)], [bl.Slab(0.5, sigma_s=1.0)],
                        bl.RoughDielectric(0.4, 1.2, 1.5), samples=4, seed=6)

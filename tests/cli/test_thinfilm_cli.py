@@ -8,8 +8,7 @@ import pytest
 
 from bsdflab.cli.main import main
 from bsdflab.optics import FilmStack, Layer, film_reflectance
-from bsdflab.plots.film_colour import (delta_e_2000, reflectance, spectral_rgb,
-                                       three_wavelength_colour)
+from bsdflab.plots.film_colour import delta_e_2000, reflectance, spectral_rgb, three_wavelength_colour
 from bsdflab.presets import AIR_IOR, GUANINE_IOR, KERATIN_IOR_550
 from bsdflab.spectra import THREE_WAVELENGTHS_NM, three_wavelength_rgb
 

@@ -71,9 +71,9 @@ def test_huge_request_is_refused_before_allocating(name):
 
 
 def test_caps_are_configurable(monkeypatch):
-    from bsdflab.util import limits
     from bsdflab.render import Camera
     from bsdflab.render.geometry import build_mesh
+    from bsdflab.util import limits
 
     monkeypatch.setenv("BSDFLAB_MAX_PIXELS", "1_000")
     with pytest.raises(ValueError, match="BSDFLAB_MAX_PIXELS"):

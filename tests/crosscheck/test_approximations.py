@@ -7,8 +7,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bsdflab.reference.approximations import (belcour_barla_rgb, gltf_iridescence_rgb, double_phase_reflectance,
-                                              double_phase_rgb, xyz_sensitivity_exact, xyz_sensitivity_gaussian)
+from bsdflab.reference.approximations import (
+    belcour_barla_rgb,
+    double_phase_reflectance,
+    double_phase_rgb,
+    gltf_iridescence_rgb,
+    xyz_sensitivity_exact,
+    xyz_sensitivity_gaussian,
+)
 from bsdflab.reference.approximations.belcour_barla import XYZ_TO_CIE_RGB
 from bsdflab.reference.approximations.standards import SNAKE_FILM, STANDARDS, can_represent
 from bsdflab.reference.approximations.study import delta_e00, exact_rgb, film_study

@@ -14,7 +14,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-
 from bsdflab.bsdfs import Conductor, Dielectric, Diffuse
 from bsdflab.lobes import Lobe
 from bsdflab.reference import mitsuba_bsdf as mb

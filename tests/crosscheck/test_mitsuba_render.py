@@ -14,7 +14,6 @@ counterpart of our scale texture (bump and film-thickness variation), so
 from __future__ import annotations
 
 import os
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np

@@ -16,7 +16,6 @@ import dataclasses
 import numpy as np
 import pytest
 
-
 from bsdflab.bsdfs import Dielectric, RoughConductor, RoughDielectric
 from bsdflab.lobes import Lobe
 from bsdflab.reference import mitsuba_bsdf as mb

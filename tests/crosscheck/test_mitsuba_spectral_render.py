@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import replace
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -63,7 +63,7 @@ def _ours(scene: Scene, spp: int = SPP, seed: int = 0):
     return r.mean, r.variance
 
 
-@lru_cache(maxsize=None)
+@cache
 def _theirs(name: str):
     """Mitsuba's spectral image of a named scene (shared by the match and power tests)."""
     from bsdflab.reference.mitsuba_render import render_mitsuba

@@ -18,8 +18,6 @@ import numpy as np
 import pytest
 from distributed import get_task_stream
 
-
-
 from bsdflab.distributed import DaskRunner, connect
 from bsdflab.render import render
 from bsdflab.render.units import plan_units, render_units
@@ -171,8 +169,8 @@ def test_table_equals_the_local_table_bit_for_bit(client):
 
 
 def test_a_worker_killed_mid_tabulation_changes_nothing(client):
-    from bsdflab.util.progress import monitored
     from bsdflab.tables import tabulate
+    from bsdflab.util.progress import monitored
 
     model, grid = _small_table_args()
     kw = dict(rel_error=0.05, wavelengths=None, min_samples=32, max_samples=256, seed=12)
@@ -210,9 +208,9 @@ def test_service_executor_runs_jobs_on_the_cluster(client, tmp_path):
 
 
 def test_cancelling_a_cluster_job_cancels_its_units(client, tmp_path):
-    from bsdflab.util.progress import JobCancelled
     from bsdflab.jobs import make_executor
     from bsdflab.jobs.kinds import get_kind
+    from bsdflab.util.progress import JobCancelled
 
     request = get_kind("render").normalise({"scene": "basic-materials", "width": 160, "height": 120,
                                             "spp": 256, "seed": 4})

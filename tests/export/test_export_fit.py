@@ -9,7 +9,6 @@ parameters within 0.5 nm and 0.005 (the map's sensitivity to them is far larger:
 """
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from bsdflab.export.fit import fit, target_rgb

@@ -30,7 +30,7 @@ def _fitted(report):
 
 
 def test_report_states_the_error_and_what_was_dropped(exported):
-    for fmt, (path, report) in exported.items():
+    for _fmt, (path, report) in exported.items():
         on_disk = json.load(open(path + ".report.json"))
         assert on_disk["delta_e00"]["median"] == pytest.approx(report["delta_e00"]["median"])
         e = np.array(on_disk["delta_e00"]["map"])

@@ -12,9 +12,10 @@ import pytest
 import bsdflab as bl
 from bsdflab import Lobe
 from bsdflab.reference.mitsuba_calls import query
-from bsdflab.testing import random_unit_vectors, sidak_z_limit
+from bsdflab.testing import random_unit_vectors
 from support.directions import directions_at
 from support.statistics import assert_agrees, z_limit
+
 
 def plastic_stack(rho, eta=1.5, samples=4096):
     return bl.Layered([bl.Dielectric(eta, 1.0)], [bl.Slab(thickness_um=0.0)], bl.Diffuse(rho),

@@ -7,14 +7,12 @@ family-wise significance ALPHA = 0.01 over the test's comparisons (`sidak_z_limi
 standard errors are the estimators' own (sample standard deviation / sqrt(n)), which for
 means of >= 10^4 independent bounded-variance terms are normal to well within this level.
 """
-import os
 
 import numpy as np
 import pytest
 
 import bsdflab as bl
 from bsdflab import Lobe, _core
-from bsdflab.spectra import DEFAULT_WAVELENGTHS
 from bsdflab.testing import albedo_sampled, albedo_uniform, random_unit_vectors, sidak_z_limit
 from support.directions import directions_at
 

@@ -3,8 +3,7 @@ import colour
 import numpy as np
 import pytest
 
-from bsdflab.spectra import (DEFAULT_WAVELENGTHS, Spectrum, rgb_to_spectrum, spectrum_to_rgb,
-                             srgb_weights)
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, rgb_to_spectrum, spectrum_to_rgb, srgb_weights
 from bsdflab.spectra.colour_weights import rgb_colourspace
 
 

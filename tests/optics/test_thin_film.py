@@ -7,9 +7,20 @@ import tmm
 from colour.phenomena import multilayer_tmm, thin_film_tmm
 
 from bsdflab import _core
-from bsdflab.optics import (Cauchy, Constant, FilmStack, Layer, Tabulated, dispersion_from_dict,
-                            film_amplitudes, film_reflectance, film_transmittance,
-                            fresnel_amplitudes, fresnel_reflectance, fresnel_transmittance)
+from bsdflab.optics import (
+    Cauchy,
+    Constant,
+    FilmStack,
+    Layer,
+    Tabulated,
+    dispersion_from_dict,
+    film_amplitudes,
+    film_reflectance,
+    film_transmittance,
+    fresnel_amplitudes,
+    fresnel_reflectance,
+    fresnel_transmittance,
+)
 from bsdflab.optics import thin_film as thin_film_module
 
 TOL = 1e-10

@@ -10,7 +10,6 @@ import tmm
 from scipy.integrate import quad
 
 from bsdflab.oracles import CoatedDiffuseOracle
-
 from support.directions import directions_at, random_directions
 
 WL = [450.0, 550.0, 650.0]

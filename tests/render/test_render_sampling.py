@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from bsdflab import _core
-from bsdflab.scenes import scene
 from bsdflab.render.geometry import build_mesh
+from bsdflab.scenes import scene
 from support.environment_integral import estimate_z, sphere_integral
 
 Z = 3.9  # two-sided 1e-4 per compared quantity

@@ -24,8 +24,15 @@ import pytest
 from bsdflab import Conductor
 from bsdflab.render import Camera, Environment, Material, Scene, Shape, render
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, rgb_to_spectrum, srgb_weights
-from support.render_scenes import (BLACK_LAYERED, ENV_RGB, FILM, FILM_TOP, THETA, film_mirror_scene, grey_world,
-                                   tabulated_film_mirror_scene)
+from support.render_scenes import (
+    ENV_RGB,
+    FILM,
+    FILM_TOP,
+    THETA,
+    film_mirror_scene,
+    grey_world,
+    tabulated_film_mirror_scene,
+)
 from support.thread_images import images_per_thread_count
 
 

@@ -107,7 +107,8 @@ def test_every_route_by_every_kind_of_key(served):
 def test_the_key_is_checked_before_the_body(served):
     """Before: a body was parsed (and a malformed one answered 422) before the key's 401."""
     client, _ = served
-    r = client.post("/v1/bsdf/eval", content=b"{not json" + b" " * 100_000, headers={"content-type": "application/json"})
+    r = client.post("/v1/bsdf/eval", content=b"{not json" + b" " * 100_000,
+                    headers={"content-type": "application/json"})
     assert r.status_code == 401 and r.headers["www-authenticate"] == "Bearer"
     r = client.post("/v1/bsdf/eval", content=b"{}", headers={"content-type": "application/json",
                                                               "Authorization": "Basic " + ALICE})

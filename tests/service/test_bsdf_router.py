@@ -7,10 +7,10 @@ import json
 
 import numpy as np
 import pytest
-from support.service_client import DIFFUSE, detail, make_client
 
 from bsdflab import presets
 from bsdflab.slices import directions_from_angles, evaluate, hemisphere, plane_of_incidence
+from support.service_client import DIFFUSE, detail, make_client
 
 
 @pytest.fixture(scope="module")
@@ -65,7 +65,8 @@ def test_eval_errors_are_422_with_a_message(client, body, status, words):
 def test_malformed_and_oversized_bodies(client):
     r = client.post("/v1/bsdf/eval", content=b"{not json", headers={"content-type": "application/json"})
     assert r.status_code == 422
-    r = client.post("/v1/bsdf/eval", content=b"[" + b"0," * 40_000 + b"0]", headers={"content-type": "application/json"})
+    r = client.post("/v1/bsdf/eval", content=b"[" + b"0," * 40_000 + b"0]",
+                    headers={"content-type": "application/json"})
     assert r.status_code == 413 and "BSDFLAB_LIMIT_BODY_BYTES" in r.text
 
 

@@ -35,7 +35,8 @@ def test_a_chunked_body_over_the_limit_is_413(client):
         yield b'{"model": {"type": "diffuse", "reflectance": 0.5}, '
         yield b'"theta_i": [0], "theta_o": [0]}'
 
-    assert client.post("/v1/bsdf/eval", content=small(), headers={"content-type": "application/json"}).status_code == 200
+    assert client.post("/v1/bsdf/eval", content=small(),
+                       headers={"content-type": "application/json"}).status_code == 200
 
 
 def test_the_schema_says_model_and_preset_exclude_each_other(client):

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import pytest
+
 from support.service_client import LONG_TABLE, TINY_TABLE, make_client, wait_job
 
 

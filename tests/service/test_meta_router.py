@@ -2,10 +2,10 @@
 from __future__ import annotations
 
 import pytest
-from support.service_client import DIFFUSE, TINY_TABLE, make_client
 
 from bsdflab import presets
 from bsdflab.scenes import SCENES
+from support.service_client import DIFFUSE, TINY_TABLE, make_client
 
 
 @pytest.fixture(scope="module")

@@ -3,6 +3,7 @@ checks, run before the job is queued), limits, missing renders."""
 from __future__ import annotations
 
 import pytest
+
 from support.service_client import detail, make_client
 
 

@@ -11,6 +11,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import httpx2 as httpx
 import pytest
+
 from support.service_process import ServiceProcess, wait_state
 
 HEAVY = 2

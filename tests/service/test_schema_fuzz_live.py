@@ -19,6 +19,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from schemathesis.generation import GenerationMode
 from schemathesis.specs.openapi.checks import positive_data_acceptance
+
 from support.service_process import ServiceProcess
 
 EXCLUDED = [positive_data_acceptance]
@@ -61,8 +62,8 @@ def fuzz(url: str, examples_per_operation: int) -> dict:
     counts = {"cases": 0, "ok": 0, "5xx": 0}
     ok_by_operation: dict[str, int] = {}
     failures: list[str] = []
-    for result in schema.get_all_operations():
-        operation = result.ok()
+
+    def fuzz_operation(operation) -> None:
         strategy = st.one_of(operation.as_strategy(GenerationMode.POSITIVE),
                              operation.as_strategy(GenerationMode.NEGATIVE),
                              *operation.get_strategies_from_examples())
@@ -87,6 +88,9 @@ def fuzz(url: str, examples_per_operation: int) -> dict:
             check()
         except Exception:   # noqa: BLE001 -- already recorded
             pass
+
+    for result in schema.get_all_operations():
+        fuzz_operation(result.ok())
     return {**counts, "ok_by_operation": ok_by_operation, "failures": failures}
 
 

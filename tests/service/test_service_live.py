@@ -14,13 +14,13 @@ import httpx2 as httpx
 import numpy as np
 import pytest
 from playwright import sync_api as playwright
-from support.service_process import ServiceProcess, follow_events, wait_state
 
 from bsdflab import presets
 from bsdflab.jobs import get_kind
 from bsdflab.jobs.render import build_scene
 from bsdflab.render import read_exr, render
 from bsdflab.tables import TableGrid, read_table, tabulate
+from support.service_process import ServiceProcess, follow_events, wait_state
 
 SMALL_TABLE = {"preset": "xenopeltis-thin-film", "grid": {"n_theta_i": 2, "n_theta_o": 3, "n_phi": 3},
                "rel_error": 0.2, "min_samples": 64, "max_samples": 64, "seed": 5}

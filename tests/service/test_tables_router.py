@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from support.service_client import LONG_TABLE, TINY_TABLE, detail, make_client, wait_job
 
 from bsdflab import Diffuse
 from bsdflab.tables import TableGrid, cache_key, read_table, tabulate
+from support.service_client import LONG_TABLE, TINY_TABLE, detail, make_client, wait_job
 
 
 @pytest.fixture(scope="module")

@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from support.service_client import detail, make_client
 
 from bsdflab.optics import film_reflectance, film_transmittance
 from bsdflab.plots.film_colour import spectral_rgb
+from support.service_client import detail, make_client
 
 
 @pytest.fixture(scope="module")

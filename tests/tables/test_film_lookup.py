@@ -19,8 +19,12 @@ from bsdflab.presets import FILM_THICKNESS_NM, preset
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
 from bsdflab.tables import TableBSDF, TableGrid
 from bsdflab.tables.data import TableData
-from bsdflab.tables.table_bsdf import (FILM_LOOKUP_COS_NODES, FILM_LOOKUP_MAX_ERROR, FILM_LOOKUP_STEP_NM,
-                                       transmission_eta)
+from bsdflab.tables.table_bsdf import (
+    FILM_LOOKUP_COS_NODES,
+    FILM_LOOKUP_MAX_ERROR,
+    FILM_LOOKUP_STEP_NM,
+    transmission_eta,
+)
 
 LO, HI = 0.85 * FILM_THICKNESS_NM, 1.15 * FILM_THICKNESS_NM  # the snake's scale jitter range
 

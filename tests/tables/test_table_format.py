@@ -12,9 +12,17 @@ import OpenEXR
 import platformdirs
 import pytest
 
-from bsdflab.tables import (TableData, TableGrid, cache_dir, cache_key, cached_table,
-                            read_attributes, read_table, write_table)
-from bsdflab.tables import file_format
+from bsdflab.tables import (
+    TableData,
+    TableGrid,
+    cache_dir,
+    cache_key,
+    cached_table,
+    file_format,
+    read_attributes,
+    read_table,
+    write_table,
+)
 
 BSDFLAB = [sys.executable, "-m", "bsdflab.cli.main"]
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

@@ -13,8 +13,7 @@ import bsdflab as bl
 from bsdflab import _core
 from bsdflab.tables import TableGrid, tabulate
 from bsdflab.tables.channels import LUMINANCE_RGB
-from bsdflab.tables.stages import (assemble, cell_count, finish_cells, floor_scale, merge_pilots,
-                                  pilot_cells)
+from bsdflab.tables.stages import assemble, cell_count, finish_cells, floor_scale, merge_pilots, pilot_cells
 from bsdflab.testing import sidak_z_limit
 
 ALPHA = 0.01

@@ -12,10 +12,20 @@ import numpy as np
 import pytest
 
 import bsdflab as bl
-from bsdflab.testing import (ChiSquareTest, albedo_sampled, albedo_uniform, bsdf_chi2,
-                             discrete_choice_chi2, eval_pdf_consistency, pearson_chi2,
-                             pool_low_expected, random_unit_vectors, reciprocity_error,
-                             sidak_significance, spherical_directions)
+from bsdflab.testing import (
+    ChiSquareTest,
+    albedo_sampled,
+    albedo_uniform,
+    bsdf_chi2,
+    discrete_choice_chi2,
+    eval_pdf_consistency,
+    pearson_chi2,
+    pool_low_expected,
+    random_unit_vectors,
+    reciprocity_error,
+    sidak_significance,
+    spherical_directions,
+)
 
 ALPHA = 0.01          # significance of every statistical test in this file
 CHI2_SAMPLES = 200_000

@@ -22,17 +22,19 @@ STUDY_EFFORT = effort({"angles": 19, "thicknesses": 61}, {"angles": 46, "thickne
 
 @REGISTRY.check(name="films/approximations/specifications", family="films",
                 title="The comparison models reproduce their specifications' stated behaviour",
-                model="reference.approximations: Belcour-Barla (MaterialX), Cycles, glTF iridescence, Padrón-Griffe et al. 2023's double-phase film",
+                model="reference.approximations: Belcour-Barla (MaterialX), Cycles, glTF iridescence, "
+                      "Padrón-Griffe et al. 2023's double-phase film",
                 reference="the specifications: no film effect when film index = outer index; "
                           "Belcour-Barla's series is the exact Airy sum (exact sensitivities); "
                           "the paper's Gaussian fit reproduces exact colour at normal incidence",
                 statistic="largest violation, in units of its tolerance (<= 1 passes)",
                 tolerance="(a) film index = outer index: every model equals its bare-interface value "
                           "(the same model with d = 0) to 1e-9 at 0, 30 and 60 deg -- glTF only at normal "
-                          "incidence and within its R12 R23 >= 1e-5 clamp, twice 2 (1e-5^0.5 + 1e-5) max|S| for a difference, because "
-                          "Schlick's F(F0 = 0) = (1 - cos)^5 keeps its film visible off normal (reported); (b) Belcour-Barla with exact "
-                          "sensitivities and 60 terms equals the exact spectral sRGB to 1e-6 (series "
-                          "truncation (R12 R23)^30 < 1e-20 and a 1 nm grid on both sides); (c) with the "
+                          "incidence and within its R12 R23 >= 1e-5 clamp, twice 2 (1e-5^0.5 + 1e-5) max|S| for a "
+                          "difference, because Schlick's F(F0 = 0) = (1 - cos)^5 keeps its film visible off normal "
+                          "(reported); (b) Belcour-Barla with exact sensitivities and 60 terms equals the exact "
+                          "spectral sRGB to 1e-6 (series truncation (R12 R23)^30 < 1e-20 and a 1 nm grid on both "
+                          "sides); (c) with the "
                           "paper's Gaussian fit and 2 terms, in the paper's own space (XYZ, illuminant E), "
                           "Delta E00 <= 2 (a JND) against the exact spectral XYZ at normal incidence for "
                           "films up to 300 nm (the paper's examples, e.g. its 290 nm leather) -- its claim of "
@@ -41,8 +43,13 @@ STUDY_EFFORT = effort({"angles": 19, "thicknesses": 61}, {"angles": 46, "thickne
                           "to ~3.5 at 700 nm for the snake's film, reported in the study)",
                 effort=effort({}, {}), seed=0)
 def _specifications(ctx):
-    from bsdflab.reference.approximations import (MODELS, XYZ_TO_SRGB, belcour_barla_rgb, belcour_barla_xyz,
-                                                  xyz_sensitivity_gaussian)
+    from bsdflab.reference.approximations import (
+        MODELS,
+        XYZ_TO_SRGB,
+        belcour_barla_rgb,
+        belcour_barla_xyz,
+        xyz_sensitivity_gaussian,
+    )
     from bsdflab.reference.approximations.study import delta_e00_xyz_e, exact_rgb, exact_xyz_illuminant_e
 
     d = np.linspace(0.0, 1500.0, 31)
@@ -70,7 +77,8 @@ def _specifications(ctx):
     ratios["(c) Gaussian fit at normal incidence, <= 300 nm"] = float(de.max()) / 2.0
     worst = max(ratios.values())
     return Outcome(worst <= 1.0, worst, 1.0, "<=", "; ".join(f"{k}: {v:.3g}" for k, v in ratios.items()),
-                   {"violation_over_tolerance": ratios, "max_delta_e00_xyz_e_normal_incidence_le_300nm": float(de.max()),
+                   {"violation_over_tolerance": ratios,
+                    "max_delta_e00_xyz_e_normal_incidence_le_300nm": float(de.max()),
                     "film_effect_at_equal_index_max_abs_rgb": residues})
 
 
@@ -109,8 +117,8 @@ def _swatch_figure(ctx, study, title):
 
 
 def _spectra_figure(ctx, n_outer, n_film, n_base, points, title):
-    from bsdflab.reference.approximations.study import SPECTRAL_GRID_NM, exact_spectrum
     from bsdflab.reference.approximations import double_phase_reflectance
+    from bsdflab.reference.approximations.study import SPECTRAL_GRID_NM, exact_spectrum
 
     fig, axes = new_figure(4.0 * len(points), 3.0, cols=len(points))
     for ax, (d, angle) in zip(axes, points):

@@ -3,9 +3,14 @@ white furnace, eval/pdf consistency."""
 from __future__ import annotations
 
 from bsdflab.bsdfs import Diffuse
+from bsdflab.validation.checks._common import (
+    CHI2_TOLERANCE,
+    FURNACE_TOLERANCE,
+    chi2_outcome,
+    furnace_outcome,
+    register_mitsuba_cases,
+)
 from bsdflab.validation.registry import REGISTRY, effort
-from bsdflab.validation.checks._common import (CHI2_TOLERANCE, FURNACE_TOLERANCE, chi2_outcome, furnace_outcome,
-                      register_mitsuba_cases)
 
 MITSUBA_TOLERANCE = ("relative error 1e-5 on pairs float32 can resolve (Mitsuba computes in float32, "
                      "both codes get bit-identical float32 inputs and uniforms); pairs it cannot "

@@ -6,9 +6,9 @@ import warnings
 
 import numpy as np
 
+from bsdflab.validation.checks._common import log_error_histogram
 from bsdflab.validation.figures import new_figure
 from bsdflab.validation.registry import REGISTRY, Outcome, effort
-from bsdflab.validation.checks._common import log_error_histogram
 
 ROUND_OFF = 1e-10
 ROUND_OFF_TOLERANCE = ("1e-10 absolute on R and T: both sides are exact closed forms in double "

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from bsdflab import Diffuse, Dielectric, Layered, Slab
+from bsdflab import Dielectric, Diffuse, Layered, Slab
 from bsdflab.testing import random_unit_vectors, spherical_directions
+from bsdflab.validation.checks._common import SIGNIFICANCE, furnace_outcome, z_outcome
 from bsdflab.validation.figures import new_figure
 from bsdflab.validation.registry import REGISTRY, Outcome, effort
-from bsdflab.validation.checks._common import SIGNIFICANCE, furnace_outcome, z_outcome
 
 Z_TOLERANCE = ("z = (PFMC - reference) / se per pair and channel; max |z| below the two-sided "
                f"normal quantile Sidak-corrected at {SIGNIFICANCE} over all z, and per channel "
@@ -77,7 +77,8 @@ def _plastic(ctx):
                           "value 1/sqrt(2(S-1)) would understate it), the slope is the weighted least-"
                           "squares fit with weights 1/se^2, and its standard error "
                           "1/sqrt(sum w (log N - weighted mean)^2)",
-                effort=effort({"seeds": 40, "counts": [128, 512, 2048]}, {"seeds": 60, "counts": [128, 512, 2048, 8192]}),
+                effort=effort({"seeds": 40, "counts": [128, 512, 2048]},
+                              {"seeds": 60, "counts": [128, 512, 2048, 8192]}),
                 make_model=lambda: __import__("bsdflab").presets.xenopeltis(), seed=33)
 def _convergence(ctx):
     counts = np.array(ctx.effort["counts"])

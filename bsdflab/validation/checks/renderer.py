@@ -6,9 +6,9 @@ import math
 
 import numpy as np
 
+from bsdflab.validation.checks._common import SIGNIFICANCE, z_limit
 from bsdflab.validation.figures import new_figure
 from bsdflab.validation.registry import REGISTRY, Outcome, effort
-from bsdflab.validation.checks._common import SIGNIFICANCE, z_limit
 
 
 def _scene_modules():
@@ -135,7 +135,8 @@ def image_figure(ctx, ours, theirs, test, labels=("bsdflab", "Mitsuba 3")):
     z = np.nan_to_num(test.z, nan=0.0, posinf=99, neginf=-99)
     strongest = np.take_along_axis(z, np.argmax(np.abs(z), axis=2)[..., None], axis=2)[..., 0]
     crit = z_limit(max(test.n_tested, 1), test.alpha)
-    im = axes[4].imshow(np.clip(strongest, -crit, crit), cmap="coolwarm", vmin=-crit, vmax=crit, interpolation="nearest")
+    im = axes[4].imshow(np.clip(strongest, -crit, crit), cmap="coolwarm", vmin=-crit, vmax=crit,
+                        interpolation="nearest")
     fig.colorbar(im, ax=axes[4], fraction=0.046)
     axes[4].set_title(f"z (|z| > {crit:.2f} rejected)", fontsize=8)
     for ax in axes:

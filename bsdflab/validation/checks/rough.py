@@ -3,10 +3,16 @@ white furnace (<= 1, single scattering), reciprocity of reflection."""
 from __future__ import annotations
 
 from bsdflab.bsdfs import RoughConductor, RoughDielectric
-from bsdflab.validation.registry import REGISTRY, effort
-from bsdflab.validation.checks._common import (CHI2_TOLERANCE, FURNACE_TOLERANCE, chi2_outcome, furnace_outcome, reciprocity_outcome,
-                      register_mitsuba_cases)
+from bsdflab.validation.checks._common import (
+    CHI2_TOLERANCE,
+    FURNACE_TOLERANCE,
+    chi2_outcome,
+    furnace_outcome,
+    reciprocity_outcome,
+    register_mitsuba_cases,
+)
 from bsdflab.validation.checks.basic import MITSUBA_STATISTIC, MITSUBA_TOLERANCE
+from bsdflab.validation.registry import REGISTRY, effort
 
 ROUGH_MITSUBA_EFFORT = effort({"pairs": 200}, {"pairs": 1000}, {"pairs": 4000})
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from bsdflab.testing import random_unit_vectors, spherical_directions
-from bsdflab.validation.figures import new_figure
-from bsdflab.validation.registry import REGISTRY, Outcome, effort
 from bsdflab.validation.checks._common import CHI2_TOLERANCE, chi2_outcome, z_outcome
 from bsdflab.validation.checks.layered import Z_TOLERANCE
+from bsdflab.validation.figures import new_figure
+from bsdflab.validation.registry import REGISTRY, Outcome, effort
 
 WAVELENGTHS = [450.0, 550.0, 650.0]
 GRIDS = effort({"grid": [4, 6, 5], "check_samples": 4000}, {"grid": [6, 10, 9], "check_samples": 8000},

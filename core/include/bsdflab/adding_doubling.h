@@ -53,7 +53,7 @@ struct ADSettings {
 };
 
 class AddingDoubling {
-public:
+  public:
     // boundaries: K + 1 core BSDFs (top first, base last); media: K + 2 real indices
     // (exterior, slab 0 .. slab K-1, the medium below the base or 0 when it is opaque).
     AddingDoubling(std::vector<double> wavelengths, std::vector<std::shared_ptr<const BSDF>> boundaries,
@@ -75,7 +75,7 @@ public:
     // thickness). What lies below the top is solved once and shared between the two.
     std::shared_ptr<AddingDoubling> with_top(std::shared_ptr<const BSDF> top) const;
 
-private:
+  private:
     struct Boundary;
     struct Inner;  // the reflection of everything below a rough top, per (channel, order)
     void solve(const std::vector<double> &out_cos, const std::vector<double> &in_cos,

@@ -46,8 +46,7 @@ namespace bsdflab::ad {
 // Gauss-Legendre nodes and weights on (0, 1] cut at `breaks`; a panel [a, b] starting at
 // a critical cosine a > 0 is mapped by mu = sqrt(a^2 + (b^2 - a^2) u^2), which makes the
 // sqrt(mu^2 - a^2) of the Fresnel terms beyond it analytic in u.
-void panel_nodes(int per_panel, std::vector<double> breaks, std::vector<double> &mu,
-                 std::vector<double> &w);
+void panel_nodes(int per_panel, std::vector<double> breaks, std::vector<double> &mu, std::vector<double> &w);
 
 // Product integration for kernels narrower than the nodes resolve (a rough top's
 // lobes): fine nodes mu_f (weights w_f in mu) on every panel, composite 4-point Gauss in

@@ -55,7 +55,7 @@ struct FilmLookupStats {
 };
 
 class BSDF {
-public:
+  public:
     explicit BSDF(std::vector<double> wavelengths) : wavelengths_(std::move(wavelengths)) {}
     virtual ~BSDF() = default;
 
@@ -64,8 +64,7 @@ public:
     virtual uint32_t lobes() const = 0;
 
     // Writes channels() values to `out`; zeros when nothing is reachable.
-    virtual void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                      double *out) const = 0;
+    virtual void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const = 0;
     virtual double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const = 0;
     // Writes channels() weights to `weight`; returns lobe 0 and zero weights on failure.
     virtual BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
@@ -77,11 +76,12 @@ public:
     // for callers whose thickness is fixed for many queries (the tabulator's cells).
     // nullptr: no such copy (no film, or no lookup reached its measured error bound).
     // `stats` accumulates the lookups' measured error and memory.
-    virtual std::shared_ptr<const BSDF> with_film_lookup(double /*thickness_nm*/, FilmLookupStats & /*stats*/) const {
+    virtual std::shared_ptr<const BSDF> with_film_lookup(double /*thickness_nm*/,
+                                                         FilmLookupStats & /*stats*/) const {
         return nullptr;
     }
 
-protected:
+  protected:
     void zero(double *out) const {
         for (int c = 0; c < channels(); ++c) out[c] = 0.0;
     }

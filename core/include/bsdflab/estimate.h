@@ -28,27 +28,27 @@ constexpr int kEstimatorVersion = 5;
 
 // Growable scratch memory of one thread's estimates.
 class EstimateWorkspace {
-public:
+  public:
     // At least n doubles; valid until the next call to doubles() on this workspace.
     double *doubles(std::size_t n) {
         if (buffer_.size() < n) buffer_.resize(n);
         return buffer_.data();
     }
 
-private:
+  private:
     std::vector<double> buffer_;
 };
 
 // A workspace leased from this thread's stack for the lifetime of the object.
 class ThreadWorkspace {
-public:
+  public:
     ThreadWorkspace() : workspace_(acquire()) {}
     ~ThreadWorkspace() { --depth(); }
     ThreadWorkspace(const ThreadWorkspace &) = delete;
     ThreadWorkspace &operator=(const ThreadWorkspace &) = delete;
     EstimateWorkspace &get() { return *workspace_; }
 
-private:
+  private:
     static int &depth() {
         thread_local int d = 0;
         return d;
@@ -77,14 +77,14 @@ struct EstimateRequest {
 };
 
 class StochasticEstimator {
-public:
+  public:
     virtual ~StochasticEstimator() = default;
     // Mean and standard error (per output row) of f |cos theta_o| at (wi, wo). Returns the
     // number of walks whose contribution was not finite: those walks count as zero in the
     // mean and are reported, never hidden (a correct model returns 0).
     virtual std::uint64_t estimate(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                                   const EstimateRequest &request, EstimateWorkspace &workspace,
-                                   double *mean, double *stderr_out) const = 0;
+                                   const EstimateRequest &request, EstimateWorkspace &workspace, double *mean,
+                                   double *stderr_out) const = 0;
 };
 
 } // namespace bsdflab

@@ -31,15 +31,14 @@
 namespace bsdflab {
 
 class FilmLookupTerm final : public FresnelTerm {
-public:
+  public:
     static constexpr int kStartIntervals = 128;
     static constexpr int kMaxIntervals = 2048;
     static constexpr double kDefaultMaxError = 1e-7; // absolute, on R and T in [0, 1]
 
     // thickness_nm: the Query::film_thickness_nm the lookup answers (< 0: the film's own).
-    static std::shared_ptr<const FilmLookupTerm> build(std::shared_ptr<const FresnelTerm> exact,
-                                                       double thickness_nm,
-                                                       double max_error = kDefaultMaxError);
+    static std::shared_ptr<const FilmLookupTerm>
+    build(std::shared_ptr<const FresnelTerm> exact, double thickness_nm, double max_error = kDefaultMaxError);
     void eval(double cos_i, const Query &q, double *R, double *T) const override;
     bool transmissive() const override { return exact_->transmissive(); }
     double thickness_nm() const { return thickness_; }
@@ -55,7 +54,7 @@ public:
 
     FilmLookupTerm(std::shared_ptr<const FresnelTerm> exact, double thickness_nm, int intervals);
 
-private:
+  private:
     void fill(Segment &s, int side) const;
     double check(const Segment &s, int side) const; // largest |error| at the check points
     void interpolate(const Segment &s, double v, double *R, double *T) const;

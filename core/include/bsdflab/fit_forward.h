@@ -60,12 +60,11 @@ struct Observation {
 };
 
 class ForwardModel {
-public:
+  public:
     // gh_x, gh_w: Gauss-Hermite nodes/weights (weight e^{-x^2}); gl_x, gl_w: Gauss-Legendre
     // on [-1, 1]. Throws std::invalid_argument on inconsistent inputs.
-    ForwardModel(std::vector<double> wavelengths_nm, std::vector<Observation> rows,
-                 std::vector<double> gh_x, std::vector<double> gh_w, std::vector<double> gl_x,
-                 std::vector<double> gl_w);
+    ForwardModel(std::vector<double> wavelengths_nm, std::vector<Observation> rows, std::vector<double> gh_x,
+                 std::vector<double> gh_w, std::vector<double> gl_x, std::vector<double> gl_w);
 
     std::size_t rows() const { return rows_.size(); }
 
@@ -74,7 +73,7 @@ public:
     // gives NaN for all its rows. Threads over (set, wavelength); call without the GIL.
     void evaluate(const double *params, std::size_t count, double *out) const;
 
-private:
+  private:
     void evaluate_wavelength(const double *p, std::size_t wl, double *out) const;
 
     std::vector<double> wavelengths_;

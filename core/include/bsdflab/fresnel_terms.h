@@ -15,7 +15,7 @@ namespace bsdflab {
 constexpr std::size_t kMaxFilmLayers = 32;
 
 class FresnelTerm {
-public:
+  public:
     virtual ~FresnelTerm() = default;
     // Writes `channels` values to R and T. T is zero for opaque (conductor) interfaces.
     virtual void eval(double cos_i, const Query &q, double *R, double *T) const = 0;
@@ -23,7 +23,7 @@ public:
     double eta() const { return eta_; }
     int channels() const { return channels_; }
 
-protected:
+  protected:
     FresnelTerm(int channels, double eta) : channels_(channels), eta_(eta) {}
     int channels_;
     double eta_;
@@ -31,7 +31,7 @@ protected:
 
 // Bare interface between two real indices (the same for every channel).
 class DielectricTerm final : public FresnelTerm {
-public:
+  public:
     DielectricTerm(int channels, double int_ior, double ext_ior);
     void eval(double cos_i, const Query &q, double *R, double *T) const override;
     bool transmissive() const override { return true; }
@@ -39,12 +39,12 @@ public:
 
 // Bare interface from a real exterior index into a complex index per channel.
 class ConductorTerm final : public FresnelTerm {
-public:
+  public:
     ConductorTerm(std::vector<std::complex<double>> n_int, double ext_ior);
     void eval(double cos_i, const Query &q, double *R, double *T) const override;
     bool transmissive() const override { return false; }
 
-private:
+  private:
     std::vector<std::complex<double>> n_int_;
     double ext_ior_;
 };
@@ -54,14 +54,14 @@ private:
 // Query::film_thickness_nm >= 0 replaces the stack's total thickness, scaling every layer
 // in proportion (for one film: its thickness), so a texture can vary it across a surface.
 class FilmTerm final : public FresnelTerm {
-public:
+  public:
     FilmTerm(std::vector<double> wavelengths, double ext_ior,
              std::vector<std::vector<std::complex<double>>> layer_n, std::vector<double> layer_d_nm,
              std::vector<std::complex<double>> n_substrate, bool substrate_transmits);
     void eval(double cos_i, const Query &q, double *R, double *T) const override;
     bool transmissive() const override { return transmits_; }
 
-private:
+  private:
     std::vector<double> wavelengths_;
     double ext_ior_;
     std::vector<std::vector<std::complex<double>>> layer_n_; // [layer][channel]

@@ -14,19 +14,16 @@
 namespace bsdflab {
 
 class SmoothInterface final : public BSDF {
-public:
-    SmoothInterface(std::vector<double> wavelengths, std::shared_ptr<const FresnelTerm> term,
-                    bool two_sided);
+  public:
+    SmoothInterface(std::vector<double> wavelengths, std::shared_ptr<const FresnelTerm> term, bool two_sided);
     uint32_t lobes() const override;
-    void eval(const Vec3 &, const Vec3 &, uint32_t, const Query &, double *out) const override {
-        zero(out);
-    }
+    void eval(const Vec3 &, const Vec3 &, uint32_t, const Query &, double *out) const override { zero(out); }
     double pdf(const Vec3 &, const Vec3 &, uint32_t, const Query &) const override { return 0.0; }
-    BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
-                      const Query &q, double *weight) const override;
+    BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes, const Query &q,
+                      double *weight) const override;
     std::shared_ptr<const BSDF> with_film_lookup(double thickness_nm, FilmLookupStats &stats) const override;
 
-private:
+  private:
     std::shared_ptr<const FresnelTerm> term_;
     bool two_sided_; // opaque terms only: reflect from below too
 };
@@ -37,18 +34,16 @@ private:
 // is no interface: it passes light straight through (a smooth index-matched interface);
 // its microfacet lobes would be narrower than double precision resolves.
 class RoughInterface final : public BSDF {
-public:
+  public:
     static constexpr double kMatchedEta = 1e-6;
 
-    RoughInterface(std::vector<double> wavelengths, std::shared_ptr<const FresnelTerm> term,
-                   double alpha, bool two_sided, MicrofacetType type = MicrofacetType::GGX,
-                   bool multiscatter = false);
+    RoughInterface(std::vector<double> wavelengths, std::shared_ptr<const FresnelTerm> term, double alpha,
+                   bool two_sided, MicrofacetType type = MicrofacetType::GGX, bool multiscatter = false);
     uint32_t lobes() const override;
-    void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-              double *out) const override;
+    void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const override;
     double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const override;
-    BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
-                      const Query &q, double *weight) const override;
+    BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes, const Query &q,
+                      double *weight) const override;
     const Microfacet &microfacet() const { return mf_; }
     // The energy compensation, or nullptr for the single-scattering model.
     const MultiScatter *multiscatter() const { return ms_.get(); }
@@ -56,12 +51,11 @@ public:
     // nullptr with the energy compensation, whose tables are the exact term's.
     std::shared_ptr<const BSDF> with_film_lookup(double thickness_nm, FilmLookupStats &stats) const override;
 
-private:
+  private:
     // Folds a one- or two-sided opaque interface's directions to the upper side; false
     // when the pair does not scatter.
     bool fold(Vec3 &wi, Vec3 &wo) const;
-    void eval_single(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                     double *out) const;
+    void eval_single(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const;
     double pdf_single(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const;
     BSDFSample sample_single(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
                              const Query &q, double *weight) const;

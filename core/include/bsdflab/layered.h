@@ -64,25 +64,24 @@ struct LayeredOptions {
 };
 
 class LayeredBSDF final : public BSDF, public StochasticEstimator {
-public:
+  public:
     LayeredBSDF(std::vector<double> wavelengths, std::vector<std::shared_ptr<const BSDF>> boundaries,
                 std::vector<Slab> slabs, LayeredOptions options);
     uint32_t lobes() const override;
-    void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-              double *out) const override;
+    void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const override;
     double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const override;
     // A transmitted sample reports eta = the product of the walk's relative indices
     // (n below / n above the stack, or its inverse from below); reflection reports 1.
-    BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
-                      const Query &q, double *weight) const override;
+    BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes, const Query &q,
+                      double *weight) const override;
     const StochasticEstimator *stochastic() const override { return this; }
     // The same stack with every boundary's film looked up (BSDF::with_film_lookup).
     std::shared_ptr<const BSDF> with_film_lookup(double thickness_nm, FilmLookupStats &stats) const override;
 
     // The whole non-delta BSDF: the multiply scattered light plus the top's own reflection.
     std::uint64_t estimate(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                           const EstimateRequest &request, EstimateWorkspace &workspace,
-                           double *mean, double *stderr_out) const override;
+                           const EstimateRequest &request, EstimateWorkspace &workspace, double *mean,
+                           double *stderr_out) const override;
     // The estimate without the entry boundary's own (deterministic) reflection: the light
     // that entered the stack. ScatteredPart exposes it as a model of its own.
     std::uint64_t estimate_scattered(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
@@ -97,7 +96,7 @@ public:
     // its own through EstimateRequest::capped). A cut walk is biased: 0 for a sound model.
     std::uint64_t capped_walks() const { return capped_.load(std::memory_order_relaxed); }
 
-private:
+  private:
     struct Walk;
     struct ExitDensity {   // pdf(): the walk's arrivals at `boundary` heading out
         Vec3 wo;
@@ -137,11 +136,10 @@ private:
 // stack, as a stochastic BSDF. The tabulator stores this part of a layered model and the
 // table BSDF adds top() back exactly at lookup.
 class ScatteredPart final : public BSDF, public StochasticEstimator {
-public:
+  public:
     explicit ScatteredPart(std::shared_ptr<const LayeredBSDF> model);
     uint32_t lobes() const override { return model_->lobes() & ~kDelta; }
-    void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-              double *out) const override;
+    void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const override;
     double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const override {
         return model_->pdf(wi, wo, lobes, q);
     }
@@ -153,14 +151,14 @@ public:
     }
     const StochasticEstimator *stochastic() const override { return this; }
     std::uint64_t estimate(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                           const EstimateRequest &request, EstimateWorkspace &workspace,
-                           double *mean, double *stderr_out) const override {
+                           const EstimateRequest &request, EstimateWorkspace &workspace, double *mean,
+                           double *stderr_out) const override {
         return model_->estimate_scattered(wi, wo, lobes, q, request, workspace, mean, stderr_out);
     }
     const LayeredBSDF &model() const { return *model_; }
     std::shared_ptr<const BSDF> with_film_lookup(double thickness_nm, FilmLookupStats &stats) const override;
 
-private:
+  private:
     std::shared_ptr<const LayeredBSDF> model_;
 };
 

@@ -20,7 +20,7 @@
 namespace bsdflab {
 
 class Warp2D {
-public:
+  public:
     static constexpr int kMaxParams = 3;
     Warp2D() = default;
     // data: (*param nodes, h, w) row-major; params: the node positions of each parameter.
@@ -33,7 +33,7 @@ public:
     // Point -> uniforms (the inverse of sample); returns the density at the point.
     double invert(double x, double y, const double *param, double &ux, double &uy) const;
 
-private:
+  private:
     struct Corners {
         int n = 1;
         std::array<std::size_t, 8> slice{};
@@ -58,7 +58,7 @@ struct MeasuredArrays {
 };
 
 class MeasuredBSDF final : public BSDF {
-public:
+  public:
     // channel_ids: what each output channel is (wavelengths in nm, or 0, 1, 2 for RGB files),
     // looked up linearly between a.channel_nodes.
     MeasuredBSDF(std::vector<double> channel_ids, const MeasuredArrays &a);
@@ -68,9 +68,9 @@ public:
     BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes, const Query &q,
                       double *weight) const override;
 
-private:
-    void values(double sx, double sy, const double *param, double ux_m, double uy_m, double ux_i,
-                double uy_i, double *out) const;
+  private:
+    void values(double sx, double sy, const double *param, double ux_m, double uy_m, double ux_i, double uy_i,
+                double *out) const;
     bool jacobian_;
     Warp2D ndf_, sigma_, vndf_, luminance_, values_;
 };
@@ -79,7 +79,7 @@ private:
 // spacing) x 90 theta_d x 180 phi_d cells of Rusinkiewicz's half/difference angles,
 // nearest-cell lookup as the dataset's reader; cosine-weighted sampling.
 class MerlBSDF final : public BSDF {
-public:
+  public:
     // values: 3 x 90 x 90 x 180, scales applied, negatives already zeroed
     explicit MerlBSDF(std::vector<float> values);
     uint32_t lobes() const override { return kGlossyReflection; }
@@ -88,7 +88,7 @@ public:
     BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes, const Query &q,
                       double *weight) const override;
 
-private:
+  private:
     std::vector<float> values_;
 };
 

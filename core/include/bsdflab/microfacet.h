@@ -11,7 +11,7 @@ namespace bsdflab {
 enum class MicrofacetType { GGX, Beckmann };
 
 class Microfacet {
-public:
+  public:
     Microfacet(MicrofacetType type, double alpha) : type_(type), alpha_(alpha) {}
     MicrofacetType type() const { return type_; }
     double alpha() const { return alpha_; }
@@ -27,7 +27,7 @@ public:
     // A normal visible from v (v.z > 0) with density pdf_visible.
     Vec3 sample_visible(const Vec3 &v, double u1, double u2) const;
 
-private:
+  private:
     Vec3 sample_visible_ggx(const Vec3 &v, double u1, double u2) const;
     Vec3 sample_visible_beckmann(const Vec3 &v, double u1, double u2) const;
     MicrofacetType type_;

@@ -6,7 +6,7 @@
 namespace bsdflab {
 
 class PhaseFunction {
-public:
+  public:
     enum Kind { kIsotropic = 0, kHenyeyGreenstein = 1, kVonMisesFisher = 2 };
     PhaseFunction() = default;
     PhaseFunction(Kind kind, double parameter) : kind_(kind), param_(parameter) {}
@@ -15,7 +15,7 @@ public:
     // A new propagation direction with density eval(w, .); the weight is exactly 1.
     Vec3 sample(const Vec3 &w, double u1, double u2) const;
 
-private:
+  private:
     double eval_cos(double cos_theta) const;
     double sample_cos(double u) const;
     Kind kind_ = kIsotropic;

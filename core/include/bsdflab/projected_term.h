@@ -17,7 +17,7 @@
 namespace bsdflab {
 
 class ProjectedFresnelTerm final : public FresnelTerm {
-public:
+  public:
     // thickness_lo/hi: the film-thickness range (nm) tabulated; lo < 0 means the exact
     // term's own film (one node). default_thickness: used when a query gives none (< 0).
     ProjectedFresnelTerm(std::shared_ptr<const FresnelTerm> exact, std::vector<double> P, int out_channels,
@@ -28,7 +28,7 @@ public:
     int n_cos() const { return n_cos_; }
     int n_thickness() const { return n_thickness_; }
 
-private:
+  private:
     void project(const double *spectral, double *out) const;
 
     std::shared_ptr<const FresnelTerm> exact_;

@@ -8,7 +8,7 @@
 namespace bsdflab {
 
 class PCG32 {
-public:
+  public:
     explicit PCG32(uint64_t seed, uint64_t stream = 0xda3e39cb94b95bdbULL) {
         inc_ = (stream << 1u) | 1u;
         state_ = 0;
@@ -26,7 +26,7 @@ public:
     // Uniform double in [0, 1) with 32 random bits.
     double uniform() { return next() * 0x1p-32; }
 
-private:
+  private:
     uint64_t state_, inc_;
 };
 

@@ -34,7 +34,7 @@
 namespace bsdflab {
 
 class MultiScatter {
-public:
+  public:
     static constexpr int kNodes = 33;
     static constexpr int kGrid = 64;
 
@@ -51,7 +51,7 @@ public:
     double albedo(int side, double mu, int c) const;
     double average_albedo(int side, int c) const { return avg_[side][c]; }
 
-private:
+  private:
     double interpolate(const std::vector<double> &table, double mu, int c) const;
     // Per channel: the tint of a conductor's lobe at the query's film thickness.
     void conductor_tint(const Query &q, double *tint) const;

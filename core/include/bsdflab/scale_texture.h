@@ -76,7 +76,7 @@ struct ScaleSample {
 constexpr double kScaleCoordinateLimit = 1099511627776.0; // 2^40
 
 class ScaleTexture {
-public:
+  public:
     explicit ScaleTexture(const ScaleParams &p); // throws std::invalid_argument on bad params
     // Thread-safe, no allocation. NaN / infinite / out-of-range (u, v) give a gap sample
     // with id 0.
@@ -87,7 +87,7 @@ public:
     uint64_t scale_id(int64_t i, int64_t j) const;
     const ScaleParams &params() const { return p_; }
 
-private:
+  private:
     uint64_t wrapped_id(int64_t i, int64_t j) const;
     ScaleParams p_;
     uint64_t seed_key_;

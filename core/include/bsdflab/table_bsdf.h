@@ -22,21 +22,23 @@
 namespace bsdflab {
 
 class TabulatedBSDF final : public BSDF {
-public:
+  public:
     // values: f per cell and channel, [cell * C + c] (cell order of TableGrid::cell_index);
     // luminance: per channel weights for the sampling CDFs.
     TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, std::vector<float> values,
-                  std::vector<double> luminance, std::shared_ptr<const BSDF> direct,
-                  std::vector<double> P, double default_thickness, double transmission_eta = 1.0);
+                  std::vector<double> luminance, std::shared_ptr<const BSDF> direct, std::vector<double> P,
+                  double default_thickness, double transmission_eta = 1.0);
     uint32_t lobes() const override;
-    void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-              double *out) const override;
+    void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const override;
     double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const override;
-    BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
-                      const Query &q, double *weight) const override;
+    BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes, const Query &q,
+                      double *weight) const override;
 
-private:
-    struct Weights { int i0, i1; double w1; }; // linear interpolation between two nodes
+  private:
+    struct Weights {
+        int i0, i1;
+        double w1;
+    }; // linear interpolation between two nodes
     Weights thickness_weights(const Query &q) const;
     Query direct_query(const Query &q) const; // the film thickness the exact part sees
     Weights angle_weights(double theta, int n) const;

@@ -16,9 +16,7 @@ struct TableGrid {
     std::vector<double> thickness{-1.0};
 
     int n_thickness() const { return static_cast<int>(thickness.size()); }
-    std::size_t cells() const {
-        return std::size_t(n_lobes) * n_thickness() * n_theta_i * n_theta_o * n_phi;
-    }
+    std::size_t cells() const { return std::size_t(n_lobes) * n_thickness() * n_theta_i * n_theta_o * n_phi; }
     double theta_i(int k) const;
     double theta_o(int k) const;
     double phi(int k) const;

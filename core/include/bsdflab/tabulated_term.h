@@ -11,13 +11,13 @@
 namespace bsdflab {
 
 class TabulatedTerm final : public FresnelTerm {
-public:
+  public:
     // reflectance[i][c]: channel c at cos theta = i / (n - 1), n >= 2, values in [0, 1].
     explicit TabulatedTerm(std::vector<std::vector<double>> reflectance);
     void eval(double cos_i, const Query &q, double *R, double *T) const override;
     bool transmissive() const override { return false; }
 
-private:
+  private:
     std::vector<double> table_;   // n x channels, row-major
     int rows_;
 };

@@ -73,7 +73,7 @@ struct FinishedCells {
 // The stage functions. Immutable after construction: safe to share between threads;
 // each stage runs its cells on all cores (call without the GIL).
 class Tabulator {
-public:
+  public:
     // P: (rows x model channels) row-major; rows - 1 output channels plus luminance last.
     Tabulator(std::shared_ptr<const BSDF> model, TableGrid grid, std::vector<double> P, int rows,
               TabulationSettings settings);
@@ -97,7 +97,7 @@ public:
                          const std::vector<double> &pilot_error, const std::vector<double> &scale,
                          const TabulationControl &ctl = {}) const;
 
-private:
+  private:
     // Mean and standard error of f (no cosine) for one cell, all rows of P (luminance last).
     std::uint64_t estimate(std::size_t cell, int n, uint64_t seed, double *mean, double *err) const;
     uint64_t cell_seed(std::size_t cell, uint64_t stage) const;
@@ -119,7 +119,7 @@ private:
 // Python tabulate() runs the pilot job over every cell, floor_scale, then the finish job
 // over every cell -- the same calls a distributed driver makes on blocks of cells.
 class TabulationStageJob {
-public:
+  public:
     enum Stage { kPilot = 0, kFinish = 1 };
     TabulationStageJob(std::shared_ptr<const Tabulator> tabulator, Stage stage,
                        std::vector<std::size_t> cells, std::vector<double> pilot_lum = {},
@@ -133,7 +133,7 @@ public:
     PilotCells pilot;       // after a pilot run
     FinishedCells finished; // after a finish run
 
-private:
+  private:
     std::shared_ptr<const Tabulator> tabulator_;
     Stage stage_;
     std::vector<std::size_t> cells_;

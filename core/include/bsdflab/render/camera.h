@@ -10,19 +10,20 @@
 namespace bsdflab {
 
 class Camera {
-public:
+  public:
     Camera() = default;
-    Camera(const Vec3 &origin, const Vec3 &target, const Vec3 &up, double fov_x_deg, int width,
-           int height)
+    Camera(const Vec3 &origin, const Vec3 &target, const Vec3 &up, double fov_x_deg, int width, int height)
         : origin_(origin), width_(width), height_(height) {
         if (width < 1 || height < 1) throw std::invalid_argument("camera: resolution must be >= 1");
-        if (!(fov_x_deg > 0 && fov_x_deg < 180)) throw std::invalid_argument("camera: fov must be in (0, 180)");
+        if (!(fov_x_deg > 0 && fov_x_deg < 180))
+            throw std::invalid_argument("camera: fov must be in (0, 180)");
         Vec3 d = target - origin;
         double ld = length(d);
         Vec3 left = cross(up, d);
         double ll = length(left);
         if (!(ld > 0) || !(ll > 1e-12 * ld * length(up)) || !all_finite(d))
-            throw std::invalid_argument("camera: degenerate look-at (origin == target or up parallel to view)");
+            throw std::invalid_argument(
+                "camera: degenerate look-at (origin == target or up parallel to view)");
         dir_ = d * (1 / ld);
         left_ = left * (1 / ll);
         up_ = cross(dir_, left_);
@@ -41,7 +42,7 @@ public:
         return d * (1 / length(d));
     }
 
-private:
+  private:
     Vec3 origin_, dir_{0, 0, 1}, left_{1, 0, 0}, up_{0, 1, 0};
     double tan_half_ = 1;
     int width_ = 1, height_ = 1;

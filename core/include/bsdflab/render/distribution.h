@@ -10,7 +10,7 @@
 namespace bsdflab {
 
 class Distribution1D {
-public:
+  public:
     Distribution1D() = default;
     // Non-finite or negative weights count as 0. All-zero weights give an empty distribution.
     explicit Distribution1D(const std::vector<double> &weights);
@@ -24,7 +24,7 @@ public:
     // in [0, 1) given the bin and independent of which bin, so the caller can reuse it.
     std::size_t sample(double u, double &u_rest) const;
 
-private:
+  private:
     // Slot k keeps its own bin with probability keep_[k], else gives alias_[k].
     std::vector<double> prob_, keep_;
     std::vector<uint32_t> alias_;

@@ -19,7 +19,7 @@
 namespace bsdflab {
 
 class Environment {
-public:
+  public:
     Environment() = default; // none
     static Environment constant(const double rgb[3]);
     // rgb: H x W x 3 floats, row-major from the top row (v = 0, +Y); scale multiplies it.
@@ -37,7 +37,7 @@ public:
     // given, its radiance (read at the sampled map coordinates, no inverse mapping).
     Vec3 sample(double u1, double u2, double &pdf, double *rgb = nullptr) const;
 
-private:
+  private:
     enum class Kind { kNone, kConstant, kMap };
     void texel(int i, int j, double rgb[3]) const;
     // Radiance and density at map coordinates (u, v); sin_theta = sin(pi v).

@@ -39,7 +39,7 @@ struct RenderSettings {
 template <int N> struct PathColour;
 
 class RenderJob {
-public:
+  public:
     RenderJob(std::shared_ptr<const RenderScene> scene, const RenderSettings &settings);
 
     // Renders every pass not yet done (call once; returns early after cancel()).
@@ -84,7 +84,7 @@ public:
     // mesh_id (H, W) is the mesh hit first (-1: none).
     void aovs(int samples, double *albedo, double *normal, int *mesh_id) const;
 
-private:
+  private:
     struct RayLog {
         std::size_t rays = 0;
         std::vector<float> *record = nullptr;

@@ -70,7 +70,7 @@ struct EmitterSample {
 };
 
 class RenderScene {
-public:
+  public:
     RenderScene();
     ~RenderScene();
     RenderScene(const RenderScene &) = delete;
@@ -124,7 +124,7 @@ public:
     // The environment radiance arriving from direction d, and environment_pdf(d), in one lookup.
     void environment_radiance(const Vec3 &d, double rgb[3], double &pdf) const;
 
-private:
+  private:
     struct Mesh;
     void fill_hit(int mesh, uint32_t prim, double b1, double b2, SurfaceHit &hit) const;
     double env_selection() const;
