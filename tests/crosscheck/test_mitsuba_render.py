@@ -125,6 +125,20 @@ def test_wrong_albedo_fails_against_mitsuba():
     assert not image_z_test(*ours, *theirs, alpha=ALPHA, block=2).passed
 
 
+@pytest.mark.parametrize("max_depth", [2, 3])
+def test_smooth_dielectric_sphere_depth_matches_mitsuba(max_depth, tmp_path):
+    """max_depth counts vertices as Mitsuba's does: a head-on smooth glass sphere shows only
+    its front's delta reflection (R(0) = 0.04) at depth 2 in both renderers, and the light
+    through it from depth 3 (tests/render/test_render_depth.py has the closed forms)."""
+    ball = Shape({"type": "sphere", "center": [0, 0, 0], "radius": 1.0, "subdivisions": 64}, "glass", name="ball")
+    camera = Camera(origin=(0.0, 0.0, 5.0), target=(0.0, 0.0, 0.0), fov_deg=0.05, width=8, height=8)
+    scene = Scene(camera, (ball,), {"glass": Material({"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0})},
+                  Environment("constant", radiance=(1.0, 1.0, 1.0)), max_depth=max_depth, rr_depth=64)
+    # 8 x 8 pixels all see the centre: 4x4 blocks pool 1024 samples each, near-Gaussian means
+    _check(f"glass-sphere-depth-{max_depth}", _render_ours(scene, 64, 0), _render_mitsuba(scene, 64, 1), tmp_path,
+           block=4)
+
+
 def test_sphere_diffuse_matches_mitsuba(tmp_path):
     scene = _scenes()("sphere", variant="diffuse").with_resolution(WIDTH, HEIGHT)
     _check("sphere-diffuse", _render_ours(scene, SPP, 0), _render_mitsuba(scene, SPP, 1), tmp_path)
