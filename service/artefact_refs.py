@@ -76,7 +76,7 @@ def _stored(value: dict[str, Any], stored_file) -> dict[str, Any]:
     return {**{k: v for k, v in value.items() if k != "hash"}, "path": str(path)}
 
 
-def public(value: Any, artefact_dir: Path) -> Any:
+def public(value: Any, artefact_dir: Path | None = None) -> Any:
     """The inverse for answers: a table or measured model that points into the store is
     shown by its hash, so no server path ever leaves in a response."""
     if isinstance(value, list):

@@ -122,3 +122,20 @@ def test_paths_and_unknown_hashes_are_refused(client, files):
     h = upload(client, files[0].read_bytes(), "rgl").json()["hash"]
     r = client.post("/v1/bsdf/eval", json={"model": {"type": "merl", "hash": h}, **ANGLES}, headers=key(ALICE))
     assert r.status_code == 422 and "no merl" in r.json()["detail"]
+
+
+def test_a_table_of_an_upload_shows_it_by_hash(client, files, tmp_path):
+    """Before: the table's metadata named the uploaded file's server path."""
+    export_model(RoughConductor(alpha=0.2, material="Cu"), tmp_path / "s.bsdf", wavelengths=[450.0, 550.0, 650.0],
+                 n_theta_i=4, resolution=8, error_points=100)
+    h = upload(client, (tmp_path / "s.bsdf").read_bytes(), "rgl").json()["hash"]
+    job = client.post("/v1/tables", json={"model": {"type": "measured", "hash": h},
+                                          "grid": {"n_theta_i": 2, "n_theta_o": 4, "n_phi": 3}},
+                      headers=key(ALICE)).json()
+    while job["state"] not in ("done", "failed"):
+        job = client.get(f"/v1/jobs/{job['id']}", headers=key(ALICE)).json()
+    assert job["state"] == "done", job
+    r = client.get(f"/v1/tables/{job['hash']}", headers=key(ALICE))
+    assert r.json()["model"] == {"type": "measured", "hash": h}
+    data_dir = str(client.app.state.settings.data_dir)
+    assert data_dir not in r.text and data_dir not in client.get("/v1/tables", headers=key(ALICE)).text
