@@ -12,7 +12,7 @@ from bsdflab.service.deps import KEY
 from bsdflab.service.errors import KEY_ERRORS
 from bsdflab.service.heavy import HeavyPool
 from bsdflab.service.job_service import JobService
-from bsdflab.service.routers import bsdf, catalog, jobs, meta, page, renders, tables, thinfilm
+from bsdflab.service.routers import bsdf, catalog, jobs, measured, meta, page, renders, tables, thinfilm
 from bsdflab.service.settings import Settings
 from bsdflab.util import native_output
 
@@ -48,7 +48,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.metrics = metrics.Metrics()
     app.state.metrics.bind(app)
     errors.install(app)
-    app.add_middleware(errors.BodyLimit, limit=settings.limit_body_bytes)
+    app.add_middleware(errors.BodyLimit, limit=settings.limit_body_bytes,
+                       routes={"/v1/measured": ("limit_measured_bytes", settings.limit_measured_bytes)})
     app.add_middleware(errors.HeadAsGet)
     app.add_middleware(auth.KeyCheck, clients=clients, reply=errors.reply)   # before any body is read
     app.add_middleware(metrics.Timing, metrics=app.state.metrics)
@@ -56,7 +57,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(meta.router)
     app.include_router(metrics.router)
     app.include_router(page.router)
-    for module in (catalog, bsdf, thinfilm, tables, renders, jobs):
+    for module in (catalog, bsdf, thinfilm, tables, measured, renders, jobs):
         app.include_router(module.router, dependencies=[KEY], responses=KEY_ERRORS)
     app.mount("/static", StaticFiles(directory=page.STATIC_DIR), name="static")
     if not clients:

@@ -57,22 +57,24 @@ def install(app: FastAPI) -> None:
 class BodyLimit:
     """Refuse request bodies over ``limit`` bytes with 413: by Content-Length when given;
     a body without one (chunked) is read here, up to the limit, before the route sees it
-    (so a chunked body over the limit is a 413 too, not a parse error)."""
+    (so a chunked body over the limit is a 413 too, not a parse error). ``routes`` gives
+    paths their own cap, ``{path: (settings field, bytes)}`` (an upload's)."""
 
-    def __init__(self, app, limit: int):
-        self.app, self.limit = app, limit
+    def __init__(self, app, limit: int, routes: dict[str, tuple[str, int]] | None = None):
+        self.app, self.routes = app, {"": ("limit_body_bytes", limit), **(routes or {})}
 
     async def __call__(self, scope, receive, send):
         if scope["type"] != "http":
             return await self.app(scope, receive, send)
+        field, limit = self.routes.get(scope["path"].rstrip("/"), self.routes[""])
         length = dict(scope.get("headers") or []).get(b"content-length")
         if length is not None:
             try:
                 declared = int(length)
             except ValueError:
                 return await reply(send, 400, "Content-Length is not an integer")
-            if declared > self.limit:
-                return await reply(send, 413, self._message(declared))
+            if declared > limit:
+                return await reply(send, 413, _too_large(declared, field, limit))
             return await self.app(scope, receive, send)   # the server holds the body to its length
         chunks, received = [], 0
         while True:
@@ -81,8 +83,8 @@ class BodyLimit:
                 return
             chunks.append(message.get("body", b""))
             received += len(chunks[-1])
-            if received > self.limit:
-                return await reply(send, 413, self._message(received, streamed=True))
+            if received > limit:
+                return await reply(send, 413, _too_large(received, field, limit, streamed=True))
             if not message.get("more_body", False):
                 break
         replayed = False
@@ -96,9 +98,10 @@ class BodyLimit:
 
         await self.app(scope, replay, send)
 
-    def _message(self, size: int, streamed: bool = False) -> str:
-        return (f"request body of {'more than ' if streamed else ''}{size} bytes is over the limit of "
-                f"{self.limit} bytes ({limit_variable('limit_body_bytes')})")
+
+def _too_large(size: int, field: str, limit: int, streamed: bool = False) -> str:
+    return (f"request body of {'more than ' if streamed else ''}{size} bytes is over the limit of "
+            f"{limit} bytes ({limit_variable(field)})")
 
 
 class HeadAsGet:

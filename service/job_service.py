@@ -17,6 +17,7 @@ from typing import Any
 
 from bsdflab.jobs import JobHandle, get_kind, make_executor
 from bsdflab.jobs import tabulate as tabulate_kind
+from bsdflab.service import uploads
 from bsdflab.service.auth import ANONYMOUS, Client
 from bsdflab.service.settings import Settings
 from bsdflab.service.store import JobStore
@@ -74,6 +75,13 @@ class JobService:
         """The store's file of the table ``content_hash`` (how HTTP requests name tables)."""
         result = self.table(content_hash)
         return None if result is None else self.artefact_dir / result["files"]["exr"]
+
+    def stored_file(self, model_type: str, content_hash: str) -> Path | None:
+        """The store's file of a model named by hash over HTTP: a table, or an uploaded
+        measured file of the matching format (bsdflab.service.uploads)."""
+        if model_type == "table":
+            return self.table_file(content_hash)
+        return uploads.stored_file(self, model_type, content_hash)
 
     def adopt(self, kind: str, content_hash: str, request: dict[str, Any]) -> dict[str, Any] | None:
         """A result whose files exist without a stored record (built by another job, e.g. a

@@ -244,3 +244,14 @@ class VersionInfo(BaseModel):
     workers: int
     api_key_required: bool
     limits: dict[str, int]
+
+
+class MeasuredInfo(BaseModel):
+    hash: str = Field(description="SHA-256 of the file's bytes: name it in a model as "
+                                  '{"type": "measured" or "merl", "hash": ...}')
+    format: str = Field(description="rgl (an RGL .bsdf file) or merl (a MERL .binary file)")
+    summary: dict[str, Any] = Field(description="bytes, channels, and the RGL grid and header description")
+
+
+class MeasuredList(BaseModel):
+    measured: list[MeasuredInfo]

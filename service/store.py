@@ -15,7 +15,7 @@ import uuid
 from pathlib import Path
 from typing import Any
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 ACTIVE = ("queued", "running")
 SCHEMA = """
 CREATE TABLE jobs (
@@ -53,6 +53,12 @@ CREATE TABLE job_clients (
     PRIMARY KEY (job_id, client)
 );
 CREATE INDEX jobs_by_owner ON jobs (owner, state);
+""" + """
+CREATE TABLE uploads (
+    hash TEXT NOT NULL,
+    client TEXT NOT NULL,
+    PRIMARY KEY (hash, client)
+);
 """
 # Version 1 -> 2: jobs belong to clients (the creator owns, clients that joined see).
 MIGRATE_1_2 = """
@@ -60,6 +66,8 @@ ALTER TABLE jobs ADD COLUMN owner TEXT;
 CREATE TABLE job_clients (job_id TEXT NOT NULL, client TEXT NOT NULL, PRIMARY KEY (job_id, client));
 CREATE INDEX jobs_by_owner ON jobs (owner, state);
 """
+# Version 2 -> 3: uploaded artefacts (measured files) belong to the clients that uploaded them.
+MIGRATE_2_3 = "CREATE TABLE uploads (hash TEXT NOT NULL, client TEXT NOT NULL, PRIMARY KEY (hash, client));"
 
 
 class QueueFull(Exception):
@@ -105,8 +113,11 @@ class JobStore:
             if tables:
                 raise StoreError(f"{path} is an SQLite file but not a bsdflab job store")
             self._db.executescript("BEGIN;" + SCHEMA + f"PRAGMA user_version={SCHEMA_VERSION}; COMMIT;")
-        elif version == 1:
+            return
+        if version == 1:
             self._db.executescript("BEGIN;" + MIGRATE_1_2 + "PRAGMA user_version=2; COMMIT;")
+        if version <= 2:
+            self._db.executescript("BEGIN;" + MIGRATE_2_3 + "PRAGMA user_version=3; COMMIT;")
 
     def close(self) -> None:
         with self._lock:
@@ -235,6 +246,29 @@ class JobStore:
             self._db.execute("INSERT OR REPLACE INTO artefacts (hash, kind, created, request, result) "
                              "VALUES (?, ?, ?, ?, ?)",
                              (content_hash, kind, time.time(), json.dumps(request), json.dumps(result)))
+
+    def put_upload(self, content_hash: str, kind: str, client: str, request: dict[str, Any],
+                   result: dict[str, Any]) -> None:
+        """Record an uploaded artefact (once: the same bytes keep their first record) and
+        that ``client`` uploaded it."""
+        with self._lock:
+            self._db.execute("BEGIN IMMEDIATE")
+            try:
+                self._db.execute("INSERT OR IGNORE INTO artefacts (hash, kind, created, request, result) "
+                                 "VALUES (?, ?, ?, ?, ?)",
+                                 (content_hash, kind, time.time(), json.dumps(request), json.dumps(result)))
+                self._db.execute("INSERT OR IGNORE INTO uploads (hash, client) VALUES (?, ?)", (content_hash, client))
+                self._db.execute("COMMIT")
+            except BaseException:
+                self._db.execute("ROLLBACK")
+                raise
+
+    def uploads_of(self, kind: str, client: str | None, limit: int = 1000) -> list[dict[str, Any]]:
+        """Uploaded artefacts of ``kind`` that ``client`` uploaded (None: all), newest first."""
+        mine = "" if client is None else "AND hash IN (SELECT hash FROM uploads WHERE client = ?) "
+        with self._lock:
+            return self._db.execute(f"SELECT * FROM artefacts WHERE kind = ? {mine}ORDER BY created DESC LIMIT ?",
+                                    (kind, *(() if client is None else (client,)), limit)).fetchall()
 
     def artefact(self, content_hash: str, kind: str | None = None) -> dict[str, Any] | None:
         with self._lock:

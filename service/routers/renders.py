@@ -6,7 +6,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, HTTPException, Path
 from fastapi.responses import FileResponse, JSONResponse
 
-from bsdflab.service import render_checks
+from bsdflab.service import artefact_refs, render_checks
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
 from bsdflab.service.job_service import JobService
@@ -29,7 +29,7 @@ def render_info(jobs: JobService, h: str, request: dict[str, Any], result: dict[
     if result is None and live is None:   # a record whose files are gone, and no job
         raise HTTPException(404, f"no render {h}")
     state = "done" if result is not None else live["state"]
-    return RenderInfo(hash=h, state=state, request=request, job=job_info(live) if live else None,
+    return RenderInfo(hash=h, state=state, request=artefact_refs.public(request), job=job_info(live) if live else None,
                       summary=None if result is None else result["summary"], links=_links(h))
 
 

@@ -7,6 +7,7 @@ from fastapi import APIRouter, HTTPException, Path, Query
 from fastapi.responses import FileResponse, JSONResponse
 
 from bsdflab.jobs import tabulate as tabulate_kind
+from bsdflab.service import artefact_refs
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
 from bsdflab.service.job_service import JobService
@@ -22,6 +23,7 @@ QUEUED = {202: {"model": JobInfo, "description": "tabulation queued (or already 
 
 def table_info(result: dict[str, Any]) -> TableInfo:
     fields = {name: result[name] for name in TableInfo.model_fields if name not in ("hash", "links")}
+    fields["model"] = artefact_refs.public(fields["model"], None)   # a stored file by its hash, never its path
     h = result["hash"]
     return TableInfo(hash=h, links={"self": f"/v1/tables/{h}", "file": f"/v1/tables/{h}/file"}, **fields)
 

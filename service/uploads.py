@@ -1,0 +1,68 @@
+"""Measured files uploaded over HTTP (``POST /v1/measured``), stored by content hash.
+
+The bytes are written to a temporary in the artefact folder, read by the real reader
+(`bsdflab.Measured` for RGL ``.bsdf``, `bsdflab.Merl` for MERL), and only then renamed to
+``<sha256>.bsdf`` / ``<sha256>.binary`` (bsdflab.util.files): a file that does not read never
+enters the store, and a reader's complaint reaches the client without the temporary's path.
+The same bytes give the same hash and one file; each client that uploaded them owns them
+(``GET /v1/measured`` lists a client's own). A model names one as ``{"type": "measured",
+"hash": h}`` or ``{"type": "merl", "hash": h}`` (bsdflab.service.artefact_refs).
+"""
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+from typing import Any
+
+from bsdflab.measured import Measured, Merl
+from bsdflab.util.files import write_atomically
+
+KIND = "measured"
+# format -> (model type, reader, file suffix)
+FORMATS = {"rgl": ("measured", Measured, ".bsdf"), "merl": ("merl", Merl, ".binary")}
+MODEL_FORMAT = {model_type: fmt for fmt, (model_type, _, _) in FORMATS.items()}
+
+
+def summary(model) -> dict[str, Any]:
+    """What a client needs to know about a read file (no path)."""
+    if isinstance(model, Merl):
+        return {"channels": ["R", "G", "B"], "spectral": False, "dims": [90, 90, 180]}
+    d = model.data
+    return {"channels": (["R", "G", "B"] if not d.spectral else [f"{w:g} nm" for w in d.wavelengths.tolist()]),
+            "spectral": d.spectral, "n_theta_i": int(d.theta_i.size), "n_phi_i": int(d.phi_i.size),
+            "resolution": int(d.values.shape[-1]), "description": d.description}
+
+
+def upload(jobs, data: bytes, fmt: str, client: str) -> dict[str, Any]:
+    """Check and store ``data`` as a ``fmt`` file; its record ``{"hash", "format", "summary"}``.
+    ValueError with the reader's message (the file called "the upload") when it does not read."""
+    model_type, reader, suffix = FORMATS[fmt]
+    h = hashlib.sha256(data).hexdigest()
+    found = jobs.store.artefact(h, KIND)
+    target = jobs.artefact_dir / f"{h}{suffix}"
+    if found is not None and found["result"]["format"] == fmt and target.is_file():
+        jobs.store.put_upload(h, KIND, client, {"format": fmt}, found["result"])
+        return found["result"]
+    read = {}
+
+    def write(tmp: str) -> None:
+        Path(tmp).write_bytes(data)
+        try:
+            read["model"] = reader(tmp)
+        except ValueError as e:
+            raise ValueError(f"format={fmt}: " + str(e).replace(tmp, "the upload")) from None
+
+    write_atomically(target, write, suffix=suffix)
+    result = {"hash": h, "format": fmt, "summary": {"bytes": len(data), **summary(read["model"])},
+              "files": {"file": target.name}}
+    jobs.store.put_upload(h, KIND, client, {"format": fmt}, result)
+    return jobs.store.artefact(h, KIND)["result"]
+
+
+def stored_file(jobs, model_type: str, content_hash: str) -> Path | None:
+    """The uploaded file of ``model_type`` ("measured" or "merl") with this hash, or None."""
+    row = jobs.store.artefact(content_hash, KIND)
+    if row is None or row["result"]["format"] != MODEL_FORMAT.get(model_type):
+        return None
+    path = jobs.artefact_dir / row["result"]["files"]["file"]
+    return path if path.is_file() else None
