@@ -26,6 +26,8 @@ from bsdflab.util.registry import Registry
 TYPES: Registry[type[BSDF]] = Registry("BSDF type", lazy={
     "layered": "bsdflab.layered.stack",
     "table": "bsdflab.tables.table_bsdf",
+    "measured": "bsdflab.measured.measured_bsdf",
+    "merl": "bsdflab.measured.merl",
 })
 
 

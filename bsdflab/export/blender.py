@@ -20,6 +20,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from bsdflab.util.settings import library_settings
+
 TIMEOUT_S = 600.0
 
 SCRIPT = '''"""Built by bsdflab export: the material {name!r} in Blender (Principled BSDF with Thin Film)."""
@@ -87,7 +89,7 @@ scene.view_settings.look = "None"
 scene.render.image_settings.file_format = "OPEN_EXR"
 scene.render.image_settings.color_depth = "32"
 
-SNAKE = os.environ.get("BSDFLAB_SNAKE_MESH")   # an .npz from bsdflab.export.snake_mesh
+SNAKE = os.environ.get("SNAKE_MESH_NPZ")   # an .npz from bsdflab.export.snake_mesh (set by the parent)
 if SNAKE:
     import numpy as np
     from mathutils import Vector
@@ -160,7 +162,7 @@ def blender_python() -> str:
     """The Python interpreter that runs bpy: ``BSDFLAB_BLENDER_PYTHON``, else the
     ``.venv-blender`` beside this environment or this checkout, else this interpreter if it
     has bpy; ValueError when there is none."""
-    named = os.environ.get("BSDFLAB_BLENDER_PYTHON")
+    named = library_settings().blender_python
     if named:
         if not os.access(named, os.X_OK):
             raise ValueError(f"BSDFLAB_BLENDER_PYTHON={named} is not an executable")
@@ -201,7 +203,7 @@ def write_blend(params: dict, path: str, name: str = "bsdflab", snake: bool = Tr
 
             npz = os.path.join(tmp, "snake.npz")
             np.savez(npz, **snake_mesh())
-            env = dict(os.environ, BSDFLAB_SNAKE_MESH=npz)
+            env = dict(os.environ, SNAKE_MESH_NPZ=npz)
         run_bpy(blender_script(params, name), [os.path.abspath(path)], env=env)
 
 

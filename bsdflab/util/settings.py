@@ -66,6 +66,8 @@ class LibrarySettings(BaseSettings):
                                                           "(bsdflab.tables.signing)")
     mitsuba_variant: str | None = Field(None, description="force the Mitsuba variant of the cross-checks "
                                                           "(scalar_rgb or llvm_ad_rgb)")
+    blender_python: str | None = Field(None, description="the Python interpreter with bpy that `bsdflab export "
+                                                         "--format blender` runs (default: .venv-blender)")
 
 
 def library_settings() -> LibrarySettings:

@@ -113,12 +113,13 @@ def test_a_client_that_leaves_cancels_its_computation(tmp_path):
         for seed in range(HEAVY):
             with pytest.raises(httpx.TimeoutException):
                 httpx.post(f"{server.url}/v1/bsdf/eval", json={**LONG_EVAL, "seed": seed}, timeout=0.5)
-        time.sleep(2.5)          # the C++ call in progress ends (about a CPU-second); no next one starts
+        time.sleep(5.0)          # the C++ call in progress ends (about a CPU-second, longer under load)
         before = cpu_s(pid)
         time.sleep(2.0)
         used = cpu_s(pid) - before
         print(f"\nCPU-seconds used in the 2 s after the clients left: {used:.2f}")
-        assert used < 0.5
+        # uncancelled, the 8 clients' remaining walks keep both cores busy (~4 CPU-s in 2 s)
+        assert used < 1.0
         assert httpx.get(f"{server.url}/healthz", timeout=2).status_code == 200
     finally:
         server.stop()
