@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include "bsdflab/complex_fresnel.h"
+#include "bsdflab/quadrature.h"
 #include "bsdflab/sampling.h"
 
 namespace bsdflab {
@@ -23,23 +24,12 @@ struct Rule {
     std::vector<double> x, w;
 };
 Rule gauss_legendre(int n) {
+    std::vector<double> x, w;
+    bsdflab::gauss_legendre(n, x, w); // on [-1, 1], ascending
     Rule r{std::vector<double>(n), std::vector<double>(n)};
     for (int i = 0; i < n; ++i) {
-        double x = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 1.0;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1.0, p1 = x;
-            for (int k = 2; k <= n; ++k) {
-                double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n * (x * p1 - p0) / (x * x - 1.0);
-            double dx = p1 / dp;
-            x -= dx;
-            if (std::abs(dx) < 1e-16) break;
-        }
-        r.x[i] = 0.5 * (1.0 - x);
-        r.w[i] = 1.0 / ((1.0 - x * x) * dp * dp);
+        r.x[i] = 0.5 * (1.0 - x[n - 1 - i]);
+        r.w[i] = 0.5 * w[n - 1 - i];
     }
     return r;
 }
