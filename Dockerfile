@@ -36,7 +36,8 @@ RUN apt-get update -qq \
  && rm -rf /var/lib/apt/lists/*
 COPY --from=build /wheels /wheels
 RUN python -m venv /opt/bsdflab \
- && /opt/bsdflab/bin/pip install --no-cache-dir /wheels/bsdflab-*.whl \
+ && wheel=$(ls /wheels/bsdflab-*.whl) \
+ && /opt/bsdflab/bin/pip install --no-cache-dir "${wheel}[service,dask]" \
  && rm -rf /wheels
 RUN useradd --system --uid 10001 --create-home --home-dir /home/bsdflab bsdflab \
  && mkdir -p /data && chown bsdflab:bsdflab /data
