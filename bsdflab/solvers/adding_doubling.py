@@ -16,7 +16,8 @@ cores with the GIL released.
 What it computes: reflection from above, f |cos theta_o| exactly as ``Layered.eval``
 (without the top's delta lobe). A rough top's own reflection is evaluated directly; the
 light that entered the stack is solved. Transmission through the stack and reflection
-from below are not solved (zero).
+from below are not solved: pairs asking for them raise ValueError on a transmissive
+stack (an opaque one's are zero, its value).
 
 Validated range (tests/solvers, docs/solvers.md): alpha in [1e-3, 1] for rough
 interfaces and bases (ValueError outside); Henyey-Greenstein |g| <= 0.95 (ValueError
@@ -33,6 +34,7 @@ import numpy as np
 from bsdflab import _core
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.layered import Layered
+from bsdflab.lobes import Lobe
 from bsdflab.util import args as check
 
 ALPHA_RANGE = (1e-3, 1.0)
@@ -40,6 +42,7 @@ MAX_G = 0.95
 DEFAULT_NODES = 16
 DEFAULT_THIN_DEPTH = 2.0 ** -16
 DEFAULT_ORDER_TOLERANCE = 1e-6
+DEFAULT_FINE_STEP = 0.25
 PHASES = ("isotropic", "hg")
 
 
@@ -53,24 +56,37 @@ def nodes_for_g(g: float) -> int:
 class Settings:
     """Truncations of the solve: Gauss-Legendre nodes per panel, Fourier orders (None:
     from the phase functions and the roughness of the boundaries below the top), the
-    optical depth of the doubling's start and the order tolerance."""
+    optical depth of the doubling's start, the order tolerance, the half-period azimuth
+    samples of the interfaces' cosine transforms (None: automatic), and for a rough top
+    the spectral stride of what lies below it (solved at every stride-th wavelength,
+    cubic in wavelength between) and the fine sub-panel width (``fine_step`` x alpha
+    radians) of its product integration."""
 
     nodes: int = DEFAULT_NODES
     orders: int | None = None
     thin_depth: float = DEFAULT_THIN_DEPTH
     order_tolerance: float = DEFAULT_ORDER_TOLERANCE
     film_lookup: bool = False
+    azimuth_samples: int | None = None
+    spectral_stride: int = 1
+    fine_step: float = DEFAULT_FINE_STEP
 
-    def coarser(self, orders_used: int) -> Settings:
-        """Half the nodes, 2/3 of the orders and a 16 x thicker start: the a-posteriori
-        check (node convergence is geometric but not monotone for a rough top, so the
-        coarse solve halves the nodes)."""
-        return replace(self, nodes=max(4, self.nodes // 2),
-                       orders=max(1, (2 * orders_used) // 3), thin_depth=16.0 * self.thin_depth)
+    def coarser(self, orders_used: int, azimuth_used: int | None = None) -> Settings:
+        """Every truncation coarser: half the nodes, 2/3 of the orders, a 16 x thicker
+        start, half the azimuth samples, twice the spectral stride and the fine step: the
+        a-posteriori check (node convergence is geometric but not monotone for a rough
+        top, so the coarse solve halves the nodes)."""
+        return replace(self, nodes=max(4, self.nodes // 2), orders=max(1, (2 * orders_used) // 3),
+                       thin_depth=16.0 * self.thin_depth,
+                       azimuth_samples=max(16, azimuth_used // 2) if azimuth_used else None,
+                       spectral_stride=2 * self.spectral_stride if self.spectral_stride > 1 else 1,
+                       fine_step=2.0 * self.fine_step)
 
     def to_dict(self) -> dict:
         return {"nodes": self.nodes, "orders": self.orders, "thin_depth": self.thin_depth,
-                "order_tolerance": self.order_tolerance, "film_lookup": self.film_lookup}
+                "order_tolerance": self.order_tolerance, "film_lookup": self.film_lookup,
+                "azimuth_samples": self.azimuth_samples, "spectral_stride": self.spectral_stride,
+                "fine_step": self.fine_step}
 
 
 class Solution:
@@ -83,10 +99,12 @@ class Solution:
         self._wl, self._to_rgb = BSDF._channels(model, wavelengths)
         self._core = _build(model, self._wl, settings)
         self._coarse = None
+        self._transmits = bool(model.lobes & Lobe.TRANSMISSION)
 
     def _coarse_core(self):
         if self._coarse is None:
-            self._coarse = _build(self.model, self._wl, self.settings.coarser(self.orders))
+            self._coarse = _build(self.model, self._wl,
+                                  self.settings.coarser(self.orders, int(self._core.azimuth_samples)))
         return self._coarse
 
     def with_model(self, model: Layered) -> Solution:
@@ -99,6 +117,7 @@ class Solution:
             raise ValueError("with_model needs a Layered model that differs only in its rough top")
         new = object.__new__(Solution)
         new.model, new.settings, new._wl, new._to_rgb = model, self.settings, self._wl, self._to_rgb
+        new._transmits = bool(model.lobes & Lobe.TRANSMISSION)
         top = model.interfaces[0]._core(self._wl)
         new._core = self._core.with_top(top)
         new._coarse = self._coarse_core().with_top(top)
@@ -115,20 +134,32 @@ class Solution:
         """Fourier orders used."""
         return int(self._core.orders)
 
+    def _pairs(self, wi, wo) -> tuple[np.ndarray, np.ndarray]:
+        a, b = check.direction_pair(wi, wo)
+        if self._transmits and np.any((a[:, 2] < 0) | (b[:, 2] < 0)):
+            raise ValueError("adding-doubling solves reflection from above only: this stack transmits, and "
+                             "transmission through it and reflection from below are not solved (use the "
+                             "model's own eval, PFMC, for pairs with wi.z < 0 or wo.z < 0)")
+        return a, b
+
     def eval(self, wi, wo, scattered_only: bool = False) -> np.ndarray:
-        """f(wi, wo) |cos theta_o| of reflection from above, (N, C); 0 elsewhere.
+        """f(wi, wo) |cos theta_o| of reflection from above, (N, C); 0 for the other pairs
+        of an opaque stack (its value). A transmissive stack raises ValueError for pairs
+        with wi.z < 0 or wo.z < 0 (transmission and reflection from below are not solved).
         ``scattered_only`` leaves out a rough top's own reflection (what a table stores;
         ``Layered.exact_part`` re-adds it)."""
-        a, b = check.direction_pair(wi, wo)
+        a, b = self._pairs(wi, wo)
         out = self._core.eval(a, b, bool(scattered_only))
         return out @ self._to_rgb.T if self._to_rgb is not None else out
 
     def eval_with_error(self, wi, wo, scattered_only: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """(eval, a-posteriori error bound), each (N, C): the bound is the change to a
-        solve with half the nodes, 2/3 of the orders and a 16 x thicker doubling start (the
-        truncations converge geometrically, the start quadratically, so the error of the
-        finer solve is below that change; tests/solvers checks it)."""
-        a, b = check.direction_pair(wi, wo)
+        solve with every truncation coarser (``Settings.coarser``: half the nodes and
+        azimuth samples, 2/3 of the orders, a 16 x thicker doubling start, twice the
+        spectral stride and fine step); the truncations converge geometrically, the start
+        quadratically, so the error of the finer solve is below that change (tests/solvers
+        checks it)."""
+        a, b = self._pairs(wi, wo)
         fine = self._core.eval(a, b, bool(scattered_only))
         coarse = self._coarse_core().eval(a, b, bool(scattered_only))
         err = np.abs(fine - coarse)
@@ -139,7 +170,9 @@ class Solution:
 
 def solve(model: Layered, wavelengths=None, nodes: int = DEFAULT_NODES, orders: int | None = None,
           thin_depth: float = DEFAULT_THIN_DEPTH,
-          order_tolerance: float = DEFAULT_ORDER_TOLERANCE, film_lookup: bool = False) -> Solution:
+          order_tolerance: float = DEFAULT_ORDER_TOLERANCE, film_lookup: bool = False,
+          azimuth_samples: int | None = None, spectral_stride: int = 1,
+          fine_step: float = DEFAULT_FINE_STEP) -> Solution:
     """Adding-doubling solution of a ``Layered`` model (module docstring).
 
     Parameters
@@ -162,6 +195,16 @@ def solve(model: Layered, wavelengths=None, nodes: int = DEFAULT_NODES, orders: 
         Read the interfaces' films from their cosine lookups (core film_lookup.h, measured
         error <= 1e-7 absolute, as PFMC tabulation does) instead of the Airy sum: faster
         for 81 wavelengths. ``Solution.film_lookup_error`` reports the measured error.
+    azimuth_samples : int in [8, 16384] or None
+        Half-period samples of the interfaces' cosine transforms over azimuth (None:
+        automatic, at least 4 x orders and orders + 10 / alpha).
+    spectral_stride : int in [1, 64]
+        Rough top: solve what lies below it at every stride-th wavelength (and the last)
+        and interpolate the rest (cubic Lagrange in wavelength); for many wavelengths and a
+        stack below that is smooth in wavelength (tables use 4 for 81 wavelengths).
+    fine_step : float in [0.05, 2]
+        Rough top: fine sub-panels of ``fine_step`` x alpha radians (clamped to [0.004,
+        0.05]) for the product integration of its lobes.
     """
     if not isinstance(model, Layered):
         raise ValueError(f"model must be a Layered stack, got {type(model).__name__}")
@@ -189,7 +232,12 @@ def solve(model: Layered, wavelengths=None, nodes: int = DEFAULT_NODES, orders: 
             nodes = nodes_for_g(g)
     if not isinstance(film_lookup, (bool, np.bool_)):
         raise ValueError(f"film_lookup must be True or False, got {film_lookup!r}")
-    return Solution(model, wavelengths, Settings(nodes, orders, thin_depth, order_tolerance, bool(film_lookup)))
+    if azimuth_samples is not None:
+        azimuth_samples = check.integer("azimuth_samples", azimuth_samples, 8, 16384)
+    spectral_stride = check.integer("spectral_stride", spectral_stride, 1, 64)
+    fine_step = check.real_scalar("fine_step", fine_step, 0.05, 2.0)
+    return Solution(model, wavelengths, Settings(nodes, orders, thin_depth, order_tolerance, bool(film_lookup),
+                                                 azimuth_samples, spectral_stride, fine_step))
 
 
 def media_indices(model: Layered) -> list[float]:
@@ -207,4 +255,4 @@ def _build(model: Layered, wl: np.ndarray, s: Settings):
         list(wl), boundaries, media_indices(model), [x.thickness_um for x in slabs],
         [list(x.sigma_a_at(wl)) for x in slabs], [x.sigma_s for x in slabs],
         [x.phase.g if x.phase.type == "hg" else 0.0 for x in slabs], s.nodes, s.orders or 0,
-        s.thin_depth, s.order_tolerance, 0, s.film_lookup)
+        s.thin_depth, s.order_tolerance, s.azimuth_samples or 0, s.film_lookup, s.spectral_stride, s.fine_step)

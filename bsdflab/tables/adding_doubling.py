@@ -26,6 +26,21 @@ from bsdflab.tables.data import LOBES, TableData, TableGrid
 
 METHOD = "adding-doubling"
 SIGNIFICANT = 0.01  # cells in the error statistics: luminance > 1 % of the max
+TABLE_THIN_DEPTH = 2.0 ** -12  # Richardson start error ~1e-5 (docs/solvers.md, convergence)
+SPECTRAL_STRIDE = 4  # what lies below a rough top: every 4th of >= 32 wavelengths (20 nm)
+
+
+def table_settings(rel_error: float, n_wavelengths: int) -> dict:
+    """The solver's truncations for a table of target ``rel_error``: the accuracy a table
+    needs, not the solver's 1e-6 defaults (docs/solvers.md, "Tables by adding-doubling").
+
+    Henyey-Greenstein orders to rel_error / 20 of the largest coefficient (at most 1e-3),
+    a 2^-12 doubling start, for many wavelengths the stack below a rough top solved at
+    every 4th, and the top's fine sub-panels alpha / 2 wide (alpha / 4 below 0.5 %). Each
+    truncation is still checked by the coarser solve of ``eval_with_error``."""
+    return {"order_tolerance": float(np.clip(rel_error / 20.0, 1e-6, 1e-3)), "thin_depth": TABLE_THIN_DEPTH,
+            "spectral_stride": SPECTRAL_STRIDE if n_wavelengths >= 8 * SPECTRAL_STRIDE else 1,
+            "fine_step": 0.5 if rel_error >= 0.005 else 0.25}
 
 
 def with_film_thickness(model: Layered, thickness_nm: float) -> Layered:
@@ -44,10 +59,12 @@ def with_film_thickness(model: Layered, thickness_nm: float) -> Layered:
 
 
 def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = 0.01, wavelengths=None,
-                             nodes: int = 16) -> TableData:
+                             nodes: int = 16, solver: dict | None = None) -> TableData:
     """The table of a ``Layered`` reflector on ``grid`` by adding-doubling (module
-    docstring). ``rel_error`` is recorded as the target; ``meta["error_bound_max_rel"]``
-    is what the solver's bound achieved over the significant cells."""
+    docstring). ``rel_error`` sets the solver's truncations (``table_settings``) and is
+    recorded as the target; ``meta["error_bound_max_rel"]`` is what the solver's bound
+    achieved over the significant cells. ``solver``: keyword arguments of
+    ``bsdflab.solvers.solve`` that replace ``table_settings``'s (e.g. a reference table)."""
     if not isinstance(model, Layered):
         raise ValueError(f"method 'adding-doubling' tabulates Layered models, got {type(model).__name__}")
     if _transmits(model):
@@ -65,7 +82,8 @@ def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = 0.01, wa
         if first is not None and hasattr(model.interfaces[0], "alpha"):  # rough top: reuse the rest
             sol = first.with_model(model_t)
         else:
-            sol = first = solve(model_t, model_wl, nodes=nodes, film_lookup=True)
+            sol = first = solve(model_t, model_wl, nodes=nodes, film_lookup=True,
+                                **{**table_settings(rel_error, len(model_wl)), **(solver or {})})
         v, e = sol.eval_with_error(wi, wo, scattered_only=True)
         values.append(v / wo[:, 2:] @ P.T)
         bounds.append(e / wo[:, 2:] @ np.abs(P).T)

@@ -15,14 +15,16 @@ void bind_adding_doubling(py::module_ &m) {
                          std::vector<double> media, std::vector<double> thickness,
                          std::vector<std::vector<double>> sigma_a, std::vector<double> sigma_s,
                          std::vector<double> g, int nodes, int orders, double thin_depth,
-                         double order_tolerance, int azimuth_samples, bool film_lookup) {
+                         double order_tolerance, int azimuth_samples, bool film_lookup, int spectral_stride,
+                         double fine_step) {
                  std::size_t K = thickness.size();
                  if (sigma_a.size() != K || sigma_s.size() != K || g.size() != K)
                      throw std::invalid_argument("slab parameter lists must have equal length");
                  std::vector<ADSlab> slabs(K);
                  for (std::size_t j = 0; j < K; ++j)
                      slabs[j] = ADSlab{thickness[j], sigma_a[j], sigma_s[j], g[j]};
-                 ADSettings s{nodes, orders, thin_depth, order_tolerance, azimuth_samples, film_lookup};
+                 ADSettings s{nodes,           orders,      thin_depth,      order_tolerance,
+                              azimuth_samples, film_lookup, spectral_stride, fine_step};
                  py::gil_scoped_release nogil;  // the film lookups take a moment
                  std::vector<std::shared_ptr<const BSDF>> b(boundaries.begin(), boundaries.end());
                  return std::make_shared<AddingDoubling>(std::move(wavelengths), std::move(b),
@@ -31,7 +33,7 @@ void bind_adding_doubling(py::module_ &m) {
              py::arg("wavelengths"), py::arg("boundaries"), py::arg("media"), py::arg("thickness"),
              py::arg("sigma_a"), py::arg("sigma_s"), py::arg("g"), py::arg("nodes"), py::arg("orders"),
              py::arg("thin_depth"), py::arg("order_tolerance"), py::arg("azimuth_samples"),
-             py::arg("film_lookup") = false)
+             py::arg("film_lookup") = false, py::arg("spectral_stride") = 1, py::arg("fine_step") = 0.25)
         .def_property_readonly("orders", &AddingDoubling::orders)
         .def_property_readonly("azimuth_samples", &AddingDoubling::azimuth_samples)
         .def_property_readonly("nodes", &AddingDoubling::nodes)

@@ -52,26 +52,32 @@ std::vector<double> kernel_at(const std::vector<double> &coef, std::size_t rows,
     return K;
 }
 
-// Product integration of a fine-node kernel over its rows (fine x cols -> n x cols) or
-// its columns (rows x fine -> rows x n): sum_f B[f][k] (mu_f w_f) / (mu_k w_k) K_f, on
-// every (channel, order) coefficient at once (`cm` of them per entry).
-std::vector<double> project(const std::vector<double> &fine, bool rows_fine, std::size_t other,
-                            const std::vector<double> &B, const std::vector<double> &ratio_f,
-                            const std::vector<double> &mw, std::size_t nf, std::size_t n, std::size_t cm) {
-    std::vector<double> out(n * other * cm, 0.0);
-    parallel_for(n, 1, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t k = begin; k < end; ++k)
-            for (std::size_t f = 0; f < nf; ++f) {
-                double b = B[f * n + k] * ratio_f[f] / mw[k];
-                if (b == 0.0) continue;
-                for (std::size_t o = 0; o < other; ++o) {
-                    double *dst = rows_fine ? &out[(k * other + o) * cm] : &out[(o * n + k) * cm];
-                    const double *src = rows_fine ? &fine[(f * other + o) * cm] : &fine[(o * nf + f) * cm];
-                    for (std::size_t x = 0; x < cm; ++x) dst[x] += b * src[x];
-                }
-            }
-    });
+// The channels whose inner reflection is solved: every stride-th and the last (all when
+// fewer than 4 would remain; the rest are interpolated in wavelength).
+std::vector<int> solved_channels(int C, int stride) {
+    std::vector<int> out;
+    for (int c = 0; c < C; c += std::max(1, stride)) out.push_back(c);
+    if (out.back() != C - 1) out.push_back(C - 1);
+    if (stride <= 1 || out.size() < 4) {
+        out.resize(C);
+        for (int c = 0; c < C; ++c) out[c] = c;
+    }
     return out;
+}
+
+// sum_i w_i a_i over operators of one grid (an empty part counts as zero).
+Op combine(const std::vector<const Op *> &ops, const std::vector<double> &w) {
+    Op r;
+    for (std::size_t i = 0; i < ops.size(); ++i) {
+        auto acc = [&](std::vector<double> &dst, const std::vector<double> &src) {
+            if (src.empty()) return;
+            if (dst.empty()) dst.assign(src.size(), 0.0);
+            for (std::size_t p = 0; p < src.size(); ++p) dst[p] += w[i] * src[p];
+        };
+        acc(r.D, ops[i]->D);
+        acc(r.K, ops[i]->K);
+    }
+    return r;
 }
 
 } // namespace
@@ -132,6 +138,8 @@ AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
             throw std::invalid_argument("sigma_a needs one value per channel");
     if (settings_.nodes < 2) throw std::invalid_argument("nodes must be >= 2");
     if (!(settings_.thin_depth > 0)) throw std::invalid_argument("thin_depth must be > 0");
+    if (settings_.spectral_stride < 1) throw std::invalid_argument("spectral_stride must be >= 1");
+    if (!(settings_.fine_step > 0)) throw std::invalid_argument("fine_step must be > 0");
     if (settings_.film_lookup) {
         FilmLookupStats stats;
         for (auto &b : boundaries_)
@@ -242,17 +250,16 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
         // The top's lobes are narrower than the nodes resolve: integrate them on fine
         // nodes against the (smooth) interpolant of what lies below.
         std::vector<double> mu_f, w_f, B;
-        double h = std::clamp(rough_alpha(top) / 4.0, 0.004, 0.05);
+        double h = std::clamp(rough_alpha(top) * settings_.fine_step, 0.004, 0.05);
         ad::product_nodes(settings_.nodes, breaks_, h, mu_f, w_f, B);
-        const std::size_t nf = mu_f.size(), cm = static_cast<std::size_t>(C) * M;
-        std::vector<double> ratio(nf), mw(n);
-        for (std::size_t f = 0; f < nf; ++f) ratio[f] = mu_f[f] * w_f[f];
-        for (int k = 0; k < n; ++k) mw[k] = mu_[k] * w_[k];
+        const std::size_t nf = mu_f.size();
+        std::vector<double> scale(nf * n);  // (mu_f w_f) / (mu_k w_k)
+        for (std::size_t f = 0; f < nf; ++f)
+            for (int k = 0; k < n; ++k) scale[f * n + k] = mu_f[f] * w_f[f] / (mu_[k] * w_[k]);
         const std::vector<double> fine_down = signed_cos(mu_f, -1.0);
-        topRb = project(ad::fourier_kernel(top, fine_down, down, M, H), true, N, B, ratio, mw, nf, n, cm);
-        topTd = project(ad::fourier_kernel(top, fine_down, in_cos, M, H), true, Qi, B, ratio, mw, nf, n, cm);
-        topTu =
-            project(ad::fourier_kernel(top, out_cos, fine_down, M, H), false, Qo, B, ratio, mw, nf, n, cm);
+        topRb = ad::projected_kernel(top, fine_down, down, true, B, scale, n, M, H);
+        topTd = ad::projected_kernel(top, fine_down, in_cos, true, B, scale, n, M, H);
+        topTu = ad::projected_kernel(top, fine_down, out_cos, false, B, scale, n, M, H);
     }
     // Phase-function coefficients per slab (orders beyond its own are unscattered).
     std::vector<int> slab_orders(K, 0);
@@ -266,85 +273,119 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
         pt[j] = ad::hg_coefficients(s.g, grid, slab_orders[j], true);
     }
 
-    values.assign(static_cast<std::size_t>(C) * M * Qo * Qi, 0.0);
-    if (!smooth_top_ && !cached) inner_->R.assign(static_cast<std::size_t>(C) * M, Op());
-    parallel_for_each(static_cast<std::size_t>(C) * M, [&](std::size_t task) {
-        const int c = static_cast<int>(task / M), m = static_cast<int>(task % M);
+    auto make_grid = [&](int m) {
         Grid g;
         g.n = n;
         g.N = static_cast<int>(N);
         g.W.assign(N, 0.0);
         for (int i = 0; i < n; ++i) g.W[i] = (m == 0 ? 2.0 : 1.0) * kPi * mu_[i] * w_[i];
-        auto exp_tau = [&](double tau) {
-            Op o;
-            o.D.resize(N);
-            for (std::size_t i = 0; i < N; ++i) o.D[i] = std::exp(-tau / grid[i]);
-            return o;
-        };
-        // Single-scattering layer of depth delta and albedo omega at this order.
-        auto thin = [&](std::size_t j, double delta, double omega, Op &R, Op &T) {
-            const double *Pr = &pr[j][static_cast<std::size_t>(m) * N * N];
-            const double *Pt = &pt[j][static_cast<std::size_t>(m) * N * N];
-            R.K.assign(N * N, 0.0);
-            T.K.assign(N * N, 0.0);
-            for (std::size_t i = 0; i < N; ++i)
-                for (std::size_t k = 0; k < N; ++k) {
-                    double mo = grid[i], mi = grid[k];
-                    R.K[i * N + k] =
-                        omega * Pr[i * N + k] * -std::expm1(-delta * (1.0 / mo + 1.0 / mi)) / (mo + mi);
-                    double x = 1.0 / mi - 1.0 / mo;
-                    double h = std::abs(delta * x) < 1e-8 ? delta * (1.0 - 0.5 * delta * x)
-                                                          : -std::expm1(-delta * x) / x;
-                    T.K[i * N + k] = omega * Pt[i * N + k] * std::exp(-delta / mo) * h / (mo * mi);
-                }
-            T.D = exp_tau(delta).D;
-            R.D.clear();
-        };
-        auto slab = [&](std::size_t j, const Op &R) -> Op {
-            const ADSlab &s = slabs_[j];
-            double sigma_t = s.sigma_a[c] + s.sigma_s, tau = sigma_t * s.thickness;
-            if (!(tau > 0)) return R;
-            double omega = sigma_t > 0 ? s.sigma_s / sigma_t : 0.0;
-            Op D = exp_tau(tau);
-            if (!(omega > 0) || m >= slab_orders[j]) return ad::mul(D, ad::mul(R, D, g), g);
-            int k = std::max(0, static_cast<int>(std::ceil(std::log2(tau / settings_.thin_depth))));
-            double delta = tau / std::ldexp(1.0, k);
-            // Richardson start: 2 (doubled half layer) - (single layer) cancels the O(delta^2)
-            // multiple scattering the single-scattering layer misses.
-            Op R1, T1, Rs, Ts;
-            thin(j, delta, omega, R1, T1);
-            thin(j, 0.5 * delta, omega, Rs, Ts);
-            ad::double_symmetric(Rs, Ts, g);
-            for (std::size_t p = 0; p < N * N; ++p) {
-                Rs.K[p] = 2.0 * Rs.K[p] - R1.K[p];
-                Ts.K[p] = 2.0 * Ts.K[p] - T1.K[p];
+        return g;
+    };
+    auto exp_tau = [&](double tau) {
+        Op o;
+        o.D.resize(N);
+        for (std::size_t i = 0; i < N; ++i) o.D[i] = std::exp(-tau / grid[i]);
+        return o;
+    };
+    // Single-scattering layer of depth delta and albedo omega at order m.
+    auto thin = [&](std::size_t j, int m, double delta, double omega, Op &R, Op &T) {
+        const double *Pr = &pr[j][static_cast<std::size_t>(m) * N * N];
+        const double *Pt = &pt[j][static_cast<std::size_t>(m) * N * N];
+        R.K.assign(N * N, 0.0);
+        T.K.assign(N * N, 0.0);
+        for (std::size_t i = 0; i < N; ++i)
+            for (std::size_t k = 0; k < N; ++k) {
+                double mo = grid[i], mi = grid[k];
+                R.K[i * N + k] =
+                    omega * Pr[i * N + k] * -std::expm1(-delta * (1.0 / mo + 1.0 / mi)) / (mo + mi);
+                double x = 1.0 / mi - 1.0 / mo;
+                double h = std::abs(delta * x) < 1e-8 ? delta * (1.0 - 0.5 * delta * x)
+                                                      : -std::expm1(-delta * x) / x;
+                T.K[i * N + k] = omega * Pt[i * N + k] * std::exp(-delta / mo) * h / (mo * mi);
             }
-            Rs.D.clear();
-            Ts.D = T1.D;
-            for (int d = 1; d <= k; ++d) {
-                ad::double_symmetric(Rs, Ts, g);
-                Ts.D = exp_tau(delta * std::ldexp(1.0, d)).D; // the unscattered beam exactly
-            }
-            Layer L{Rs, Ts, Rs, Ts};
-            return ad::reflect_over(L, R, g);
-        };
-        // From the base up.
-        Op R;
-        if (cached) {
-            R = inner_->R[task];
-        } else {
-            R = below[K].op(below[K].Rt, N, C, M, c, m);
-            for (std::size_t j = K; j-- > 0;) {
-                R = slab(j, R);
-                if (j >= 1) {
-                    const Boundary &B = below[j];
-                    Layer L{B.op(B.Rt, N, C, M, c, m), B.op(B.Td, N, C, M, c, m), B.op(B.Rb, N, C, M, c, m),
-                            B.op(B.Tu, N, C, M, c, m)};
-                    R = ad::reflect_over(L, R, g);
-                }
-            }
-            if (!smooth_top_) inner_->R[task] = R;
+        T.D = exp_tau(delta).D;
+        R.D.clear();
+    };
+    auto slab = [&](std::size_t j, int c, int m, const Grid &g, const Op &R) -> Op {
+        const ADSlab &s = slabs_[j];
+        double sigma_t = s.sigma_a[c] + s.sigma_s, tau = sigma_t * s.thickness;
+        if (!(tau > 0)) return R;
+        double omega = sigma_t > 0 ? s.sigma_s / sigma_t : 0.0;
+        Op D = exp_tau(tau);
+        if (!(omega > 0) || m >= slab_orders[j]) return ad::mul(D, ad::mul(R, D, g), g);
+        int k = std::max(0, static_cast<int>(std::ceil(std::log2(tau / settings_.thin_depth))));
+        double delta = tau / std::ldexp(1.0, k);
+        // Richardson start: 2 (doubled half layer) - (single layer) cancels the O(delta^2)
+        // multiple scattering the single-scattering layer misses.
+        Op R1, T1, Rs, Ts;
+        thin(j, m, delta, omega, R1, T1);
+        thin(j, m, 0.5 * delta, omega, Rs, Ts);
+        ad::double_symmetric(Rs, Ts, g);
+        for (std::size_t p = 0; p < N * N; ++p) {
+            Rs.K[p] = 2.0 * Rs.K[p] - R1.K[p];
+            Ts.K[p] = 2.0 * Ts.K[p] - T1.K[p];
         }
+        Rs.D.clear();
+        Ts.D = T1.D;
+        for (int d = 1; d <= k; ++d) {
+            ad::double_symmetric(Rs, Ts, g);
+            Ts.D = exp_tau(delta * std::ldexp(1.0, d)).D;  // the unscattered beam exactly
+        }
+        Layer L{Rs, Ts, Rs, Ts};
+        return ad::reflect_over(L, R, g);
+    };
+    // Reflection of everything below the top (seen from the first slab), from the base up.
+    auto inner = [&](int c, int m, const Grid &g) -> Op {
+        Op R = below[K].op(below[K].Rt, N, C, M, c, m);
+        for (std::size_t j = K; j-- > 0;) {
+            R = slab(j, c, m, g, R);
+            if (j >= 1) {
+                const Boundary &B = below[j];
+                Layer L{B.op(B.Rt, N, C, M, c, m), B.op(B.Td, N, C, M, c, m), B.op(B.Rb, N, C, M, c, m),
+                        B.op(B.Tu, N, C, M, c, m)};
+                R = ad::reflect_over(L, R, g);
+            }
+        }
+        return R;
+    };
+    if (!smooth_top_ && !cached) {
+        // Solved at every spectral_stride-th channel, the rest interpolated in wavelength
+        // (cubic Lagrange on the 4 nearest solved channels).
+        const std::vector<int> solved = solved_channels(C, settings_.spectral_stride);
+        const std::size_t S = solved.size();
+        inner_->R.assign(static_cast<std::size_t>(C) * M, Op());
+        parallel_for_each(S * M, [&](std::size_t t) {
+            int c = solved[t / M], m = static_cast<int>(t % M);
+            inner_->R[static_cast<std::size_t>(c) * M + m] = inner(c, m, make_grid(m));
+        });
+        std::vector<char> is_solved(C, 0);
+        for (int c : solved) is_solved[c] = 1;
+        parallel_for_each(static_cast<std::size_t>(C) * M, [&](std::size_t task) {
+            const int c = static_cast<int>(task / M), m = static_cast<int>(task % M);
+            if (is_solved[c]) return;
+            std::size_t hi = std::upper_bound(solved.begin(), solved.end(), c) - solved.begin();
+            std::size_t j0 = std::min(S - 4, hi < 2 ? 0 : hi - 2);
+            std::vector<const Op *> ops;
+            std::vector<double> w;
+            for (std::size_t i = j0; i < j0 + 4; ++i) {
+                double l = 1.0, x = wavelengths_[c];
+                for (std::size_t j = j0; j < j0 + 4; ++j)
+                    if (j != i)
+                        l *= (x - wavelengths_[solved[j]]) /
+                             (wavelengths_[solved[i]] - wavelengths_[solved[j]]);
+                ops.push_back(&inner_->R[static_cast<std::size_t>(solved[i]) * M + m]);
+                w.push_back(l);
+            }
+            inner_->R[task] = combine(ops, w);
+        });
+        inner_->ready = true;
+    }
+
+    values.assign(static_cast<std::size_t>(C) * M * Qo * Qi, 0.0);
+    parallel_for_each(static_cast<std::size_t>(C) * M, [&](std::size_t task) {
+        const int c = static_cast<int>(task / M), m = static_cast<int>(task % M);
+        const Grid g = make_grid(m);
+        const Op R = smooth_top_ ? inner(c, m, g) : inner_->R[task];
         if (R.D.empty() && R.K.empty()) return;
         Op Rb;
         if (smooth_top_) Rb.D.assign(topRb.begin() + c * N, topRb.begin() + (c + 1) * N);
@@ -379,7 +420,6 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
                 for (std::size_t b = 0; b < Qi; ++b) V[a * Qi + b] += s * Z[k * Qi + b];
             }
     });
-    if (!smooth_top_) inner_->ready = true;
 }
 
 void AddingDoubling::eval(const double *wi_, const double *wo_, std::size_t count, double *out,

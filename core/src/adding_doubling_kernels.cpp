@@ -107,6 +107,57 @@ void product_nodes(int per_panel, std::vector<double> breaks, double h, std::vec
     }
 }
 
+// a[c][m] += sum_k S[k][c] T[k][m] (S: K x C samples, T: K x M cosines, a: C x M), in
+// 4 x 4 register tiles: the transform costs C M per sample, more than the BSDF's eval.
+static void cosine_transform(const double *S, const double *T, int K, int C, int M, double *a) {
+    int c0 = 0;
+    for (; c0 + 4 <= C; c0 += 4) {
+        int m0 = 0;
+        for (; m0 + 4 <= M; m0 += 4) {
+            double acc[4][4] = {};
+            for (int k = 0; k < K; ++k) {
+                const double *s = S + k * C + c0, *t = T + k * M + m0;
+                for (int i = 0; i < 4; ++i)
+                    for (int j = 0; j < 4; ++j) acc[i][j] += s[i] * t[j];
+            }
+            for (int i = 0; i < 4; ++i)
+                for (int j = 0; j < 4; ++j) a[(c0 + i) * M + m0 + j] += acc[i][j];
+        }
+        for (; m0 < M; ++m0)
+            for (int k = 0; k < K; ++k)
+                for (int i = 0; i < 4; ++i) a[(c0 + i) * M + m0] += S[k * C + c0 + i] * T[k * M + m0];
+    }
+    for (; c0 < C; ++c0)
+        for (int k = 0; k < K; ++k) {
+            double s = S[k * C + c0];
+            for (int m = 0; m < M; ++m) a[c0 * M + m] += s * T[k * M + m];
+        }
+}
+
+// The cosine coefficients a[c][m] of f = eval(wi, wo) / |zi| over the azimuth difference
+// for one pair of cosines (wi.z = zo, wo.z = zi); S holds (H + 1) x C samples.
+static void pair_coefficients(const BSDF &b, double zo, double zi, const CosineTable &table,
+                              std::vector<double> &S, Query &q, double *a) {
+    const int C = b.channels(), M = table.M, H = table.H;
+    double so = std::sqrt(std::max(0.0, 1.0 - zo * zo));
+    double si = std::sqrt(std::max(0.0, 1.0 - zi * zi));
+    Vec3 wo{si, 0.0, zi};
+    for (int k = 0; k <= H; ++k) {
+        double d = kPi * k / H;
+        Vec3 wi{-so * std::cos(d), -so * std::sin(d), zo};
+        double *f = &S[k * C];
+        b.eval(wi, wo, kAll, q, f);
+        for (int c = 0; c < C; ++c) {
+            double v = f[c] / std::abs(zi) * table.wk[k];
+            f[c] = std::isfinite(v) ? v : 0.0;
+        }
+    }
+    std::fill(a, a + C * M, 0.0);
+    cosine_transform(S.data(), table.c.data(), H + 1, C, M, a);
+    for (int c = 0; c < C; ++c)
+        for (int m = 1; m < M; ++m) a[c * M + m] *= 2.0;
+}
+
 std::vector<double> fourier_kernel(const BSDF &b, const std::vector<double> &out_z,
                                    const std::vector<double> &in_z, int M, int H) {
     const int C = b.channels();
@@ -114,28 +165,39 @@ std::vector<double> fourier_kernel(const BSDF &b, const std::vector<double> &out
     std::vector<double> out(rows * cols * C * M, 0.0);
     CosineTable table(H, M);
     parallel_for(rows * cols, 16, [&](std::size_t begin, std::size_t end) {
-        std::vector<double> f(C);
+        std::vector<double> S((H + 1) * C);
         Query q;
-        for (std::size_t p = begin; p < end; ++p) {
-            double zo = out_z[p / cols], zi = in_z[p % cols];
-            double so = std::sqrt(std::max(0.0, 1.0 - zo * zo));
-            double si = std::sqrt(std::max(0.0, 1.0 - zi * zi));
-            Vec3 wo{si, 0.0, zi};
-            double *a = &out[p * C * M];
-            for (int k = 0; k <= H; ++k) {
-                double d = kPi * k / H;
-                Vec3 wi{-so * std::cos(d), -so * std::sin(d), zo};
-                b.eval(wi, wo, kAll, q, f.data());
-                const double *ck = &table.c[k * M];
-                for (int c = 0; c < C; ++c) {
-                    double v = f[c] / std::abs(zi) * table.wk[k];
-                    if (v == 0.0 || !std::isfinite(v)) continue;
-                    for (int m = 0; m < M; ++m) a[c * M + m] += v * ck[m];
+        for (std::size_t p = begin; p < end; ++p)
+            pair_coefficients(b, out_z[p / cols], in_z[p % cols], table, S, q, &out[p * C * M]);
+    });
+    return out;
+}
+
+std::vector<double> projected_kernel(const BSDF &b, const std::vector<double> &fine_z,
+                                     const std::vector<double> &other_z, bool fine_rows,
+                                     const std::vector<double> &B, const std::vector<double> &scale, int n,
+                                     int M, int H) {
+    const std::size_t C = b.channels(), cm = C * M, nf = fine_z.size(), other = other_z.size();
+    std::vector<double> out(static_cast<std::size_t>(n) * other * cm, 0.0);
+    CosineTable table(H, M);
+    // One column (or row) of the coarse result per task: the fine kernel is never stored.
+    parallel_for(other, 1, [&](std::size_t begin, std::size_t end) {
+        std::vector<double> S((H + 1) * C), a(cm);
+        Query q;
+        for (std::size_t o = begin; o < end; ++o)
+            for (std::size_t f = 0; f < nf; ++f) {
+                bool any = false;
+                for (int k = 0; k < n && !any; ++k) any = B[f * n + k] != 0.0;
+                if (!any) continue;
+                if (fine_rows) pair_coefficients(b, fine_z[f], other_z[o], table, S, q, a.data());
+                else pair_coefficients(b, other_z[o], fine_z[f], table, S, q, a.data());
+                for (int k = 0; k < n; ++k) {
+                    double w = B[f * n + k] * scale[f * n + k];
+                    if (w == 0.0) continue;
+                    double *dst = fine_rows ? &out[(k * other + o) * cm] : &out[(o * n + k) * cm];
+                    for (std::size_t x = 0; x < cm; ++x) dst[x] += w * a[x];
                 }
             }
-            for (int c = 0; c < C; ++c)
-                for (int m = 1; m < M; ++m) a[c * M + m] *= 2.0;
-        }
     });
     return out;
 }

@@ -50,6 +50,9 @@ struct ADSettings {
     double order_tolerance = 1e-6;   // automatic orders: HG coefficients below this
     int azimuth_samples = 0;         // half-period samples of eval (0: automatic)
     bool film_lookup = false;        // boundaries' films from their cosine lookups (film_lookup.h)
+    int spectral_stride = 1;         // rough top: what lies below it solved at every stride-th
+                                     // channel (and the last), cubic in wavelength between
+    double fine_step = 0.25;         // rough top: fine sub-panels of fine_step * alpha radians
 };
 
 class AddingDoubling {

@@ -64,6 +64,15 @@ void product_nodes(int per_panel, std::vector<double> breaks, double h, std::vec
 std::vector<double> fourier_kernel(const BSDF &b, const std::vector<double> &out_z,
                                    const std::vector<double> &in_z, int M, int H);
 
+// fourier_kernel of a kernel with fine rows (fine_rows) or fine columns, product-integrated
+// onto the n nodes on the fly (the fine kernel is never stored): rows (or columns) k of the
+// result are sum_f B[f][k] scale[f][k] K_f. Layout: n x other (fine rows) or other x n,
+// then [channel][order] as fourier_kernel.
+std::vector<double> projected_kernel(const BSDF &b, const std::vector<double> &fine_z,
+                                     const std::vector<double> &other_z, bool fine_rows,
+                                     const std::vector<double> &B, const std::vector<double> &scale, int n,
+                                     int M, int H);
+
 // The weight per channel of a delta BSDF's `lobe` (kDeltaReflection or
 // kDeltaTransmission, alone) for wi of cosine z; the sampled direction's |z| in cos_out.
 void delta_weight(const BSDF &b, double z, uint32_t lobe, double *out, double *cos_out);
