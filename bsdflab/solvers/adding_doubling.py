@@ -158,11 +158,18 @@ class Solution:
         azimuth samples, 2/3 of the orders, a 16 x thicker doubling start, twice the
         spectral stride and fine step); the truncations converge geometrically, the start
         quadratically, so the error of the finer solve is below that change (tests/solvers
-        checks it)."""
+        checks it). Per pair, the largest relative change over the channels applies to
+        every channel (the change alone crosses zero where the error does not)."""
         a, b = self._pairs(wi, wo)
         fine = self._core.eval(a, b, bool(scattered_only))
         coarse = self._coarse_core().eval(a, b, bool(scattered_only))
         err = np.abs(fine - coarse)
+        # The change crosses zero where fine and coarse swap order at some wavelength while
+        # the error does not: each pair's largest relative change over its channels
+        # applies to all of them (never below the change itself).
+        mag = np.abs(fine)
+        rel = np.max(np.divide(err, mag, out=np.zeros_like(err), where=mag > 0), axis=1, keepdims=True)
+        err = np.maximum(err, rel * mag)
         if self._to_rgb is not None:
             return fine @ self._to_rgb.T, err @ np.abs(self._to_rgb).T
         return fine, err
