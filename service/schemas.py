@@ -188,6 +188,9 @@ class TableRequest(ModelSpec):
     min_samples: Count = 512
     max_samples: Count = 65536
     seed: Seed = 0
+    method: Literal["pfmc", "adding-doubling"] = Field(
+        "pfmc", description="pfmc (Monte Carlo) or adding-doubling (deterministic; reflecting layered "
+                            "models; the walk settings do not apply)")
 
 
 class TableInfo(BaseModel):

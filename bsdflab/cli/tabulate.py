@@ -29,7 +29,7 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--method", choices=("pfmc", "adding-doubling"), default="pfmc",
                    help="pfmc (Monte Carlo, default) or adding-doubling (deterministic, layered "
-                        "reflectors; needs --out and bypasses the cache, docs/solvers.md)")
+                        "reflectors, docs/solvers.md; cached under its own key)")
     p.add_argument("--no-cache", action="store_true", help="always tabulate; do not read or fill the cache")
     p.add_argument("--cache-dir", default=None, help="cache folder (default: $BSDFLAB_CACHE_DIR or the user cache)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -45,10 +45,6 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None:
         check_writable(args.out, "--out")  # before the tabulation, not after it
     model = material_from_args(args)
-    if args.method == "adding-doubling":
-        if args.out is None:
-            raise ValueError("--method adding-doubling needs --out (its tables are not cached)")
-        args.no_cache = True
     grid = TableGrid(args.n_theta_i, args.n_theta_o, args.n_phi, tuple(args.thickness))
     wavelengths = args.wavelengths if args.wavelengths else None
     check_table_memory(grid, 3 if wavelengths is None else len(wavelengths))
@@ -75,7 +71,7 @@ def _tabulate(args, model, grid, channels, make) -> int:
     else:
         table, path, hit = cached_table(model.to_dict(), grid, args.rel_error, channels, make,
                                         directory=args.cache_dir, min_samples=args.min_samples,
-                                        max_samples=args.max_samples, seed=args.seed)
+                                        max_samples=args.max_samples, seed=args.seed, method=args.method)
     if args.out is not None:
         if path is not None and hit:
             from bsdflab.util.files import write_atomically
@@ -92,9 +88,16 @@ def _tabulate(args, model, grid, channels, make) -> int:
           f"95 % {m.get('rel_error_p95', 0):.4g}, max {m.get('rel_error_max', 0):.4g}")
     print(f"time          {m.get('seconds', 0):.1f} s on {m.get('threads', '?')} threads")
     accuracy = table.accuracy()
-    print(f"target met    {'yes' if accuracy['target_met'] else 'NO'}: {accuracy['capped_cells']} of "
-          f"{table.samples.size} cells stopped at --max-samples {accuracy['max_samples']}")
-    if not accuracy["target_met"]:
+    if m.get("method") == "adding-doubling":
+        print(f"target met    {'yes' if accuracy['target_met'] else 'NO'}: the solver's error bound, "
+              f"max {m.get('error_bound_max_rel', 0):.3g} relative")
+    else:
+        print(f"target met    {'yes' if accuracy['target_met'] else 'NO'}: {accuracy['capped_cells']} of "
+              f"{table.samples.size} cells stopped at --max-samples {accuracy['max_samples']}")
+    if not accuracy["target_met"] and m.get("method") == "adding-doubling":
+        print(f"bsdflab tabulate: warning: the solver's error bound exceeds the target "
+              f"{table.rel_error_target:g} somewhere (docs/solvers.md: more nodes)", file=sys.stderr)
+    elif not accuracy["target_met"]:
         print(f"bsdflab tabulate: warning: the table does not reach the target error "
               f"{table.rel_error_target:g} everywhere; raise --max-samples", file=sys.stderr)
     return 0

@@ -4,7 +4,11 @@ Request (normalised)::
 
     {"model": <BSDF dict>, "grid": {"n_theta_i", "n_theta_o", "n_phi", "thickness_nm"},
      "rel_error": 0.01, "wavelengths": null | [nm, ...], "min_samples": 512,
-     "max_samples": 65536, "seed": 0}
+     "max_samples": 65536, "seed": 0, "method": "pfmc" | "adding-doubling"}
+
+``method`` "adding-doubling" (a reflecting ``Layered`` model) solves the table
+deterministically (bsdflab.tables.adding_doubling); the walk settings do not apply to it
+and its cache key holds the method and the solver's settings instead.
 
 ``out_dir`` is a table cache folder (``bsdflab.tables.cache``): the table is
 ``out_dir/<key>.exr`` with the cache's own key, so the same table asked for by a render's
@@ -24,12 +28,13 @@ from bsdflab.tables import TableGrid, cache_key, cached_table, read_attributes, 
 from bsdflab.tables.channels import table_channels
 from bsdflab.tables.file_format import HASH_ATTRIBUTE
 from bsdflab.tables.summary import relative_error_summary
-from bsdflab.tables.tabulate import DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES
+from bsdflab.tables.adding_doubling import check_adding_doubling
+from bsdflab.tables.tabulate import DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES, METHODS
 from bsdflab.util import args as check
 from bsdflab.util.progress import monitored
 
 FIELDS = {"model", "preset", "overrides", "grid", "rel_error", "wavelengths", "min_samples",
-          "max_samples", "seed"}
+          "max_samples", "seed", "method"}
 
 
 def normalise(request: dict[str, Any]) -> dict[str, Any]:
@@ -52,7 +57,12 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
     max_samples = check.count("max_samples", request.get("max_samples", DEFAULT_MAX_SAMPLES))
     if max_samples < min_samples:
         raise ValueError(f"max_samples ({max_samples}) must be >= min_samples ({min_samples})")
-    return {"model": model.to_dict(), "grid": grid.to_dict(),
+    method = request.get("method", "pfmc")
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {check.brief(method)}")
+    if method == "adding-doubling":
+        check_adding_doubling(model)   # refused at submission, not when the job runs
+    return {"model": model.to_dict(), "grid": grid.to_dict(), "method": method,
             "rel_error": check.real_scalar("rel_error", request.get("rel_error", 0.01), 0.0, 1.0, lo_open=True),
             "wavelengths": wavelengths, "min_samples": min_samples, "max_samples": max_samples,
             "seed": check.seed(request.get("seed", 0))}
@@ -69,7 +79,7 @@ def _key_arguments(request: dict[str, Any]):
     (defaults spelled out share the entry of requests that leave them out)."""
     names = table_channels(request["wavelengths"])[0]
     effort = {"min_samples": request["min_samples"], "max_samples": request["max_samples"],
-              "seed": request["seed"]}
+              "seed": request["seed"], "method": request.get("method", "pfmc")}
     return request["model"], TableGrid.from_dict(request["grid"]), request["rel_error"], names, effort
 
 
@@ -97,7 +107,7 @@ def run(request: dict[str, Any], out_dir: Path, progress, cancelled, runner=None
         with monitored(lambda stage, fraction: progress(fraction), cancelled):
             return tabulate(model, grid, rel_error=rel_error, wavelengths=request["wavelengths"],
                             min_samples=request["min_samples"], max_samples=request["max_samples"],
-                            seed=request["seed"], progress=False, runner=runner)
+                            seed=request["seed"], progress=False, runner=runner, method=effort["method"])
 
     table, path, hit = cached_table(model_dict, grid, rel_error, names, make, directory=out_dir, **effort)
     if path is None:

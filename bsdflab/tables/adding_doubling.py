@@ -21,13 +21,18 @@ from bsdflab import __version__, _core
 from bsdflab.bsdfs.base import from_dict
 from bsdflab.layered import Layered
 from bsdflab.solvers import solve
+from bsdflab.solvers.adding_doubling import Settings
 from bsdflab.tables.channels import table_channels
 from bsdflab.tables.data import LOBES, TableData, TableGrid
 
 METHOD = "adding-doubling"
+TABLE_NODES = 16    # Gauss-Legendre nodes per cosine panel of a table's solve
 SIGNIFICANT = 0.01  # cells in the error statistics: luminance > 1 % of the max
 TABLE_THIN_DEPTH = 2.0 ** -12  # Richardson start error ~1e-5 (docs/solvers.md, convergence)
 SPECTRAL_STRIDE = 4  # what lies below a rough top: every 4th of >= 32 wavelengths (20 nm)
+# table_settings' rules, in the cache key (solver_settings): a change makes new tables.
+TABLE_RULES = ("orders to rel_error/20 (<= 1e-3), start 2^-12, stride 4 from 32 wavelengths, "
+               "fine step alpha/2 (alpha/4 below 0.5 %)")
 
 
 def table_settings(rel_error: float, n_wavelengths: int) -> dict:
@@ -58,18 +63,30 @@ def with_film_thickness(model: Layered, thickness_nm: float) -> Layered:
     return from_dict(d)
 
 
-def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = 0.01, wavelengths=None,
-                             nodes: int = 16, solver: dict | None = None) -> TableData:
-    """The table of a ``Layered`` reflector on ``grid`` by adding-doubling (module
-    docstring). ``rel_error`` sets the solver's truncations (``table_settings``) and is
-    recorded as the target; ``meta["error_bound_max_rel"]`` is what the solver's bound
-    achieved over the significant cells. ``solver``: keyword arguments of
-    ``bsdflab.solvers.solve`` that replace ``table_settings``'s (e.g. a reference table)."""
+def check_adding_doubling(model) -> None:
+    """ValueError unless ``model`` is a stack this method tabulates (a reflecting ``Layered``)."""
     if not isinstance(model, Layered):
         raise ValueError(f"method 'adding-doubling' tabulates Layered models, got {type(model).__name__}")
     if _transmits(model):
         raise ValueError("method 'adding-doubling' tabulates reflection only; this stack transmits "
                          "(use method 'pfmc')")
+
+
+def solver_settings() -> dict:
+    """The solver settings a table is requested with (part of its cache key: a change of
+    the defaults makes new tables). The solve may raise the nodes (``nodes_for_g``);
+    ``meta["solver"]`` records what it used."""
+    return {**Settings(nodes=TABLE_NODES, film_lookup=True).to_dict(), "table_settings": TABLE_RULES}
+
+
+def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = 0.01, wavelengths=None,
+                             nodes: int = TABLE_NODES, solver: dict | None = None) -> TableData:
+    """The table of a ``Layered`` reflector on ``grid`` by adding-doubling (module
+    docstring). ``rel_error`` sets the solver's truncations (``table_settings``) and is
+    recorded as the target; ``meta["error_bound_max_rel"]`` is what the solver's bound
+    achieved over the significant cells. ``solver``: keyword arguments of
+    ``bsdflab.solvers.solve`` that replace ``table_settings``'s (e.g. a reference table)."""
+    check_adding_doubling(model)
     names, model_wl, P, lum_w = table_channels(wavelengths)
     start = time.perf_counter()
     ti, to, ph = np.meshgrid(grid.theta_i, grid.theta_o, grid.phi, indexing="ij")
@@ -91,24 +108,32 @@ def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = 0.01, wa
         if sol.film_lookup_error is not None:
             lookup_error = max(lookup_error or 0.0, sol.film_lookup_error)
     shape = (1, len(thicknesses), grid.n_theta_i, grid.n_theta_o, grid.n_phi, len(names))
-    vals = np.stack(values).reshape(shape)
-    errs = np.stack(bounds).reshape(shape)
-    lum, lum_err = vals @ lum_w, errs @ np.abs(lum_w)
-    mask = lum > SIGNIFICANT * max(float(lum.max()), 1e-300)
-    rel = lum_err[mask] / lum[mask] if np.any(mask) else np.zeros(1)
+    # The statistics are of the stored (float32) cells, so a table assembled from units
+    # (bsdflab.tables.units) reports the same ones.
+    vals = np.stack(values).reshape(shape).astype(np.float32)
+    errs = np.stack(bounds).reshape(shape).astype(np.float32)
     meta = {"bsdflab_version": __version__, "method": METHOD,
             "solver": {**sol.settings.to_dict(), "orders": orders},
             "seconds": round(time.perf_counter() - start, 3), "threads": _core.worker_count(),
             "error_kind": "deterministic bound (adding-doubling, Solution.eval_with_error)",
-            "error_bound_max_rel": float(rel.max()), "error_bound_rms_rel": float(np.sqrt(np.mean(rel**2))),
             "film_lookup_error": lookup_error, "max_samples": 1 << 24, "min_samples": 1,
-            "rel_error_rms": float(np.sqrt(np.mean(rel**2))), "rel_error_p95": float(np.percentile(rel, 95)),
-            "rel_error_max": float(rel.max())}
+            **bound_statistics(vals.astype(np.float64), errs.astype(np.float64), lum_w)}
     table = TableData(model=model.to_dict(), grid=grid, lobes=LOBES[:1], channels=names, split_direct=True,
-                      values=vals.astype(np.float32), stderr=errs.astype(np.float32),
+                      values=vals, stderr=errs,
                       samples=np.ones(shape[:-1], dtype=np.int32), rel_error_target=float(rel_error), meta=meta)
     table.check()
     return table
+
+
+def bound_statistics(values: np.ndarray, bounds: np.ndarray, lum_w: np.ndarray) -> dict:
+    """The error bound relative to the luminance over the significant cells (luminance >
+    ``SIGNIFICANT`` x the max): its max, RMS and 95th percentile, as ``meta`` keys."""
+    lum, lum_err = values @ lum_w, bounds @ np.abs(lum_w)
+    mask = lum > SIGNIFICANT * max(float(lum.max()), 1e-300)
+    rel = lum_err[mask] / lum[mask] if np.any(mask) else np.zeros(1)
+    rms, top = float(np.sqrt(np.mean(rel**2))), float(rel.max())
+    return {"error_bound_max_rel": top, "error_bound_rms_rel": rms, "rel_error_rms": rms,
+            "rel_error_p95": float(np.percentile(rel, 95)), "rel_error_max": top}
 
 
 def _transmits(model: Layered) -> bool:

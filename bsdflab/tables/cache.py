@@ -3,7 +3,9 @@
 Each table lives at ``<cache_dir>/<key>.exr`` where the key hashes everything that can
 change a table's content: the model, the grid, the target relative error, the channels,
 the effort (``min_samples``, ``max_samples``), the seed, the table format version, the
-tabulator's error floor and the core's estimator version. A file read back is checked to
+tabulator's error floor and the core's estimator version; for a table by adding-doubling
+(``method="adding-doubling"``, deterministic) the method and the solver's settings instead
+of the walks' effort, seed and estimator version. A file read back is checked to
 be the table that was asked for (its header must repeat the request) before it is
 returned. Files are written atomically, so concurrent writers of the same key are safe:
 the last rename wins and every reader sees a complete file. A file that fails
@@ -22,7 +24,7 @@ from typing import Any
 from bsdflab import _core
 from bsdflab.tables.data import FORMAT_VERSION, TableData, TableGrid, check_table_memory
 from bsdflab.tables.file_format import canonical_json, read_table, write_table
-from bsdflab.tables.tabulate import ERROR_FLOOR, tabulate
+from bsdflab.tables.tabulate import ERROR_FLOOR, METHODS, tabulate
 from bsdflab.util import args as check
 from bsdflab.util.settings import library_settings
 
@@ -77,16 +79,30 @@ def channel_names(channels: str | Sequence[Any]) -> tuple[str, ...]:
 
 def request_dict(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], rel_error: float,
                  channels: str | Sequence[Any], min_samples: int | None = None,
-                 max_samples: int | None = None, seed: int | None = None) -> dict[str, Any]:
-    """Everything that determines a table's content, with defaults resolved (the key's input)."""
+                 max_samples: int | None = None, seed: int | None = None,
+                 method: str = "pfmc") -> dict[str, Any]:
+    """Everything that determines a table's content, with defaults resolved (the key's input).
+
+    A PFMC request has no ``method`` entry, so the keys of tables cached before methods
+    existed still match; an adding-doubling request records the method and the solver's
+    settings, and no walk effort or seed (they do not apply to it)."""
     defaults = _tabulate_defaults()
     grid_obj = grid if isinstance(grid, TableGrid) else TableGrid.from_dict(dict(grid))
-    return {
+    common = {
         "channels": list(channel_names(channels)),
         "format_version": FORMAT_VERSION,
         "grid": grid_obj.to_dict(),
         "model": model_dict,
         "rel_error": check.real_scalar("rel_error", rel_error, 0.0, 1.0, lo_open=True),
+    }
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {check.brief(method)}")
+    if method != "pfmc":
+        from bsdflab.tables.adding_doubling import solver_settings
+
+        return {**common, "method": method, "solver": solver_settings()}
+    return {
+        **common,
         "min_samples": check.count("min_samples", defaults["min_samples"] if min_samples is None else min_samples),
         "max_samples": check.count("max_samples", defaults["max_samples"] if max_samples is None else max_samples),
         "seed": check.seed(defaults["seed"] if seed is None else seed),
@@ -97,12 +113,13 @@ def request_dict(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], r
 
 def cache_key(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], rel_error: float,
               channels: str | Sequence[Any], min_samples: int | None = None,
-              max_samples: int | None = None, seed: int | None = None) -> str:
+              max_samples: int | None = None, seed: int | None = None, method: str = "pfmc") -> str:
     """SHA-256 (hex) of the canonical JSON (sorted keys) of ``request_dict(...)``: the
     channels, format version, grid, model, target error, effort, seed, error floor and
-    estimator version. Omitted effort and seed take ``tabulate``'s defaults, so a request
-    that spells them out shares the entry of one that does not."""
-    request = request_dict(model_dict, grid, rel_error, channels, min_samples, max_samples, seed)
+    estimator version (for adding-doubling: the method and solver settings). Omitted effort
+    and seed take ``tabulate``'s defaults, so a request that spells them out shares the
+    entry of one that does not."""
+    request = request_dict(model_dict, grid, rel_error, channels, min_samples, max_samples, seed, method)
     try:
         text = canonical_json(request)
     except (TypeError, ValueError) as e:
@@ -118,8 +135,9 @@ def mismatch(table: TableData, request: dict[str, Any]) -> str | None:
         "grid": table.grid.to_dict() == request["grid"],
         "rel_error": table.rel_error_target == request["rel_error"],
         "channels": list(table.channels) == request["channels"],
+        "method": meta.get("method", "pfmc") == request.get("method", "pfmc"),
     }
-    if table.split_direct:  # stochastic tables record their effort and seed
+    if "method" not in request and table.split_direct:  # stochastic tables record their effort and seed
         found.update({k: meta.get(k) == request[k] for k in ("min_samples", "max_samples", "seed")})
     wrong = [k for k, ok in found.items() if not ok]
     return f"it holds a different {', '.join(wrong)}" if wrong else None
@@ -128,14 +146,14 @@ def mismatch(table: TableData, request: dict[str, Any]) -> str | None:
 def cached_table(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], rel_error: float,
                  channels: str | Sequence[Any], make: Callable[[], TableData],
                  directory: str | os.PathLike | None = None, min_samples: int | None = None,
-                 max_samples: int | None = None, seed: int | None = None,
+                 max_samples: int | None = None, seed: int | None = None, method: str = "pfmc",
                  ) -> tuple[TableData, Path | None, bool]:
     """The cached table for this request, tabulating it with `make()` only when needed.
 
     Parameters
     ----------
-    model_dict, grid, rel_error, channels, min_samples, max_samples, seed
-        What the table holds and how hard it was measured; together they form the key
+    model_dict, grid, rel_error, channels, min_samples, max_samples, seed, method
+        What the table holds and how it was measured; together they form the key
         (`cache_key`). `make` must build the table with these same settings.
     make : callable
         Builds the table when there is no valid cached file.
@@ -153,9 +171,9 @@ def cached_table(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], r
     hit : bool
         True when the table was read from the cache and `make` was not called.
     """
-    request = request_dict(model_dict, grid, rel_error, channels, min_samples, max_samples, seed)
+    request = request_dict(model_dict, grid, rel_error, channels, min_samples, max_samples, seed, method)
     check_table_memory(TableGrid.from_dict(request["grid"]), len(request["channels"]))
-    key = cache_key(model_dict, grid, rel_error, channels, min_samples, max_samples, seed)
+    key = cache_key(model_dict, grid, rel_error, channels, min_samples, max_samples, seed, method)
     path = cache_dir(directory) / f"{key}.exr"
     if path.exists():
         try:

@@ -169,7 +169,12 @@ class TableData:
     def accuracy(self) -> dict[str, Any]:
         """Whether the tabulator reached its target: ``target_met`` is False when any cell
         of a stochastic (layered) table stopped at ``max_samples`` (its refinement was cut
-        by the cap, not by the error), or when the table does not record its effort."""
+        by the cap, not by the error), or when the table does not record its effort; for a
+        table by adding-doubling, when its error bound exceeds the target somewhere."""
+        if self.meta.get("method") == "adding-doubling":  # deterministic: its error bound decides
+            bound = self.meta.get("error_bound_max_rel")
+            met = isinstance(bound, float) and bound <= self.rel_error_target
+            return {"target_met": met, "capped_cells": 0, "max_samples": None}
         if not self.split_direct:  # deterministic models: one exact evaluation per cell
             return {"target_met": True, "capped_cells": 0, "max_samples": self.meta.get("max_samples")}
         cap = self.meta.get("max_samples")

@@ -21,7 +21,7 @@ from bsdflab.tables.stages import (
     lobes_of,
     pilot_cells,
 )
-from bsdflab.tables.units import tabulate_units
+from bsdflab.tables.units import tabulate_adding_doubling_units, tabulate_units
 from bsdflab.util import args as check
 from bsdflab.util import runners
 from bsdflab.util.runners import Runner
@@ -81,11 +81,13 @@ def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = 0.01
     if method not in METHODS:
         raise ValueError(f"method must be one of {', '.join(METHODS)}, got {check.brief(method)}")
     if method == "adding-doubling":
-        if client is not None or runner is not None:
-            raise ValueError("method 'adding-doubling' runs in this process (no runner or client)")
         from bsdflab.tables.adding_doubling import tabulate_adding_doubling
 
         check_table_memory(grid, len(table_channels(wavelengths)[0]), 1)
+        runner = runners.resolve(runner, client)
+        if runner is not None:
+            return tabulate_adding_doubling_units(runner, model, grid, rel_error=rel_error,
+                                                  wavelengths=wavelengths, progress=progress)
         return tabulate_adding_doubling(model, grid, rel_error=rel_error, wavelengths=wavelengths)
     if check.count("max_samples", max_samples) < check.count("min_samples", min_samples):
         raise ValueError(f"max_samples ({max_samples}) must be >= min_samples ({min_samples})")

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from bsdflab.bsdfs.base import from_dict
-from bsdflab.tables.data import TableGrid
+from bsdflab.tables.data import TableData, TableGrid
 from bsdflab.tables.stages import (
     CellBlock,
     PilotBlock,
@@ -72,7 +72,58 @@ def finish_unit(model_dict, grid_dict, kw: dict[str, Any], pilot, scale, cells: 
     return finish_cells(_model(model_dict), TableGrid.from_dict(grid_dict), cells, pilot, scale, **kw)
 
 
+def adding_doubling_unit(model_dict, grid_dict, kw: dict[str, Any], nodes: np.ndarray):
+    """The adding-doubling table of the thickness nodes ``nodes`` (indices into the grid's)."""
+    from bsdflab.tables.adding_doubling import tabulate_adding_doubling
+
+    grid = TableGrid.from_dict(grid_dict)
+    sub = TableGrid(grid.n_theta_i, grid.n_theta_o, grid.n_phi, tuple(grid.thickness_nm[int(i)] for i in nodes))
+    return tabulate_adding_doubling(_model(model_dict), sub, **kw)
+
+
 # -- the driver -------------------------------------------------------------------------------
+def tabulate_adding_doubling_units(runner: Runner, model, grid, *, rel_error: float, wavelengths,
+                                   progress: bool = True):
+    """``tabulate(model, grid, method="adding-doubling")`` with the film-thickness nodes
+    split over ``runner``'s workers (a unit solves the layers below a rough top once and
+    redoes the top per node, so a unit holds a run of nodes, not one); the same values and
+    bounds as in this process, assembled along the thickness axis. Without thickness nodes
+    the table is one unit."""
+    from bsdflab.tables.adding_doubling import bound_statistics
+    from bsdflab.tables.channels import table_channels
+
+    n_nodes = len(grid.thickness_nm)
+    units = max(1, min(n_nodes, runner.workers()))
+    groups = np.array_split(np.arange(n_nodes, dtype=np.int64), units)  # one empty group: no nodes
+    model_dict, grid_dict = model.to_dict(), grid.to_dict()
+    wl = None if wavelengths is None else [float(w) for w in np.asarray(wavelengths, float).ravel()]
+    kw = {"rel_error": rel_error, "wavelengths": wl}
+    key = f"bsdflab-tabulate-ad-{unit_key(model_dict, grid_dict, kw, units)}"
+    parts: dict[int, Any] = {}
+    runner.run(adding_doubling_unit, [model_dict, grid_dict, kw], groups,
+               lambda g, r: parts.__setitem__(int(g[0]) if len(g) else 0, r), key=key, progress=progress,
+               desc="tabulating (adding-doubling)")
+    ordered = [parts[k] for k in sorted(parts)]
+    first = ordered[0]
+    values = np.concatenate([p.values for p in ordered], axis=1)
+    stderr = np.concatenate([p.stderr for p in ordered], axis=1)
+    samples = np.concatenate([p.samples for p in ordered], axis=1)
+    meta = dict(first.meta)
+    meta["seconds"] = round(sum(p.meta["seconds"] for p in ordered), 3)
+    meta["solver"] = {**first.meta["solver"], "orders": max(p.meta["solver"]["orders"] for p in ordered)}
+    errors = [p.meta["film_lookup_error"] for p in ordered if p.meta.get("film_lookup_error") is not None]
+    meta["film_lookup_error"] = max(errors) if errors else None
+    meta.update(bound_statistics(values.astype(np.float64), stderr.astype(np.float64),
+                                 table_channels(wavelengths)[3]))
+    meta.update({"units": len(groups), "workers": runner.workers()})
+    table = TableData(model=model_dict, grid=grid, lobes=first.lobes, channels=first.channels,
+                      split_direct=first.split_direct, values=values, stderr=stderr, samples=samples,
+                      rel_error_target=first.rel_error_target, meta=meta)
+    table.check()
+    return table
+
+
+
 def tabulate_units(runner: Runner, model, grid, *, rel_error: float, wavelengths, min_samples: int,
                    max_samples: int, seed: int, progress: bool = True,
                    unit_cells: int = DEFAULT_UNIT_CELLS):

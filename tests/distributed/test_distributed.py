@@ -168,6 +168,19 @@ def test_table_equals_the_local_table_bit_for_bit(client):
         assert local.meta[key] == remote.meta[key], key
 
 
+def test_adding_doubling_table_on_the_cluster_equals_the_local_one(client):
+    """method "adding-doubling" on 2 workers: the thickness nodes in 2 units, bit for bit."""
+    from bsdflab.tables import tabulate
+
+    model, grid = _small_table_args()
+    kw = dict(wavelengths=[450.0, 550.0, 650.0], method="adding-doubling", progress=False)
+    local = tabulate(model, grid, **kw)
+    remote = tabulate(model, grid, runner=DaskRunner(client), **kw)
+    assert remote.meta["units"] == 2 and remote.meta["workers"] == 2
+    for name in ("values", "stderr", "samples"):
+        assert np.array_equal(getattr(local, name), getattr(remote, name)), name
+
+
 def test_a_worker_killed_mid_tabulation_changes_nothing(client):
     from bsdflab.tables import tabulate
     from bsdflab.util.progress import monitored

@@ -63,3 +63,26 @@ def test_limits_queue_and_missing_things(client):
     assert client.get(f"/v1/jobs/{'0' * 32}").status_code == 404
     assert client.get("/v1/jobs/..%2F..%2Fetc").status_code in (404, 422)
     assert client.get("/v1/tables/not-a-hash").status_code == 422
+
+
+def test_adding_doubling_table_job(client):
+    """method "adding-doubling": a job under its own key (not the PFMC one), its method
+    and error bound in the table's info; a model it cannot solve is refused at submission."""
+    from bsdflab.presets import preset
+
+    body = {"preset": "xenopeltis", "grid": {"n_theta_i": 2, "n_theta_o": 3, "n_phi": 2},
+            "wavelengths": [450.0, 550.0, 650.0], "method": "adding-doubling"}
+    r = client.post("/v1/tables", json=body)
+    assert r.status_code == 202, r.text
+    job = wait_job(client, r.json()["id"])
+    assert job["state"] == "done", job
+    grid, wl = TableGrid(2, 3, 2), [450.0, 550.0, 650.0]
+    d = preset("xenopeltis").to_dict()
+    assert job["hash"] == cache_key(d, grid, 0.01, wl, method="adding-doubling") != cache_key(d, grid, 0.01, wl)
+    info = client.get(f"/v1/tables/{job['hash']}").json()
+    assert info["meta"]["method"] == "adding-doubling" and info["meta"]["error_bound_max_rel"] < 0.01
+    assert client.post("/v1/tables", json=body).status_code == 200          # cached
+    r = client.post("/v1/tables", json={**body, "preset": "xenopeltis-diffuse"})
+    assert r.status_code == 422 and "tabulates Layered models" in detail(r)
+    r = client.post("/v1/tables", json={**body, "method": "exact"})
+    assert r.status_code == 422 and "method" in detail(r)
