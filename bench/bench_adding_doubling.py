@@ -18,7 +18,7 @@
     in full (``--skip-fine`` leaves it out), against the PFMC cost model's 16.6 h on one
     worker.
 
-    python bench/bench_adding_doubling.py [--quick] [--skip-fine]
+    python bench/bench_adding_doubling.py [--quick] [--skip-fine] [--only-ad]
 """
 from __future__ import annotations
 
@@ -70,8 +70,9 @@ def snake_table(model, grid) -> None:
           f"{e_ad[0]:.2e}, RMS {e_ad[1]:.2e}; stated bound max {ad.meta['error_bound_max_rel']:.2e}")
     print(f"    ratio PFMC 2 % / AD: CPU {c_mc / c_ad:.1f}x, wall {w_mc / w_ad:.1f}x, with {e_mc[0] / e_ad[0]:.0f}x "
           f"smaller max error (RMS {e_mc[1] / e_ad[1]:.0f}x)")
+    c_law = c_mc * (e_mc[0] / e_ad[0]) ** p
     print(f"    ratio at equal max error ({e_ad[0]:.2e}; PFMC 2 % scaled by 1/sqrt(N)): {c_equal:.3g} CPU-s, "
-          f"{c_equal / c_ad:.3g}x")
+          f"{c_equal / c_ad:.3g}x; by the measured exponent {p:.2f}: {c_law:.3g} CPU-s, {c_law / c_ad:.3g}x")
 
 
 def per_pair(model) -> None:
@@ -107,9 +108,14 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="a 4 x 6 x 5 x 1 grid instead of the snake's")
     ap.add_argument("--skip-fine", action="store_true", help="leave out (c), the spectral fine grid")
+    ap.add_argument("--only-ad", action="store_true", help="only the adding-doubling table of (a) (for profilers)")
     args = ap.parse_args()
     model = preset("xenopeltis")
     grid = TableGrid(4, 6, 5) if args.quick else TableGrid.from_dict(table_grid())
+    if args.only_ad:
+        ad, w, c = timed(lambda: tabulate(model, grid, method="adding-doubling", progress=False))
+        print(f"AD table: {w:.1f} s wall, {c:.1f} CPU-s, stated bound max {ad.meta['error_bound_max_rel']:.2e}")
+        return
     print(f"grid {grid.n_theta_i} x {grid.n_theta_o} x {grid.n_phi} x {max(1, len(grid.thickness_nm))} "
           f"thickness nodes, RGB, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}")
     snake_table(model, grid)

@@ -25,10 +25,10 @@ import numpy as np
 from bsdflab.bsdfs import from_dict
 from bsdflab.requests import model_from_spec
 from bsdflab.tables import TableGrid, cache_key, cached_table, read_attributes, read_table, tabulate
+from bsdflab.tables.adding_doubling import check_adding_doubling
 from bsdflab.tables.channels import table_channels
 from bsdflab.tables.file_format import HASH_ATTRIBUTE
 from bsdflab.tables.summary import relative_error_summary
-from bsdflab.tables.adding_doubling import check_adding_doubling
 from bsdflab.tables.tabulate import DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES, METHODS
 from bsdflab.util import args as check
 from bsdflab.util.progress import monitored
