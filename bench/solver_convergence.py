@@ -53,7 +53,7 @@ def main() -> None:
     for name, make in CONFIGS.items():
         model = make()
         default = solve(model, WL)
-        auto, h = default.orders, int(default._core.azimuth_samples)
+        auto, h = default.orders, default.azimuth_samples
         ref = solve(model, WL, nodes=48, orders=max(2, int(1.5 * auto)), thin_depth=2.0**-20,
                     azimuth_samples=8 * h).eval(wi, wo, scattered_only=True)
 

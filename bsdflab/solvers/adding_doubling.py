@@ -104,7 +104,7 @@ class Solution:
     def _coarse_core(self):
         if self._coarse is None:
             self._coarse = _build(self.model, self._wl,
-                                  self.settings.coarser(self.orders, int(self._core.azimuth_samples)))
+                                  self.settings.coarser(self.orders, self.azimuth_samples))
         return self._coarse
 
     def with_model(self, model: Layered) -> Solution:
@@ -133,6 +133,11 @@ class Solution:
     def orders(self) -> int:
         """Fourier orders used."""
         return int(self._core.orders)
+
+    @property
+    def azimuth_samples(self) -> int:
+        """Half-period azimuth samples of the cosine transforms used."""
+        return int(self._core.azimuth_samples)
 
     def _pairs(self, wi, wo) -> tuple[np.ndarray, np.ndarray]:
         a, b = check.direction_pair(wi, wo)
