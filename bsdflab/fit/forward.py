@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from bsdflab import _core
-from bsdflab.fit.data import GEOMETRIES, Dataset
+from bsdflab.fit.data import GEOMETRIES, SPECULAR_TOLERANCE_DEG, Dataset
 from bsdflab.fit.parameters import FORWARD_NAMES, PARAMETERS
 
 THICKNESS_NODES = 24   # Gauss-Hermite nodes over the thickness distribution
@@ -40,11 +40,19 @@ class ForwardModel:
         self.dataset = dataset
         self.thickness_nodes, self.angle_nodes = int(thickness_nodes), int(angle_nodes)
         self.wavelengths, index = np.unique(dataset.wavelength_nm, return_inverse=True)
-        out = np.where(dataset.geometry == GEOMETRIES.index("diffuse"), np.abs(dataset.angle_out_deg), 0.0)
+        brdf = dataset.geometry == GEOMETRIES.index("brdf")
+        mirror = brdf & (np.abs(dataset.angle_out_deg - dataset.angle_deg) < SPECULAR_TOLERANCE_DEG) & (
+            np.abs(dataset.phi_deg) < SPECULAR_TOLERANCE_DEG)
+        if np.any(mirror):
+            raise ValueError(f"brdf row {int(np.argmax(mirror))} is at the mirror direction, where the smooth model's "
+                             "reflection is a delta (use a specular row, or [model] kind = 'full')")
+        # the smooth model's off-specular light depends on the polar angles only: brdf = diffuse
+        geometry = np.where(brdf, GEOMETRIES.index("diffuse"), dataset.geometry)
+        out = np.where(geometry == GEOMETRIES.index("diffuse"), np.abs(dataset.angle_out_deg), 0.0)
         gh_x, gh_w = np.polynomial.hermite.hermgauss(self.thickness_nodes)
         gl_x, gl_w = np.polynomial.legendre.leggauss(self.angle_nodes)
         self._core = _core.FitForwardModel(
-            self.wavelengths, dataset.geometry.astype(np.int32), index.astype(np.int32),
+            self.wavelengths, geometry.astype(np.int32), index.astype(np.int32),
             np.cos(np.radians(dataset.angle_deg)), np.cos(np.radians(out)), gh_x, gh_w, gl_x, gl_w)
 
     @property

@@ -122,11 +122,13 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
               for a, m, lo, hi, b in zip(app.angles_deg, iv["median"], iv["low"], iv["high"], iv["bound"])]
     _text(os.path.join(folder, "appearance.csv"), "\n".join(lines) + "\n")
 
-    material = from_dict(material_dict(mean_full)).to_dict()   # canonical form, as from_dict reads it
+    # canonical form, as from_dict reads it
+    material = from_dict(material_dict(mean_full, model=config.model)).to_dict()
     _text(os.path.join(folder, "material.json"), json.dumps(material, indent=1) + "\n")
-    _write_scene(mean_full, folder)
+    _write_scene(mean_full, folder, config.model)
     if ap.renders:
-        _write_renders(app_draws[:ap.renders], mean_full, ap, folder, config.sampler.seed)
+        _write_renders(app_draws[:ap.renders], mean_full, ap, folder, config.sampler.seed,
+                       config.model)
 
     if data_path:
         shutil.copyfile(data_path, os.path.join(folder, "data.csv"))
@@ -161,22 +163,23 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
     return summary
 
 
-def _write_scene(values, folder: str) -> None:
+def _write_scene(values, folder: str, model) -> None:
     from bsdflab.fit.renders import sphere_scene
     from bsdflab.scenes.scene_file import save_scene
 
-    scene = sphere_scene(values, 320)
+    scene = sphere_scene(values, 320, model)
     mat = scene.materials["object"]
-    full = replace(scene, materials={**scene.materials, "object": replace(mat, bsdf=material_dict(values))})
+    bsdf = material_dict(values, model=model)
+    full = replace(scene, materials={**scene.materials, "object": replace(mat, bsdf=bsdf)})
     save_scene(full, os.path.join(folder, "sphere.json"))
 
 
-def _write_renders(draws_full, mean_full, ap, folder: str, seed: int) -> None:
+def _write_renders(draws_full, mean_full, ap, folder: str, seed: int, model) -> None:
     from bsdflab.fit.renders import render_draws
     from bsdflab.plots.contact_sheet import contact_sheet
 
     values = [mean_full, *draws_full]
     labels = ["posterior mean"] + [f"draw {i + 1}: d = {v[0]:.1f} nm" for i, v in enumerate(draws_full)]
-    items = render_draws(values, labels, ap.render_size, ap.render_spp, seed)
+    items = render_draws(values, labels, ap.render_size, ap.render_spp, seed, model)
     contact_sheet(items, os.path.join(folder, "renders.png"), title="sphere renders of posterior draws",
                   columns=min(len(items), 5))
