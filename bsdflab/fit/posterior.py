@@ -10,6 +10,8 @@ full model through the adding-doubling solver (``[model] kind``, bsdflab.fit.ful
 """
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from bsdflab.fit.config import FitConfig
@@ -80,6 +82,18 @@ class LogPosterior:
         if np.any(ok):
             out[ok] = lp[ok] + self.log_likelihood(x[ok])
         return out
+
+    def with_data(self, dataset: Dataset) -> LogPosterior:
+        """The same posterior (priors, forward model: an emulator is shared) for other values
+        at the same rows (simulation-based calibration, repeated measurements)."""
+        same = len(dataset) == len(self.dataset) and all(
+            np.array_equal(getattr(dataset, k), getattr(self.dataset, k), equal_nan=True)
+            for k in ("geometry", "angle_deg", "angle_out_deg", "phi_deg", "wavelength_nm"))
+        if not same:
+            raise ValueError("with_data needs a dataset with the same rows (geometry, angles, wavelengths)")
+        new = copy.copy(self)
+        new.dataset, new.evaluations = dataset, 0
+        return new
 
     def sample_prior(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """n draws (n, ndim) from the priors."""
