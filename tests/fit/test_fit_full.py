@@ -174,8 +174,8 @@ def pfmc_fit():
 def test_recovery_from_pfmc_gonio_data(pfmc_fit):
     """Data by PFMC (not the solver), fitted through the solver's emulator: the 95 % interval
     of roughness and sigma_s covers the truth; the emulator's measured error is below 0.25
-    sigma (measured 0.16 at 5 nodes per parameter); the posterior is informative (roughness's 95 % interval narrower than 1/3 of the
-    prior's)."""
+    sigma (measured 0.16 at 5 nodes per parameter); the posterior is informative (roughness's
+    95 % interval narrower than 1/3 of the prior's)."""
     data, cfg, logpost, run = pfmc_fit
     assert logpost.model.max_error_sigma < 0.25, logpost.model.max_error_sigma
     draws = run.draws()
