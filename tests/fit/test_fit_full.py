@@ -231,3 +231,46 @@ def test_simulation_based_calibration_full_model_small(pfmc_fit):
 def test_simulation_based_calibration_full_model_120(pfmc_fit):
     truths, posteriors = full_sbc(pfmc_fit[2], 120, seed=22)
     assert calibration_failures(truths, posteriors, bins=5) == []
+
+
+def test_full_model_study_folder(tmp_path):
+    """A study of the full model end to end (base albedo free: the emulator needs 3 solves):
+    material.json is the rough, scattering model at the posterior mean, the summary records
+    the emulator, the appearance is the gloss colour."""
+    from bsdflab.fit import run_study
+
+    ds = gonio_design(PAIRS[:4] + PAIRS[10:])
+    v = full_vector(base_albedo=0.3, sigma_a_550=0.05)
+    y = SolverForwardModel(ds, ModelSettings(kind="full")).evaluate(v)
+    rng = np.random.default_rng(0)
+    data = ds.with_reflectance(y * (1 + 0.01 * rng.standard_normal(len(y))), 0.01 * y)
+    cfg = FitConfig.parse(tomllib.loads("""
+[parameters]
+base_albedo = { prior = "uniform", low = 0.05, high = 0.6 }
+sigma_a_550 = 0.05
+[model]
+kind = "full"
+emulator_checks = 1
+[sampler]
+walkers = 4
+max_steps = 200
+check_every = 100
+map_starts = 1
+[appearance]
+draws = 4
+angles_deg = [0, 30]
+renders = 0
+"""))
+    summary = run_study(data, cfg, tmp_path / "study", progress=False)
+    assert summary["forward_model"]["emulator_solves"] == 3
+    assert summary["forward_model"]["emulator_max_relative_error"] < 1e-9   # exact in the albedo
+    assert "gloss colour" in summary["appearance"]["statement"]
+    material = json.loads((tmp_path / "study" / "material.json").read_text())
+    top, slab = material["interfaces"][0], material["slabs"][0]
+    assert top["type"] == "roughdielectric" and top["alpha"] == 0.08 and slab["sigma_s"] == 0.2
+    assert abs(summary["posterior_mean"]["base_albedo"] - 0.3) < 0.05
+    # the material read back predicts what the fit's forward model predicts at the mean
+    mean = full_vector(base_albedo=summary["posterior_mean"]["base_albedo"], sigma_a_550=0.05)
+    det, src = row_directions(ds)
+    solved = np.pi * solve(from_dict(material), wavelengths=[WAVELENGTH]).eval(det, src)[:, 0] / src[:, 2]
+    assert np.allclose(solved, SolverForwardModel(ds, ModelSettings(kind="full")).evaluate(mean), rtol=1e-9, atol=0)
