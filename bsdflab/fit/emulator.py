@@ -30,6 +30,7 @@ import numpy as np
 
 from bsdflab.fit.config import ModelSettings
 from bsdflab.fit.data import Dataset
+from bsdflab.fit.forward import parameter_sets
 from bsdflab.fit.full_forward import SolverForwardModel
 from bsdflab.fit.parameters import ALL_NAMES, parameter
 
@@ -146,9 +147,7 @@ class EmulatedForward:
 
     def evaluate(self, full) -> np.ndarray:
         """Model values (P, rows) for full vectors (P, len(ALL_NAMES)) or (rows,) for one."""
-        t = np.asarray(full, dtype=np.float64)
-        single = t.ndim == 1
-        t = np.atleast_2d(t)
+        t, single = parameter_sets("values", full, ALL_NAMES)
         y = np.exp(self._interpolate(t))                 # (albedos, P, rows)
         if self.albedo_free:
             rho = t[:, self._albedo_col][:, None]

@@ -62,14 +62,20 @@ class ForwardModel:
     def evaluate(self, theta) -> np.ndarray:
         """Model values (P, rows) for parameter sets ``theta`` (P, 10) or (10,) -> (rows,).
         Sets outside the model's domain give NaN rows."""
-        t = np.asarray(theta, dtype=np.float64)
-        single = t.ndim == 1
-        t = np.atleast_2d(t)
-        if t.shape[-1] != len(FORWARD_NAMES):
-            raise ValueError(f"theta must end in an axis of {len(FORWARD_NAMES)} parameters "
-                             f"({', '.join(FORWARD_NAMES)}), got shape {t.shape}")
+        t, single = parameter_sets("theta", theta, FORWARD_NAMES)
         out = self._core.evaluate(np.ascontiguousarray(t))
         return out[0] if single else out
+
+
+def parameter_sets(label: str, values, names) -> tuple[np.ndarray, bool]:
+    """(P, len(names)) float array of parameter sets and whether one set (a 1-D array) was given."""
+    t = np.asarray(values, dtype=np.float64)
+    single = t.ndim == 1
+    t = np.atleast_2d(t)
+    if t.shape[-1] != len(names):
+        raise ValueError(f"{label} must end in an axis of {len(names)} parameters "
+                         f"({', '.join(names)}), got shape {t.shape}")
+    return t, single
 
 
 def default_theta(**overrides) -> np.ndarray:

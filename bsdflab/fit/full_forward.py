@@ -28,7 +28,7 @@ import numpy as np
 from bsdflab.bsdfs import from_dict
 from bsdflab.fit.config import ModelSettings
 from bsdflab.fit.data import GEOMETRIES, Dataset
-from bsdflab.fit.forward import ForwardModel
+from bsdflab.fit.forward import ForwardModel, parameter_sets
 from bsdflab.fit.material import material_dict
 from bsdflab.fit.parameters import ALL_NAMES, FORWARD_NAMES, in_domain
 from bsdflab.solvers import solve
@@ -118,12 +118,7 @@ class SolverForwardModel:
 
     def evaluate(self, full) -> np.ndarray:
         """Model values (P, rows) for full parameter vectors (P, len(ALL_NAMES)), or (rows,)."""
-        t = np.asarray(full, dtype=np.float64)
-        single = t.ndim == 1
-        t = np.atleast_2d(t)
-        if t.shape[-1] != len(ALL_NAMES):
-            raise ValueError(f"values must end in an axis of {len(ALL_NAMES)} parameters "
-                             f"({', '.join(ALL_NAMES)}), got shape {t.shape}")
+        t, single = parameter_sets("values", full, ALL_NAMES)
         out = np.array([self.predict_one(row) for row in t])
         return out[0] if single else out
 
