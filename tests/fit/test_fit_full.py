@@ -274,3 +274,33 @@ renders = 0
     det, src = row_directions(ds)
     solved = np.pi * solve(from_dict(material), wavelengths=[WAVELENGTH]).eval(det, src)[:, 0] / src[:, 2]
     assert np.allclose(solved, SolverForwardModel(ds, ModelSettings(kind="full")).evaluate(mean), rtol=1e-9, atol=0)
+
+
+def test_simulate_brdf_rows_with_the_full_model():
+    """`bsdflab fit simulate` with kind = "full": brdf triples, noiseless values = a direct
+    solve; bad triples and parameters foreign to the model are ValueErrors naming them."""
+    from bsdflab.fit import SimulationConfig, simulate
+
+    text = """
+[truth]
+roughness = 0.15
+[noise]
+relative = 1e-12
+absolute = 1e-12
+[model]
+kind = "full"
+[[measurement]]
+geometry = "brdf"
+angle_triples_deg = [[30, 30, 0], [30, 45, 90]]
+wavelengths_nm = [550]
+"""
+    cfg = SimulationConfig.parse(tomllib.loads(text))
+    data, y = simulate(cfg)
+    assert data.phi_deg.tolist() == [0.0, 90.0] and np.allclose(data.reflectance, y, rtol=1e-9, atol=0)
+    v = full_vector(roughness=0.15)
+    assert np.allclose(y, SolverForwardModel(data, ModelSettings(kind="full")).evaluate(v), rtol=1e-12, atol=0)
+    for old, new, message in [("[[30, 30, 0], [30, 45, 90]]", "[[30, 30]]", "angle_triples_deg"),
+                              ("[[30, 30, 0], [30, 45, 90]]", "[[30, 30, 270]]", "angle_triples_deg"),
+                              ("roughness = 0.15", "film_thickness_spread_nm = 3.0", "not part of the full model")]:
+        with pytest.raises(ValueError, match=message):
+            SimulationConfig.parse(tomllib.loads(text.replace(old, new)))
