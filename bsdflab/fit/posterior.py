@@ -64,13 +64,17 @@ class LogPosterior:
             lp += self.config.priors[name].logpdf(x[:, j])
         return lp
 
-    def log_likelihood(self, x) -> np.ndarray:
+    def pointwise_log_likelihood(self, x) -> np.ndarray:
+        """log likelihood of every row, (P, rows) (PSIS-LOO needs it per observation)."""
         full = self.full(x)
         m = self.model.evaluate(full)
         self.evaluations += len(full)
         s = full[:, self._noise_col:self._noise_col + 1] * self.dataset.sigma[None, :]
         r = (self.dataset.reflectance[None, :] - m) / s
-        ll = -0.5 * np.sum(r * r + 2.0 * np.log(s) + _LOG_2PI, axis=1)
+        return -0.5 * (r * r + 2.0 * np.log(s) + _LOG_2PI)
+
+    def log_likelihood(self, x) -> np.ndarray:
+        ll = np.sum(self.pointwise_log_likelihood(x), axis=1)
         return np.where(np.isfinite(ll), ll, -np.inf)
 
     def __call__(self, x) -> np.ndarray:
