@@ -22,6 +22,7 @@ side away from the source, where the mirror direction lies; 180: back toward the
 from __future__ import annotations
 
 import json
+import warnings
 
 import numpy as np
 
@@ -32,7 +33,6 @@ from bsdflab.fit.forward import ForwardModel, parameter_sets
 from bsdflab.fit.material import material_dict
 from bsdflab.fit.parameters import ALL_NAMES, FORWARD_NAMES, in_domain
 from bsdflab.solvers import solve
-from bsdflab.solvers.adding_doubling import nodes_for_g
 
 CACHE = 64   # below-the-top solutions kept for reuse (an emulator grid varies the top fastest)
 
@@ -91,12 +91,15 @@ class SolverForwardModel:
     def _solution(self, model):
         d = model.to_dict()
         key = json.dumps({**d, "interfaces": d["interfaces"][1:]}, sort_keys=True)
-        g = model.slabs[0].phase.g if model.slabs[0].phase.type == "hg" else 0.0
-        nodes = max(self.settings.nodes, nodes_for_g(g)) if model.slabs[0].sigma_s > 0 else self.settings.nodes
         if key in self._cache:
             self.top_solves += 1
             return self._cache[key].with_model(model)
-        sol = solve(model, wavelengths=self.wavelengths, nodes=nodes, orders=self.settings.orders or None)
+        with warnings.catch_warnings():
+            # the solver raises the nodes to resolve the slab's phase function and says so;
+            # in a fit that is expected for every parameter set (docs/fit.md)
+            warnings.filterwarnings("ignore", message="adding-doubling: nodes raised", category=UserWarning)
+            sol = solve(model, wavelengths=self.wavelengths, nodes=self.settings.nodes,
+                        orders=self.settings.orders or None)
         self.solves += 1
         if len(self._cache) >= CACHE:
             self._cache.pop(next(iter(self._cache)))
