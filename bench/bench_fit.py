@@ -11,6 +11,11 @@ on one (BSDFLAB_THREADS=1); the peers on one.
 
     python3 bench/bench_fit.py
 Profile:  python3 -m cProfile -s cumtime bench/bench_fit.py | head -40
+
+Second part: the full model (the rendered Layered model through the adding-doubling solver,
+docs/fit.md) against the smooth model on the same gonio brdf rows: forward evaluations/s of
+the smooth C++ model, the full model's emulator and its direct solves, the emulator's build
+time, and ESS/s of an emcee run with each (the direct-solve ESS/s from its evaluation rate).
 """
 from __future__ import annotations
 
@@ -92,8 +97,19 @@ def evals_per_second(model, theta, min_seconds=1.5):
             return n / elapsed
 
 
+class FullVectors:
+    """A forward model of the smooth model's 10 columns behind LogPosterior's interface (full
+    parameter vectors in ALL_NAMES order, whose first columns are FORWARD_NAMES)."""
+
+    def __init__(self, model):
+        self.model = model
+
+    def evaluate(self, full):
+        return self.model.evaluate(np.atleast_2d(full)[:, :len(FORWARD_NAMES)])
+
+
 def study(logpost, model, p0, seed):
-    logpost.model = model
+    logpost.model = FullVectors(model)
     sampler = emcee.EnsembleSampler(len(p0), logpost.ndim, logpost, vectorize=True)
     sampler.random_state = np.random.RandomState(seed).get_state()
     start = time.perf_counter()
@@ -149,5 +165,90 @@ def main():
           f"~{(ess_ours / t_ours) / (ess_peer / t_peer) * rates['colour thin_film_tmm'] / rates['tmm']:.0f}x)")
 
 
+# -- the full model (adding-doubling solver) against the smooth one, same gonio rows --------
+GONIO_PAIRS = [(30, 20, 0), (30, 40, 0), (30, 60, 0), (30, 0, 0), (30, 45, 90), (30, 60, 180), (60, 40, 0),
+               (60, 75, 0)]
+GONIO_WAVELENGTHS = (450.0, 550.0, 650.0)
+FULL_STEPS = 400
+SMOOTH_GONIO = """
+[parameters]
+film_thickness_nm = { prior = "normal", mean = 400.0, sd = 10.0 }
+base_albedo = { prior = "uniform", low = 0.01, high = 0.6 }
+[sampler]
+walkers = 8
+"""
+FULL_GONIO = """
+[parameters]
+roughness = { prior = "lognormal", median = 0.08, sigma = 0.25 }
+sigma_s = { prior = "uniform", low = 0.05, high = 0.5 }
+[model]
+kind = "full"
+emulator_nodes = 5
+emulator_checks = 2
+[sampler]
+walkers = 8
+"""
+
+
+def gonio_dataset():
+    from bsdflab.fit.data import Dataset
+
+    rows = np.array([(*p, wl) for wl in GONIO_WAVELENGTHS for p in GONIO_PAIRS], float)
+    n = len(rows)
+    return Dataset(np.full(n, GEOMETRIES.index("brdf")), rows[:, 0], rows[:, 1], rows[:, 3], np.zeros(n),
+                   np.ones(n), phi_deg=rows[:, 2])
+
+
+def timed_emcee(logpost, p0, seed=1):
+    sampler = emcee.EnsembleSampler(len(p0), logpost.ndim, logpost, vectorize=True)
+    sampler.random_state = np.random.RandomState(seed).get_state()
+    start = time.perf_counter()
+    sampler.run_mcmc(p0, FULL_STEPS, progress=False)
+    seconds = time.perf_counter() - start
+    tau = emcee.autocorr.integrated_time(sampler.get_chain(), tol=0)
+    return float(np.min(FULL_STEPS * len(p0) / tau)), seconds
+
+
+def full_vs_smooth():
+    from bsdflab.fit.full_forward import SolverForwardModel
+
+    ds = gonio_dataset()
+    print(f"full model (adding-doubling) vs smooth model: {len(ds)} brdf rows "
+          f"({len(GONIO_PAIRS)} pairs x {len(GONIO_WAVELENGTHS)} wavelengths), 2 free parameters each")
+    smooth = LogPosterior(ds, FitConfig.parse(tomllib.loads(SMOOTH_GONIO)))
+    start = time.perf_counter()
+    full = LogPosterior(ds, FitConfig.parse(tomllib.loads(FULL_GONIO)))
+    build = time.perf_counter() - start
+    emu = full.model
+    direct = SolverForwardModel(ds, full.config.model)
+    rng = np.random.default_rng(3)
+    xs, xf = smooth.sample_prior(32, rng), full.sample_prior(32, rng)
+    rates = {"smooth (C++ closed form)": evals_per_second(smooth.model, smooth.full(xs)),
+             "full, emulated": evals_per_second(emu, full.full(xf)),
+             "full, direct solves": evals_per_second(direct, full.full(xf[:2]), min_seconds=3.0)}
+    for name, r in rates.items():
+        print(f"  {name:<26} {r:12.2f} evaluations/s")
+    print(f"  emulator build: {emu.solves} solves in {build:.1f} s; measured error {emu.max_relative_error:.1e} "
+          "relative")
+    print(f"  ratio smooth / full direct {rates['smooth (C++ closed form)'] / rates['full, direct solves']:10.0f}x; "
+          f"smooth / full emulated {rates['smooth (C++ closed form)'] / rates['full, emulated']:.1f}x")
+    # data: the full model at its defaults + 1 % noise (the smooth fit is misspecified: timing only)
+    y = direct.evaluate(full.full(np.array([[0.1, 0.3]])))[0]
+    data = ds.with_reflectance(y * (1 + 0.01 * rng.standard_normal(len(y))), 0.01 * y)
+    smooth, full = smooth.with_data(data), full.with_data(data)
+    ess_s, t_s = timed_emcee(smooth, np.array([400.0, 0.05]) + 1e-3 * rng.standard_normal((8, 2)))
+    ess_f, t_f = timed_emcee(full, np.array([0.1, 0.3]) + 1e-4 * rng.standard_normal((8, 2)))
+    per_eval = ess_f / (FULL_STEPS * 8)
+    print(f"  emcee, 8 walkers x {FULL_STEPS} steps:")
+    print(f"    smooth         {t_s:8.2f} s  ESS {ess_s:6.1f}  {ess_s / t_s:10.2f} ESS/s")
+    print(f"    full emulated  {t_f:8.2f} s  ESS {ess_f:6.1f}  {ess_f / t_f:10.2f} ESS/s "
+          f"({ess_f / (t_f + build):.2f} ESS/s with the build)")
+    print(f"    full direct    (from its rate) {per_eval * rates['full, direct solves']:10.4f} ESS/s")
+    print(f"  ESS/s ratio smooth / full emulated: {(ess_s / t_s) / (ess_f / t_f):.1f}x (with the build: "
+          f"{(ess_s / t_s) / (ess_f / (t_f + build)):.0f}x); smooth / full direct: "
+          f"{(ess_s / t_s) / (per_eval * rates['full, direct solves']):.0f}x")
+
+
 if __name__ == "__main__":
     main()
+    full_vs_smooth()

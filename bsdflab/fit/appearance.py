@@ -12,9 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsdflab.fit.config import ModelSettings
 from bsdflab.fit.data import GEOMETRIES, Dataset
 from bsdflab.fit.forward import ForwardModel
-from bsdflab.fit.parameters import ALL_NAMES, FORWARD_NAMES
+from bsdflab.fit.parameters import ALL, ALL_NAMES, FORWARD_NAMES
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
 from bsdflab.spectra.colour_weights import rgb_colourspace
 
@@ -34,6 +35,27 @@ class AppearancePosterior:
         lo, hi = (1 - level) / 2, 1 - (1 - level) / 2
         q = np.quantile(self.delta_e, [0.5, lo, hi, level], axis=0)
         return {"median": q[0], "low": q[1], "high": q[2], "bound": q[3]}
+
+
+def gloss_vectors(full: np.ndarray, model: ModelSettings) -> np.ndarray | None:
+    """Parameter vectors whose smooth-model specular spectrum is the colour of ``model``'s
+    gloss, or None (a platelet stack: the smooth model has one film). For the full model's
+    rough top, the gloss at the mirror direction comes from facets along the normal, so its
+    spectrum is the smooth film's specular reflectance times a grey factor (D G / 4 cos^2);
+    the light scattered from below adds a little, which this leaves out. The spread is 0,
+    no film is a film of thickness 0."""
+    if model.kind == "smooth":
+        return full
+    if model.film == "stack":
+        return None
+    out = np.array(full, dtype=float, copy=True)
+    for n in FORWARD_NAMES:
+        col = ALL_NAMES.index(n)
+        out[..., col] = np.where(np.isnan(out[..., col]), ALL[n].default, out[..., col])
+    out[..., ALL_NAMES.index("film_thickness_spread_nm")] = 0.0
+    if model.film == "none":
+        out[..., ALL_NAMES.index("film_thickness_nm")] = 0.0
+    return out
 
 
 def specular_spectra(full: np.ndarray, angles_deg, thickness_nodes: int, angle_nodes: int) -> np.ndarray:

@@ -5,12 +5,15 @@ fit.toml
                    parameters left out are fixed at their defaults (bsdflab.fit.parameters)
     [sampler]      walkers, max_steps (the step cap), tau_multiple (run until
                    N > tau_multiple * tau), check_every, seed, map_starts
-    [model]        thickness_nodes, angle_nodes (quadrature orders)
+    [model]        kind (smooth | full), film (single | none | stack), distribution,
+                   platelets; thickness_nodes, angle_nodes (the smooth model's quadrature
+                   orders); nodes, orders (the full model's adding-doubling solver)
     [appearance]   draws, angles_deg, renders, render_size, render_spp
 truth.toml (``bsdflab fit simulate``)
     [truth]        parameter values (missing ones: defaults)
     [noise]        relative, absolute, seed: sigma_i = sqrt(absolute^2 + (relative y_i)^2)
-    [[measurement]] geometry, angles_deg (or angle_pairs_deg for diffuse), wavelengths_nm
+    [[measurement]] geometry, angles_deg (or angle_pairs_deg [in, out] for diffuse,
+                   angle_triples_deg [in, out, phi] for brdf), wavelengths_nm
                    ({start, stop, step} or a list)
     [model]        as above
 """
@@ -74,14 +77,63 @@ def _settings(cls, section: str, d: dict, ranges: dict) -> dict:
     return out
 
 
+KINDS = ("smooth", "full")
+FILMS = ("single", "none", "stack")
+DISTRIBUTIONS = ("ggx", "beckmann")
+
+
 @dataclass(frozen=True)
 class ModelSettings:
+    """The forward model: ``kind`` smooth (the closed-form C++ model: smooth top, non-
+    scattering slab) or full (the rendered ``Layered`` model solved by adding-doubling:
+    rough top of microfacet ``distribution``, scattering Henyey-Greenstein slab, top film
+    ``film`` = one film, none, or a stack of ``platelets`` platelets); quadrature orders
+    of the smooth model; the solver's ``nodes`` and ``orders`` (0: automatic); the full
+    model's Chebyshev emulator: ``emulator_nodes`` per free parameter (0: a direct solve per
+    evaluation) and ``emulator_checks`` direct solves that measure its error."""
+
+    kind: str = "smooth"
+    film: str = "single"
+    distribution: str = "ggx"
+    platelets: int = 5
     thickness_nodes: int = 24
     angle_nodes: int = 32
+    nodes: int = 16
+    orders: int = 0
+    emulator_nodes: int = 5
+    emulator_checks: int = 2
 
     @classmethod
     def parse(cls, d: dict) -> ModelSettings:
-        return cls(**_settings(cls, "model", d, {"thickness_nodes": (1, 200), "angle_nodes": (2, 1000)}))
+        words = {}
+        for key, known in (("kind", KINDS), ("film", FILMS), ("distribution", DISTRIBUTIONS)):
+            v = d.get(key, getattr(cls(), key))
+            if v not in known:
+                raise ValueError(f"[model] {key} must be one of {', '.join(known)}, got {v!r}")
+            words[key] = v
+        numbers = {k: v for k, v in d.items() if k not in words}
+        s = cls(**words, **_settings(cls, "model", numbers, {
+            "thickness_nodes": (1, 200), "angle_nodes": (2, 1000), "platelets": (1, 16),
+            "nodes": (4, 256), "orders": (0, 4096), "emulator_nodes": (0, 64), "emulator_checks": (0, 1000)}))
+        if s.kind == "smooth" and s.film != "single":
+            raise ValueError(f"[model] film = {s.film!r} needs kind = 'full' (the smooth model has one "
+                             "film; fix film_thickness_nm = 0 for none)")
+        return s
+
+    def names(self) -> tuple[str, ...]:
+        """The parameters this model uses (canonical order); the others may not be given."""
+        if self.kind == "smooth":
+            return (*P.FORWARD_NAMES, P.NOISE.name)
+        film = {"single": ("film_thickness_nm", "film_index_A", "film_index_B"), "none": (),
+                "stack": ("film_index_A", "film_index_B", "platelet_nm", "gap_nm", "gap_index")}[self.film]
+        unused = {"film_thickness_spread_nm", "film_thickness_nm", "film_index_A", "film_index_B",
+                  "platelet_nm", "gap_nm", "gap_index"} - set(film)
+        return tuple(n for n in P.ALL_NAMES if n not in unused)
+
+    def fixed_implied(self) -> dict[str, float]:
+        """Values the model implies and nobody may change (the smooth model: a smooth top and
+        a non-scattering slab)."""
+        return dict(P.SMOOTH_VALUES) if self.kind == "smooth" else {}
 
 
 @dataclass(frozen=True)
@@ -142,9 +194,15 @@ class FitConfig:
         params = d.get("parameters", {})
         if not isinstance(params, dict):
             raise ValueError("[parameters] must be a table")
+        model = ModelSettings.parse(d.get("model", {}))
+        used = model.names()
         priors, fixed = {}, {}
         for name, spec in params.items():
             P.parameter(name)  # ValueError for an unknown name
+            if name not in used:
+                raise ValueError(f"parameter {name!r} is not part of the {model.kind} model"
+                                 + (f" with film = {model.film!r}" if model.kind == "full" else "")
+                                 + f"; its parameters: {', '.join(used)}")
             if isinstance(spec, dict) and set(spec) == {"fixed"}:
                 spec = spec["fixed"]
             if isinstance(spec, dict):
@@ -158,15 +216,15 @@ class FitConfig:
                 fixed[name] = value
         if not priors:
             raise ValueError("[parameters]: no free parameter (give at least one a prior)")
-        for p in P.ALL.values():
-            if p.name not in priors and p.name not in fixed:
-                fixed[p.name] = p.default
+        for name in used:
+            if name not in priors and name not in fixed:
+                fixed[name] = P.parameter(name).default
+        fixed.update(model.fixed_implied())
         sampler = SamplerSettings.parse(d.get("sampler", {}))
         if sampler.walkers < 2 * len(priors):
             raise ValueError(f"[sampler] walkers must be at least twice the number of free parameters "
                              f"({2 * len(priors)}), got {sampler.walkers}")
-        return cls(priors, fixed, sampler, ModelSettings.parse(d.get("model", {})),
-                   AppearanceSettings.parse(d.get("appearance", {})), source)
+        return cls(priors, fixed, sampler, model, AppearanceSettings.parse(d.get("appearance", {})), source)
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> FitConfig:
@@ -181,7 +239,7 @@ class FitConfig:
 @dataclass(frozen=True)
 class Measurement:
     geometry: str
-    angles: tuple[tuple[float, float], ...]   # (in, out); out is NaN unless diffuse
+    angles: tuple[tuple[float, float, float], ...]   # (in, out, phi); out NaN unless diffuse/brdf, phi unless brdf
     wavelengths_nm: np.ndarray
 
 
@@ -199,13 +257,19 @@ class SimulationConfig:
         from bsdflab.fit.data import GEOMETRIES
 
         _check_keys("top level", d, {"truth": 0, "noise": 0, "measurement": 0, "model": 0})
-        truth = {p.name: p.default for p in P.ALL.values()}
+        model = ModelSettings.parse(d.get("model", {}))
+        used = model.names()
+        truth = {n: P.parameter(n).default for n in used}
         for name, value in d.get("truth", {}).items():
             P.parameter(name)
+            if name not in used:
+                raise ValueError(f"[truth] {name} is not part of the {model.kind} model; its parameters: "
+                                 f"{', '.join(used)}")
             v = _real("truth", name, value, -math.inf)
             if not P.in_domain(name, v):
                 raise ValueError(f"[truth] {name} = {v:g} is outside the model's domain")
             truth[name] = v
+        truth.update(model.fixed_implied())
         noise = d.get("noise", {})
         _check_keys("noise", noise, {"relative": 0, "absolute": 0, "seed": 0})
         rel = _real("noise", "relative", noise.get("relative", 0.02), 0.0)
@@ -219,7 +283,8 @@ class SimulationConfig:
         ms = []
         for i, m in enumerate(items):
             sec = f"measurement {i + 1}"
-            _check_keys(sec, m, {"geometry": 0, "angles_deg": 0, "angle_pairs_deg": 0, "wavelengths_nm": 0})
+            _check_keys(sec, m, {"geometry": 0, "angles_deg": 0, "angle_pairs_deg": 0, "angle_triples_deg": 0,
+                                 "wavelengths_nm": 0})
             g = m.get("geometry")
             if g not in GEOMETRIES:
                 raise ValueError(f"[{sec}] geometry must be one of {', '.join(GEOMETRIES)}, got {g!r}")
@@ -229,13 +294,22 @@ class SimulationConfig:
                         or not all(isinstance(p, list) and len(p) == 2 for p in pairs)):
                     raise ValueError(f"[{sec}] a diffuse measurement needs angle_pairs_deg = [[in, out], ...]")
                 angles = tuple((_real(sec, "angle_pairs_deg", a, 0, 89.9),
-                                _real(sec, "angle_pairs_deg", b, -89.9, 89.9))
+                                _real(sec, "angle_pairs_deg", b, -89.9, 89.9), math.nan)
                                for a, b in pairs)
+            elif g == "brdf":
+                triples = m.get("angle_triples_deg")
+                if (not isinstance(triples, list) or not triples
+                        or not all(isinstance(p, list) and len(p) == 3 for p in triples)):
+                    raise ValueError(f"[{sec}] a brdf measurement needs angle_triples_deg = "
+                                     "[[in, out, phi], ...]")
+                angles = tuple((_real(sec, "angle_triples_deg", a, 0, 89.9),
+                                _real(sec, "angle_triples_deg", b, 0, 89.9),
+                                _real(sec, "angle_triples_deg", c, -180.0, 180.0)) for a, b, c in triples)
             else:
                 raw = m.get("angles_deg")
                 if not isinstance(raw, list) or not raw:
                     raise ValueError(f"[{sec}] needs angles_deg = [...]")
-                angles = tuple((_real(sec, "angles_deg", a, 0, 89.9), math.nan) for a in raw)
+                angles = tuple((_real(sec, "angles_deg", a, 0, 89.9), math.nan, math.nan) for a in raw)
             wl = m.get("wavelengths_nm")
             if isinstance(wl, dict):
                 _check_keys(f"{sec}.wavelengths_nm", wl, {"start": 0, "stop": 0, "step": 0})
@@ -248,7 +322,7 @@ class SimulationConfig:
             else:
                 raise ValueError(f"[{sec}] wavelengths_nm must be {{start, stop, step}} or a list")
             ms.append(Measurement(g, angles, grid))
-        return cls(truth, rel, ab, seed, tuple(ms), ModelSettings.parse(d.get("model", {})))
+        return cls(truth, rel, ab, seed, tuple(ms), model)
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> SimulationConfig:

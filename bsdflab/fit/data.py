@@ -2,10 +2,11 @@
 
 A CSV file with a header row and the columns
 
-    angle_deg, angle_out_deg, wavelength_nm, reflectance, sigma, geometry
+    angle_deg, angle_out_deg, phi_deg, wavelength_nm, reflectance, sigma, geometry
 
-``angle_out_deg`` may be left out of the header when no row is ``diffuse`` and is empty
-for specular and total rows. Lines starting with ``#`` are comments (kept, e.g. to label
+``angle_out_deg`` may be left out of the header when no row is ``diffuse`` or ``brdf`` and
+is empty for specular and total rows; ``phi_deg`` (the detector's azimuth, brdf rows only)
+may be left out when no row is ``brdf``. Lines starting with ``#`` are comments (kept, e.g. to label
 synthetic data). Every problem is a ``ValueError`` naming the file, the line and the column.
 """
 from __future__ import annotations
@@ -20,10 +21,12 @@ import numpy as np
 
 from bsdflab.util.files import write_atomically
 
-GEOMETRIES = ("specular", "diffuse", "total")   # index = the core's Geometry code
+# index = the geometry code (0-2: the smooth C++ model's; brdf rows become diffuse ones there)
+GEOMETRIES = ("specular", "diffuse", "total", "brdf")
 MODEL_RANGE_NM = (350.0, 1000.0)                # Cauchy film index and melanin power law
-COLUMNS = ("angle_deg", "angle_out_deg", "wavelength_nm", "reflectance", "sigma", "geometry")
-REQUIRED = tuple(c for c in COLUMNS if c != "angle_out_deg")
+COLUMNS = ("angle_deg", "angle_out_deg", "phi_deg", "wavelength_nm", "reflectance", "sigma", "geometry")
+OPTIONAL = ("angle_out_deg", "phi_deg")
+REQUIRED = tuple(c for c in COLUMNS if c not in OPTIONAL)
 SPECULAR_TOLERANCE_DEG = 1e-6
 
 
@@ -31,7 +34,8 @@ SPECULAR_TOLERANCE_DEG = 1e-6
 class Dataset:
     """Measured (or simulated) reflectances, one entry per row of the file.
 
-    geometry: int codes into GEOMETRIES; angle_out_deg is NaN except for diffuse rows.
+    geometry: int codes into GEOMETRIES; angle_out_deg is NaN except for diffuse and brdf
+    rows, phi_deg NaN except for brdf rows (None: all NaN).
     """
 
     geometry: np.ndarray
@@ -41,6 +45,11 @@ class Dataset:
     reflectance: np.ndarray
     sigma: np.ndarray
     comments: list[str] = field(default_factory=list)
+    phi_deg: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.phi_deg is None:
+            self.phi_deg = np.full(len(self.geometry), np.nan)
 
     def __len__(self) -> int:
         return len(self.geometry)
@@ -49,18 +58,20 @@ class Dataset:
         return Dataset(self.geometry, self.angle_deg, self.angle_out_deg, self.wavelength_nm,
                        np.asarray(reflectance, float),
                        self.sigma if sigma is None else np.asarray(sigma, float),
-                       self.comments if comments is None else list(comments))
+                       self.comments if comments is None else list(comments), self.phi_deg)
 
     def groups(self) -> list[tuple[str, np.ndarray]]:
         """(label, row indices) per measured curve (geometry and angles), in file order."""
         keys: dict[tuple, list[int]] = {}
         for i in range(len(self)):
             g = GEOMETRIES[self.geometry[i]]
-            key = (g, float(self.angle_deg[i]), float(self.angle_out_deg[i]) if g == "diffuse" else None)
+            key = (g, float(self.angle_deg[i]), float(self.angle_out_deg[i]) if g in ("diffuse", "brdf") else None,
+                   float(self.phi_deg[i]) if g == "brdf" else None)
             keys.setdefault(key, []).append(i)
         out = []
-        for (g, a, b), rows in keys.items():
-            label = f"{g} {a:g}°" + (f" → {b:g}°" if b is not None else "")
+        for (g, a, b, phi), rows in keys.items():
+            label = (f"{g} {a:g}°" + (f" → {b:g}°" if b is not None else "")
+                     + (f" φ {phi:g}°" if phi is not None else ""))
             idx = np.array(rows)
             out.append((label, idx[np.argsort(self.wavelength_nm[idx], kind="stable")]))
         return out
@@ -70,10 +81,12 @@ class Dataset:
         for c in self.comments:
             buf.write(f"# {c}\n")
         w = csv.writer(buf, lineterminator="\n")
-        w.writerow(COLUMNS)
+        with_phi = bool(np.any(~np.isnan(self.phi_deg)))
+        w.writerow([c for c in COLUMNS if with_phi or c != "phi_deg"])
         for i in range(len(self)):
             out = "" if math.isnan(self.angle_out_deg[i]) else repr(float(self.angle_out_deg[i]))
-            w.writerow([repr(float(self.angle_deg[i])), out, repr(float(self.wavelength_nm[i])),
+            phi = ["" if math.isnan(self.phi_deg[i]) else repr(float(self.phi_deg[i]))] if with_phi else []
+            w.writerow([repr(float(self.angle_deg[i])), out, *phi, repr(float(self.wavelength_nm[i])),
                         f"{self.reflectance[i]:.10g}", f"{self.sigma[i]:.6g}",
                         GEOMETRIES[self.geometry[i]]])
         return buf.getvalue()
@@ -121,7 +134,7 @@ def parse_csv(lines: list[str], name: str = "<data>") -> Dataset:
     unknown = [c for c in header if c not in COLUMNS]
     if missing or unknown:
         raise ValueError(f"{name}: line {header_line}: header must name the columns {', '.join(COLUMNS)} "
-                         f"(angle_out_deg optional); missing {missing or 'none'}, unknown {unknown or 'none'}")
+                         f"({', '.join(OPTIONAL)} optional); missing {missing or 'none'}, unknown {unknown or 'none'}")
     if len(set(header)) != len(header):
         raise ValueError(f"{name}: line {header_line}: a column is named twice in the header")
     if len(numbered) == 1:
@@ -139,9 +152,22 @@ def parse_csv(lines: list[str], name: str = "<data>") -> Dataset:
         a = _number(cells[col["angle_deg"]], "angle_deg", where)
         if not 0.0 <= a < 90.0:
             raise ValueError(f"{where}: angle_deg must be in [0, 90), got {a:g}")
-        b = math.nan
+        b = phi = math.nan
         out_text = cells[col["angle_out_deg"]] if "angle_out_deg" in col else ""
-        if g == "diffuse":
+        phi_text = cells[col["phi_deg"]] if "phi_deg" in col else ""
+        if g != "brdf" and phi_text:
+            raise ValueError(f"{where}: phi_deg must be empty for a {g} row")
+        if g == "brdf":
+            if not out_text or not phi_text:
+                raise ValueError(f"{where}: a brdf row needs angle_out_deg and phi_deg")
+            b = _number(out_text, "angle_out_deg", where)
+            if not 0.0 <= b < 90.0:
+                raise ValueError(f"{where}: angle_out_deg of a brdf row (the detector's polar angle) must be "
+                                 f"in [0, 90), got {b:g}")
+            phi = _number(phi_text, "phi_deg", where)
+            if not -180.0 <= phi <= 180.0:
+                raise ValueError(f"{where}: phi_deg must be in [-180, 180], got {phi:g}")
+        elif g == "diffuse":
             if not out_text:
                 raise ValueError(f"{where}: a diffuse row needs angle_out_deg")
             b = _number(out_text, "angle_out_deg", where)
@@ -160,10 +186,10 @@ def parse_csv(lines: list[str], name: str = "<data>") -> Dataset:
         s = _number(cells[col["sigma"]], "sigma", where)
         if s <= 0:
             raise ValueError(f"{where}: sigma must be > 0, got {s:g}")
-        key = (g, a, b if g == "diffuse" else None, wl)
+        key = (g, a, b if g in ("diffuse", "brdf") else None, phi if g == "brdf" else None, wl)
         if key in seen:
             raise ValueError(f"{where}: duplicate of line {seen[key]} (same geometry, angles and wavelength)")
         seen[key] = number
-        rows.append((GEOMETRIES.index(g), a, b, wl, r, s))
+        rows.append((GEOMETRIES.index(g), a, b, wl, r, s, phi))
     arr = np.array(rows, dtype=float)
-    return Dataset(arr[:, 0].astype(int), arr[:, 1], arr[:, 2], arr[:, 3], arr[:, 4], arr[:, 5], comments)
+    return Dataset(arr[:, 0].astype(int), arr[:, 1], arr[:, 2], arr[:, 3], arr[:, 4], arr[:, 5], comments, arr[:, 6])

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from bsdflab import _core
-from bsdflab.fit.data import GEOMETRIES, Dataset
+from bsdflab.fit.data import GEOMETRIES, SPECULAR_TOLERANCE_DEG, Dataset
 from bsdflab.fit.parameters import FORWARD_NAMES, PARAMETERS
 
 THICKNESS_NODES = 24   # Gauss-Hermite nodes over the thickness distribution
@@ -40,11 +40,19 @@ class ForwardModel:
         self.dataset = dataset
         self.thickness_nodes, self.angle_nodes = int(thickness_nodes), int(angle_nodes)
         self.wavelengths, index = np.unique(dataset.wavelength_nm, return_inverse=True)
-        out = np.where(dataset.geometry == GEOMETRIES.index("diffuse"), np.abs(dataset.angle_out_deg), 0.0)
+        brdf = dataset.geometry == GEOMETRIES.index("brdf")
+        mirror = brdf & (np.abs(dataset.angle_out_deg - dataset.angle_deg) < SPECULAR_TOLERANCE_DEG) & (
+            np.abs(dataset.phi_deg) < SPECULAR_TOLERANCE_DEG)
+        if np.any(mirror):
+            raise ValueError(f"brdf row {int(np.argmax(mirror))} is at the mirror direction, where the smooth model's "
+                             "reflection is a delta (use a specular row, or [model] kind = 'full')")
+        # the smooth model's off-specular light depends on the polar angles only: brdf = diffuse
+        geometry = np.where(brdf, GEOMETRIES.index("diffuse"), dataset.geometry)
+        out = np.where(geometry == GEOMETRIES.index("diffuse"), np.abs(dataset.angle_out_deg), 0.0)
         gh_x, gh_w = np.polynomial.hermite.hermgauss(self.thickness_nodes)
         gl_x, gl_w = np.polynomial.legendre.leggauss(self.angle_nodes)
         self._core = _core.FitForwardModel(
-            self.wavelengths, dataset.geometry.astype(np.int32), index.astype(np.int32),
+            self.wavelengths, geometry.astype(np.int32), index.astype(np.int32),
             np.cos(np.radians(dataset.angle_deg)), np.cos(np.radians(out)), gh_x, gh_w, gl_x, gl_w)
 
     @property
@@ -54,14 +62,20 @@ class ForwardModel:
     def evaluate(self, theta) -> np.ndarray:
         """Model values (P, rows) for parameter sets ``theta`` (P, 10) or (10,) -> (rows,).
         Sets outside the model's domain give NaN rows."""
-        t = np.asarray(theta, dtype=np.float64)
-        single = t.ndim == 1
-        t = np.atleast_2d(t)
-        if t.shape[-1] != len(FORWARD_NAMES):
-            raise ValueError(f"theta must end in an axis of {len(FORWARD_NAMES)} parameters "
-                             f"({', '.join(FORWARD_NAMES)}), got shape {t.shape}")
+        t, single = parameter_sets("theta", theta, FORWARD_NAMES)
         out = self._core.evaluate(np.ascontiguousarray(t))
         return out[0] if single else out
+
+
+def parameter_sets(label: str, values, names) -> tuple[np.ndarray, bool]:
+    """(P, len(names)) float array of parameter sets and whether one set (a 1-D array) was given."""
+    t = np.asarray(values, dtype=np.float64)
+    single = t.ndim == 1
+    t = np.atleast_2d(t)
+    if t.shape[-1] != len(names):
+        raise ValueError(f"{label} must end in an axis of {len(names)} parameters "
+                         f"({', '.join(names)}), got shape {t.shape}")
+    return t, single
 
 
 def default_theta(**overrides) -> np.ndarray:

@@ -3,6 +3,11 @@ and the column each takes in the C++ forward model (core/include/bsdflab/fit_for
 
 ``noise_scale`` is not a forward-model input: it multiplies every row's sigma in the
 likelihood (1 = the stated uncertainties are right).
+
+``FULL_PARAMETERS`` are used only by the full model (``[model] kind = "full"``, solved by
+adding-doubling, bsdflab.fit.full_forward): the top's roughness, the slab's scattering, and
+the iridophore platelet stack. The smooth model is the full one with roughness 0 (a smooth
+top) and a non-scattering slab; ``SMOOTH_VALUES`` records that.
 """
 from __future__ import annotations
 
@@ -44,7 +49,20 @@ PARAMETERS: tuple[Parameter, ...] = (
 FORWARD_NAMES = tuple(p.name for p in PARAMETERS)
 NOISE = Parameter("noise_scale", "", 1.0, 0.0, 1000.0,
                   "multiplies every stated sigma in the likelihood", lo_open=True)
-ALL = {p.name: p for p in (*PARAMETERS, NOISE)}
+FULL_PARAMETERS: tuple[Parameter, ...] = (
+    Parameter("roughness", "", presets.ROUGHNESS, 1e-3, 1.0,
+              "microfacet alpha of the top (the adding-doubling solver's validated range)"),
+    Parameter("sigma_s", "1/um", 0.2, 0.0, 1000.0, "slab scattering coefficient (grey)"),
+    Parameter("hg_g", "", 0.6, -0.95, 0.95, "Henyey-Greenstein asymmetry of the slab's phase function"),
+    Parameter("platelet_nm", "nm", 80.0, 0.0, 20000.0,
+              "guanine platelet thickness of the iridophore stack (index: film_index_A, B)"),
+    Parameter("gap_nm", "nm", 100.0, 0.0, 20000.0, "cytoplasm gap between platelets"),
+    Parameter("gap_index", "", presets.CYTOPLASM_IOR, 0.0, 10.0, "index of the gaps (cytoplasm)",
+              lo_open=True),
+)
+FULL_NAMES = tuple(p.name for p in FULL_PARAMETERS)
+SMOOTH_VALUES = {"roughness": 0.0, "sigma_s": 0.0, "hg_g": 0.0}
+ALL = {p.name: p for p in (*PARAMETERS, NOISE, *FULL_PARAMETERS)}
 ALL_NAMES = tuple(ALL)
 
 

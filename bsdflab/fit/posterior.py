@@ -5,16 +5,19 @@
 
 with s the noise scale (fixed at 1 unless given a prior). Deterministic and smooth in
 theta (the forward model has no Monte Carlo in it); vectorised over parameter sets, which
-is how emcee calls it (``vectorize=True``).
+is how emcee calls it (``vectorize=True``). The forward model is the smooth C++ one or the
+full model through the adding-doubling solver (``[model] kind``, bsdflab.fit.full_forward).
 """
 from __future__ import annotations
+
+import copy
 
 import numpy as np
 
 from bsdflab.fit.config import FitConfig
 from bsdflab.fit.data import Dataset
-from bsdflab.fit.forward import ForwardModel
-from bsdflab.fit.parameters import ALL_NAMES, FORWARD_NAMES
+from bsdflab.fit.full_forward import forward_model
+from bsdflab.fit.parameters import ALL_NAMES
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 
@@ -23,11 +26,19 @@ class LogPosterior:
     def __init__(self, dataset: Dataset, config: FitConfig):
         self.dataset, self.config = dataset, config
         self.free = config.free
-        self.model = ForwardModel(dataset, config.model.thickness_nodes, config.model.angle_nodes)
+        # parameters the model does not use stay NaN
         base = np.array([config.fixed.get(n, np.nan) for n in ALL_NAMES])
+        solver_free = [n for n in self.free if n != "noise_scale"]
+        if config.model.kind == "full" and config.model.emulator_nodes and solver_free:
+            from bsdflab.fit.emulator import EmulatedForward, prior_box
+
+            boxes = {n: prior_box(n, config.priors[n]) for n in solver_free}
+            self.model = EmulatedForward(dataset, config.model, base, boxes, config.model.emulator_checks,
+                                         config.sampler.seed)
+        else:
+            self.model = forward_model(dataset, config.model)
         self._base = base
         self._free_cols = np.array([ALL_NAMES.index(n) for n in self.free])
-        self._forward_cols = np.array([ALL_NAMES.index(n) for n in FORWARD_NAMES])
         self._noise_col = ALL_NAMES.index("noise_scale")
         self.evaluations = 0
 
@@ -36,7 +47,7 @@ class LogPosterior:
         return len(self.free)
 
     def full(self, x) -> np.ndarray:
-        """All parameters (P, 11) in ALL_NAMES order from free values (P, ndim)."""
+        """All parameters (P, len(ALL_NAMES)) in ALL_NAMES order from free values (P, ndim)."""
         x = np.atleast_2d(np.asarray(x, float))
         out = np.repeat(self._base[None, :], len(x), axis=0)
         out[:, self._free_cols] = x
@@ -44,7 +55,7 @@ class LogPosterior:
 
     def predict(self, x) -> np.ndarray:
         """Model values (P, rows) for free values (P, ndim)."""
-        return self.model.evaluate(self.full(x)[:, self._forward_cols])
+        return self.model.evaluate(self.full(x))
 
     def log_prior(self, x) -> np.ndarray:
         x = np.atleast_2d(np.asarray(x, float))
@@ -53,13 +64,17 @@ class LogPosterior:
             lp += self.config.priors[name].logpdf(x[:, j])
         return lp
 
-    def log_likelihood(self, x) -> np.ndarray:
+    def pointwise_log_likelihood(self, x) -> np.ndarray:
+        """log likelihood of every row, (P, rows) (PSIS-LOO needs it per observation)."""
         full = self.full(x)
-        m = self.model.evaluate(full[:, self._forward_cols])
+        m = self.model.evaluate(full)
         self.evaluations += len(full)
         s = full[:, self._noise_col:self._noise_col + 1] * self.dataset.sigma[None, :]
         r = (self.dataset.reflectance[None, :] - m) / s
-        ll = -0.5 * np.sum(r * r + 2.0 * np.log(s) + _LOG_2PI, axis=1)
+        return -0.5 * (r * r + 2.0 * np.log(s) + _LOG_2PI)
+
+    def log_likelihood(self, x) -> np.ndarray:
+        ll = np.sum(self.pointwise_log_likelihood(x), axis=1)
         return np.where(np.isfinite(ll), ll, -np.inf)
 
     def __call__(self, x) -> np.ndarray:
@@ -71,6 +86,18 @@ class LogPosterior:
         if np.any(ok):
             out[ok] = lp[ok] + self.log_likelihood(x[ok])
         return out
+
+    def with_data(self, dataset: Dataset) -> LogPosterior:
+        """The same posterior (priors, forward model: an emulator is shared) for other values
+        at the same rows (simulation-based calibration, repeated measurements)."""
+        same = len(dataset) == len(self.dataset) and all(
+            np.array_equal(getattr(dataset, k), getattr(self.dataset, k), equal_nan=True)
+            for k in ("geometry", "angle_deg", "angle_out_deg", "phi_deg", "wavelength_nm"))
+        if not same:
+            raise ValueError("with_data needs a dataset with the same rows (geometry, angles, wavelengths)")
+        new = copy.copy(self)
+        new.dataset, new.evaluations = dataset, 0
+        return new
 
     def sample_prior(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """n draws (n, ndim) from the priors."""

@@ -12,17 +12,17 @@ SPHERE_RADIUS = 10.0
 PREVIEW_WALKS = 16   # PFMC walks per BSDF evaluation in the preview renders
 
 
-def sphere_scene(values, size: int) -> Scene:
+def sphere_scene(values, size: int, model=None) -> Scene:
     centre = [0.0, SPHERE_RADIUS, 0.0]
     shapes = (ground(), Shape({"type": "sphere", "center": centre, "radius": SPHERE_RADIUS, "subdivisions": 96},
                               material="object", name="sphere"),
               soft_box([-35.0, 70.0, -30.0], centre, 40.0, (14.0, 13.3, 12.4)))
-    materials = {"ground": ground_material(), "object": Material(material_dict(values, PREVIEW_WALKS))}
+    materials = {"ground": ground_material(), "object": Material(material_dict(values, PREVIEW_WALKS, model))}
     camera = orbit_camera(centre, 48.0, 25.0, 30.0, 40.0, size, size)
     return Scene(camera, shapes, materials, sky(), max_depth=4, name="fit-draw")
 
 
 def render_draws(values: list[np.ndarray], labels: list[str], size: int, spp: int,
-                 seed: int) -> list[tuple[str, np.ndarray]]:
-    return [(label, render(sphere_scene(v, size), spp=spp, seed=seed, progress=False).mean)
+                 seed: int, model=None) -> list[tuple[str, np.ndarray]]:
+    return [(label, render(sphere_scene(v, size, model), spp=spp, seed=seed, progress=False).mean)
             for v, label in zip(values, labels)]

@@ -12,20 +12,20 @@ import numpy as np
 
 from bsdflab.fit.config import SimulationConfig
 from bsdflab.fit.data import GEOMETRIES, Dataset
-from bsdflab.fit.forward import ForwardModel
-from bsdflab.fit.parameters import FORWARD_NAMES
+from bsdflab.fit.full_forward import forward_model
+from bsdflab.fit.parameters import ALL_NAMES
 
 
 def design(config: SimulationConfig) -> Dataset:
     """The rows the measurements describe (reflectance and sigma still zero)."""
     rows = []
     for m in config.measurements:
-        for a, b in m.angles:
+        for a, b, phi in m.angles:
             for wl in m.wavelengths_nm:
-                rows.append((GEOMETRIES.index(m.geometry), a, b, float(wl)))
+                rows.append((GEOMETRIES.index(m.geometry), a, b, float(wl), phi))
     arr = np.array(rows, dtype=float)
     zeros = np.zeros(len(arr))
-    ds = Dataset(arr[:, 0].astype(int), arr[:, 1], arr[:, 2], arr[:, 3], zeros, zeros + 1.0)
+    ds = Dataset(arr[:, 0].astype(int), arr[:, 1], arr[:, 2], arr[:, 3], zeros, zeros + 1.0, phi_deg=arr[:, 4])
     # the data file's own checks (range, duplicates, specular direction) apply to simulations too
     from bsdflab.fit.data import parse_csv
 
@@ -35,9 +35,8 @@ def design(config: SimulationConfig) -> Dataset:
 def simulate(config: SimulationConfig, command: str = "") -> tuple[Dataset, np.ndarray]:
     """(noisy dataset, true model values)."""
     ds = design(config)
-    model = ForwardModel(ds, config.model.thickness_nodes, config.model.angle_nodes)
-    theta = np.array([config.truth[n] for n in FORWARD_NAMES])
-    y = model.evaluate(theta)
+    model = forward_model(ds, config.model)
+    y = model.evaluate(np.array([config.truth.get(n, np.nan) for n in ALL_NAMES]))
     if not np.all(np.isfinite(y)):
         raise ValueError("the truth lies outside the model's domain (the forward model gave NaN)")
     sigma = np.sqrt(config.absolute_noise ** 2 + (config.relative_noise * y) ** 2)

@@ -22,7 +22,7 @@ from dataclasses import replace
 import numpy as np
 
 from bsdflab.bsdfs import from_dict
-from bsdflab.fit.appearance import appearance_posterior
+from bsdflab.fit.appearance import appearance_posterior, gloss_vectors
 from bsdflab.fit.config import FitConfig
 from bsdflab.fit.data import Dataset, read_csv
 from bsdflab.fit.diagnostics import inference_data, summary_rows, table_markdown
@@ -113,20 +113,15 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
     mean_full = logpost.full(np.mean(draws, axis=0))[0]
     ap = config.appearance
     app_draws = logpost.full(draws[rng.choice(len(draws), min(ap.draws, len(draws)), replace=False)])
-    app = appearance_posterior(app_draws, mean_full, ap.angles_deg, config.model.thickness_nodes,
-                               config.model.angle_nodes)
-    exposure = appearance_plot(app, os.path.join(folder, "appearance.png"))
-    iv = app.interval(0.9)
-    lines = ["angle_deg,delta_e00_median,delta_e00_p05,delta_e00_p95,delta_e00_p90"]
-    lines += [f"{a:g},{m:.4f},{lo:.4f},{hi:.4f},{b:.4f}"
-              for a, m, lo, hi, b in zip(app.angles_deg, iv["median"], iv["low"], iv["high"], iv["bound"])]
-    _text(os.path.join(folder, "appearance.csv"), "\n".join(lines) + "\n")
+    appearance = _write_appearance(app_draws, mean_full, config, folder)
 
-    material = from_dict(material_dict(mean_full)).to_dict()   # canonical form, as from_dict reads it
+    # canonical form, as from_dict reads it
+    material = from_dict(material_dict(mean_full, model=config.model)).to_dict()
     _text(os.path.join(folder, "material.json"), json.dumps(material, indent=1) + "\n")
-    _write_scene(mean_full, folder)
+    _write_scene(mean_full, folder, config.model)
     if ap.renders:
-        _write_renders(app_draws[:ap.renders], mean_full, ap, folder, config.sampler.seed)
+        _write_renders(app_draws[:ap.renders], mean_full, ap, folder, config.sampler.seed,
+                       config.model)
 
     if data_path:
         shutil.copyfile(data_path, os.path.join(folder, "data.csv"))
@@ -134,7 +129,6 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
         _text(os.path.join(folder, "data.csv"), data.to_csv_text())
     if config.source and os.path.isfile(config.source):
         shutil.copyfile(config.source, os.path.join(folder, "config.toml"))
-    angle30 = int(np.argmin(np.abs(app.angles_deg - 30.0)))
     ess_min = float(np.min(run.ess_tau()))
     summary = {
         "data": data_path, "rows": len(data), "free": list(run.names), "fixed": config.fixed,
@@ -147,11 +141,7 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
         "posterior_draws": int(len(draws)), "ess_tau_min": ess_min,
         "sampling_seconds": run.seconds, "ess_per_second": ess_min / run.seconds,
         "forward_evaluations": run.evaluations + run.map.evaluations,
-        "appearance": {"angle_deg": float(app.angles_deg[angle30]),
-                       "delta_e00_p90": float(iv["bound"][angle30]),
-                       "statement": f"the specular colour at {app.angles_deg[angle30]:g} deg is known to within "
-                                    f"dE00 <= {iv['bound'][angle30]:.2f} (90 % of posterior draws)",
-                       "display_exposure_stops": exposure},
+        "appearance": appearance, "forward_model": _forward_summary(logpost),
         "posterior_mean": dict(zip(ALL_NAMES, map(float, mean_full))),
         "material_note": "material.json carries the mean film thickness: the thickness spread is a spatial "
                          "average with no counterpart in one BSDF",
@@ -161,22 +151,57 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
     return summary
 
 
-def _write_scene(values, folder: str) -> None:
+def _write_appearance(app_draws, mean_full, config: FitConfig, folder: str) -> dict:
+    """appearance.png / .csv and the summary's statement (the smooth model's specular colour;
+    the full model's gloss colour, see ``gloss_vectors``; none for a platelet stack)."""
+    draws, mean = gloss_vectors(app_draws, config.model), gloss_vectors(mean_full, config.model)
+    if draws is None:
+        return {"statement": "not computed: the appearance posterior uses the smooth model's specular "
+                             "spectra, which have one film (not a platelet stack)"}
+    ap = config.appearance
+    app = appearance_posterior(draws, mean, ap.angles_deg, config.model.thickness_nodes, config.model.angle_nodes)
+    exposure = appearance_plot(app, os.path.join(folder, "appearance.png"))
+    iv = app.interval(0.9)
+    lines = ["angle_deg,delta_e00_median,delta_e00_p05,delta_e00_p95,delta_e00_p90"]
+    lines += [f"{a:g},{m:.4f},{lo:.4f},{hi:.4f},{b:.4f}"
+              for a, m, lo, hi, b in zip(app.angles_deg, iv["median"], iv["low"], iv["high"], iv["bound"])]
+    _text(os.path.join(folder, "appearance.csv"), "\n".join(lines) + "\n")
+    k = int(np.argmin(np.abs(app.angles_deg - 30.0)))
+    what = "specular" if config.model.kind == "smooth" else "gloss"
+    return {"angle_deg": float(app.angles_deg[k]), "delta_e00_p90": float(iv["bound"][k]),
+            "statement": f"the {what} colour at {app.angles_deg[k]:g} deg is known to within "
+                         f"dE00 <= {iv['bound'][k]:.2f} (90 % of posterior draws)",
+            "display_exposure_stops": exposure}
+
+
+def _forward_summary(logpost: LogPosterior) -> dict:
+    m = logpost.model
+    out = {"kind": logpost.config.model.kind}
+    if hasattr(m, "max_relative_error"):
+        out.update(emulator_solves=m.solves, emulator_nodes=logpost.config.model.emulator_nodes,
+                   emulator_boxes={a.name: [a.lo, a.hi] for a in m.axes},
+                   emulator_max_relative_error=m.max_relative_error, emulator_max_error_sigma=m.max_error_sigma)
+    return out
+
+
+def _write_scene(values, folder: str, model) -> None:
     from bsdflab.fit.renders import sphere_scene
     from bsdflab.scenes.scene_file import save_scene
 
-    scene = sphere_scene(values, 320)
+    scene = sphere_scene(values, 320, model)
     mat = scene.materials["object"]
-    full = replace(scene, materials={**scene.materials, "object": replace(mat, bsdf=material_dict(values))})
+    bsdf = material_dict(values, model=model)
+    full = replace(scene, materials={**scene.materials, "object": replace(mat, bsdf=bsdf)})
     save_scene(full, os.path.join(folder, "sphere.json"))
 
 
-def _write_renders(draws_full, mean_full, ap, folder: str, seed: int) -> None:
+def _write_renders(draws_full, mean_full, ap, folder: str, seed: int, model) -> None:
     from bsdflab.fit.renders import render_draws
     from bsdflab.plots.contact_sheet import contact_sheet
 
     values = [mean_full, *draws_full]
-    labels = ["posterior mean"] + [f"draw {i + 1}: d = {v[0]:.1f} nm" for i, v in enumerate(draws_full)]
-    items = render_draws(values, labels, ap.render_size, ap.render_spp, seed)
+    labels = ["posterior mean"] + [f"draw {i + 1}" + (f": d = {v[0]:.1f} nm" if np.isfinite(v[0]) else "")
+                                   for i, v in enumerate(draws_full)]
+    items = render_draws(values, labels, ap.render_size, ap.render_spp, seed, model)
     contact_sheet(items, os.path.join(folder, "renders.png"), title="sphere renders of posterior draws",
                   columns=min(len(items), 5))

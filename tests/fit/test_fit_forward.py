@@ -12,7 +12,7 @@ import tmm
 from bsdflab.fit import GEOMETRIES, Dataset, ForwardModel, default_theta
 from bsdflab.oracles import CoatedDiffuseOracle
 
-SPEC, DIFF, TOT = (GEOMETRIES.index(g) for g in GEOMETRIES)
+SPEC, DIFF, TOT = (GEOMETRIES.index(g) for g in ("specular", "diffuse", "total"))
 
 
 def design(rows) -> Dataset:

@@ -13,9 +13,9 @@ import time
 import numpy as np
 import pytest
 import tomllib
-from scipy import stats
 
 from bsdflab.fit import FitConfig, LogPosterior, SimulationConfig, run_sampler, run_study, simulate
+from support.sbc import NARROW, calibration_failures, narrowed, z_sum_power
 
 TRUTH_TOML = """
 [truth]
@@ -92,70 +92,6 @@ def sbc(datasets: int, seed: int, ranks_from: int = 19):
         truths.append([d, A])
         posteriors.append(run.draws())
     return np.array(truths), posteriors
-
-
-def narrowed(draws, factor):
-    """The same posterior draws, their spread about the mean scaled by ``factor`` (a sampler
-    or likelihood that reports too narrow a posterior, for the power check)."""
-    mean = draws.mean(axis=0)
-    return mean + factor * (draws - mean)
-
-
-# Calibration statistics, each Sidak-corrected within a family at ALPHA_SBC (so a correctly
-# calibrated fit fails the family 1 time in 1000): coverage of the 90 % intervals (one test
-# per parameter), rank uniformity (one chi-square per parameter) and the sum of squared
-# posterior z-scores (one test). The last one carries the power: for a calibrated posterior
-# E[z^2] = 1 exactly (z = (truth - posterior mean) / posterior sd, any posterior shape), and
-# sum z^2 over the datasets and both parameters is close to chi^2 with 2 n degrees of
-# freedom; a posterior whose sd is r times the true one gives z^2 / r^2 instead.
-ALPHA_SBC = 0.001
-SBC_TESTS = 5
-NARROW = 0.7  # the mis-calibration the check must catch: posterior sd 0.7 x the true one
-
-
-def z_sum_limits(n_datasets: int, alpha: float = ALPHA_SBC, tests: int = SBC_TESTS):
-    """Two-sided acceptance interval of sum z^2 (chi^2, 2 n degrees of freedom)."""
-    a = 1 - (1 - alpha) ** (1 / tests)
-    k = 2 * n_datasets
-    return stats.chi2.ppf(a / 2, k), stats.chi2.ppf(1 - a / 2, k)
-
-
-def z_sum_power(n_datasets: int, narrow: float = NARROW) -> float:
-    """Probability that sum z^2 leaves its acceptance interval when every posterior sd is
-    ``narrow`` times the true one (sum z^2 is then chi^2(2 n) / narrow^2)."""
-    lo, hi = z_sum_limits(n_datasets)
-    k = 2 * n_datasets
-    return stats.chi2.sf(hi * narrow ** 2, k) + stats.chi2.cdf(lo * narrow ** 2, k)
-
-
-def calibration_failures(truths, posteriors, bins, seed=0, ranks_from=19):
-    """The calibration tests that reject (an empty list when the posteriors are calibrated)."""
-    rng = np.random.default_rng(seed)
-    n = len(truths)
-    a = 1 - (1 - ALPHA_SBC) ** (1 / SBC_TESTS)
-    failed = []
-    draws_mean = np.array([d.mean(axis=0) for d in posteriors])
-    draws_sd = np.array([d.std(axis=0, ddof=1) for d in posteriors])
-    z = (truths - draws_mean) / draws_sd
-    lo, hi = z_sum_limits(n)
-    if not lo <= np.sum(z ** 2) <= hi:
-        failed.append(("sum z^2", float(np.sum(z ** 2)), (lo, hi)))
-    # coverage of the central 90 % interval: Binomial(n, 0.9), two-sided band at level a
-    bounds = np.array([np.quantile(d, [0.05, 0.95], axis=0) for d in posteriors])
-    counts = ((bounds[:, 0] < truths) & (truths < bounds[:, 1])).sum(axis=0)
-    c_lo, c_hi = stats.binom.ppf(a / 2, n, 0.9), stats.binom.ppf(1 - a / 2, n, 0.9)
-    for j in range(2):
-        if not c_lo <= counts[j] <= c_hi:
-            failed.append((f"coverage {j}", int(counts[j]), (c_lo, c_hi)))
-    # ranks of the truth among ranks_from draws: uniform on 0..ranks_from
-    ranks = np.array([np.sum(d[rng.choice(len(d), ranks_from, replace=False)] < t, axis=0)
-                      for d, t in zip(posteriors, truths, strict=True)])
-    for j in range(2):
-        hist = np.histogram(ranks[:, j], bins=bins, range=(0, ranks_from + 1))[0]
-        p = stats.chisquare(hist).pvalue
-        if not p > a:
-            failed.append((f"ranks {j}", hist.tolist(), p))
-    return failed
 
 
 SBC_DATASETS = 48

@@ -19,6 +19,7 @@ def test_require_names_the_extra():
     ("distributed", "bsdflab.distributed", "dask"),
     ("fastapi", "bsdflab.service", "service"),
     ("emcee", "bsdflab.fit", "fit"),
+    ("dynesty", "bsdflab.fit", "fit"),
 ])
 def test_a_package_without_its_extra_says_which_to_install(blocked, module, extra):
     """In a fresh interpreter where ``blocked`` cannot be imported (None in sys.modules is

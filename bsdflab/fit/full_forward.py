@@ -1,0 +1,142 @@
+"""The full model's forward model: parameter sets -> the rendered ``Layered`` model ->
+the adding-doubling solver (bsdflab.solvers, docs/solvers.md) -> the dataset's observables.
+
+Each parameter set becomes the model dict that the study writes as material.json
+(``bsdflab.fit.material.material_dict``), and that dict's ``Layered`` model is solved at the
+dataset's wavelengths: the fitted model IS the tabulated and rendered one (rough top with
+its film or platelet stack, Henyey-Greenstein slab with spectral sigma_a and grey sigma_s,
+Lambertian base). One solve per parameter set (a Python loop over sets; the solve itself
+is threaded C++); the solution of what lies below the top is reused when only the top
+changes (``Solution.with_model``: roughness, film), which makes fits with a fixed slab
+several times cheaper.
+
+Rows: ``brdf`` (and ``diffuse``, its in-plane special case) give the reflectance factor
+pi f(theta_i, theta_o, phi), the rough top's own reflection included. ``specular`` and
+``total`` rows are not modelled (a rough top has no mirror beam; the hemispherical integral
+of a narrow gloss lobe needs its own quadrature): ValueError.
+
+Geometry: the source lies at polar angle theta_i in the plane of incidence; phi is the
+detector's azimuth measured from the mirror side (phi = 0: the plane of incidence on the
+side away from the source, where the mirror direction lies; 180: back toward the source).
+"""
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+
+from bsdflab.bsdfs import from_dict
+from bsdflab.fit.config import ModelSettings
+from bsdflab.fit.data import GEOMETRIES, Dataset
+from bsdflab.fit.forward import ForwardModel, parameter_sets
+from bsdflab.fit.material import material_dict
+from bsdflab.fit.parameters import ALL_NAMES, FORWARD_NAMES, in_domain
+from bsdflab.solvers import solve
+
+CACHE = 64   # below-the-top solutions kept for reuse (an emulator grid varies the top fastest)
+
+
+def row_directions(dataset: Dataset) -> tuple[np.ndarray, np.ndarray]:
+    """(detector, source) unit directions (rows, 3) of brdf and diffuse rows (+z up)."""
+    g = dataset.geometry
+    brdf, diffuse = g == GEOMETRIES.index("brdf"), g == GEOMETRIES.index("diffuse")
+    bad = ~(brdf | diffuse)
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        raise ValueError(f"row {i}: geometry {GEOMETRIES[g[i]]!r} is not modelled by the full model (a rough top "
+                         "has no mirror beam); use brdf rows (or kind = 'smooth')")
+    theta_o = np.radians(np.where(brdf, dataset.angle_out_deg, np.abs(dataset.angle_out_deg)))
+    phi = np.radians(np.where(brdf, dataset.phi_deg, np.where(dataset.angle_out_deg >= 0, 0.0, 180.0)))
+    ti = np.radians(dataset.angle_deg)
+    source = np.column_stack([-np.sin(ti), np.zeros_like(ti), np.cos(ti)])
+    detector = np.column_stack([np.sin(theta_o) * np.cos(phi), np.sin(theta_o) * np.sin(phi), np.cos(theta_o)])
+    return detector, source
+
+
+class SolverForwardModel:
+    """Observables (P, rows) of ``dataset`` for full parameter vectors (P, len(ALL_NAMES)).
+
+    Parameters
+    ----------
+    dataset : Dataset
+        brdf and diffuse rows (angles, wavelengths; the values are not used).
+    model : ModelSettings
+        kind "full": film, platelets, distribution, solver nodes (raised to the slab's
+        ``nodes_for_g``) and orders (0: automatic).
+    """
+
+    def __init__(self, dataset: Dataset, model: ModelSettings):
+        if model.kind != "full":
+            raise ValueError(f"SolverForwardModel needs [model] kind = 'full', got {model.kind!r}")
+        self.dataset, self.settings = dataset, model
+        self.wavelengths, wl_index = np.unique(dataset.wavelength_nm, return_inverse=True)
+        detector, source = row_directions(dataset)
+        pairs, pair_index = np.unique(np.hstack([detector, source]), axis=0, return_inverse=True)
+        self._wi, self._wo = np.ascontiguousarray(pairs[:, :3]), np.ascontiguousarray(pairs[:, 3:])
+        self._pick = (pair_index.ravel(), wl_index.ravel())
+        self._names = model.names()
+        self._cache: dict[str, object] = {}
+        self.solves = 0        # full solves (what lies below the top solved anew)
+        self.top_solves = 0    # solves that reused the layers below the top
+
+    @property
+    def rows(self) -> int:
+        return len(self.dataset)
+
+    def layered(self, values):
+        """The ``Layered`` model of one full parameter vector (what material.json holds)."""
+        return from_dict(material_dict(values, model=self.settings))
+
+    def _solution(self, model):
+        d = model.to_dict()
+        key = json.dumps({**d, "interfaces": d["interfaces"][1:]}, sort_keys=True)
+        if key in self._cache:
+            self.top_solves += 1
+            return self._cache[key].with_model(model)
+        with warnings.catch_warnings():
+            # the solver raises the nodes to resolve the slab's phase function and says so;
+            # in a fit that is expected for every parameter set (docs/fit.md)
+            warnings.filterwarnings("ignore", message="adding-doubling: nodes raised", category=UserWarning)
+            sol = solve(model, wavelengths=self.wavelengths, nodes=self.settings.nodes,
+                        orders=self.settings.orders or None)
+        self.solves += 1
+        if len(self._cache) >= CACHE:
+            self._cache.pop(next(iter(self._cache)))
+        self._cache[key] = sol
+        return sol
+
+    def predict_one(self, values) -> np.ndarray:
+        """pi f for every row of one full parameter vector (NaN outside the domain)."""
+        v = dict(zip(ALL_NAMES, map(float, values)))
+        if not all(in_domain(n, v[n]) for n in self._names) or v["substrate_index"] <= v["exterior_index"]:
+            return np.full(self.rows, np.nan)
+        try:
+            sol = self._solution(self.layered(v))
+        except ValueError:
+            return np.full(self.rows, np.nan)
+        f_cos = sol.eval(self._wi, self._wo)          # f |cos theta_source|, (pairs, wavelengths)
+        factor = np.pi * f_cos / self._wo[:, 2:3]
+        return factor[self._pick]
+
+    def evaluate(self, full) -> np.ndarray:
+        """Model values (P, rows) for full parameter vectors (P, len(ALL_NAMES)), or (rows,)."""
+        t, single = parameter_sets("values", full, ALL_NAMES)
+        out = np.array([self.predict_one(row) for row in t])
+        return out[0] if single else out
+
+
+class SmoothForward:
+    """The smooth C++ model behind the same interface (full vectors in, values out)."""
+
+    def __init__(self, dataset: Dataset, model: ModelSettings):
+        self.model = ForwardModel(dataset, model.thickness_nodes, model.angle_nodes)
+        self._cols = np.array([ALL_NAMES.index(n) for n in FORWARD_NAMES])
+
+    def evaluate(self, full) -> np.ndarray:
+        return self.model.evaluate(np.asarray(full, dtype=np.float64)[..., self._cols])
+
+
+def forward_model(dataset: Dataset, model: ModelSettings):
+    """The forward model that ``model.kind`` names: ``evaluate(full)`` -> (P, rows)."""
+    return SolverForwardModel(dataset, model) if model.kind == "full" else SmoothForward(dataset, model)

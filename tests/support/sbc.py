@@ -1,0 +1,73 @@
+"""Simulation-based calibration statistics (Talts et al. 2018) shared by the fit tests.
+
+Each family is Sidak-corrected at ALPHA_SBC (a calibrated fit fails it 1 time in 1000):
+the sum of squared posterior z-scores (one test), coverage of the central 90 % intervals
+and rank uniformity (one chi-square) per parameter. The z-sum carries the power: for a
+calibrated posterior E[z^2] = 1 exactly (z = (truth - posterior mean) / posterior sd, any
+posterior shape), so sum z^2 over the datasets and parameters is close to chi^2 with
+ndim x n degrees of freedom; a posterior whose sd is r times the true one gives z^2 / r^2.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+
+ALPHA_SBC = 0.001
+NARROW = 0.7  # the mis-calibration the check must catch: posterior sd 0.7 x the true one
+
+
+def family_size(ndim: int) -> int:
+    return 1 + 2 * ndim
+
+
+def z_sum_limits(n_datasets: int, ndim: int = 2, alpha: float = ALPHA_SBC):
+    """Two-sided acceptance interval of sum z^2 (chi^2, ndim x n degrees of freedom)."""
+    a = 1 - (1 - alpha) ** (1 / family_size(ndim))
+    k = ndim * n_datasets
+    return stats.chi2.ppf(a / 2, k), stats.chi2.ppf(1 - a / 2, k)
+
+
+def z_sum_power(n_datasets: int, ndim: int = 2, narrow: float = NARROW) -> float:
+    """Probability that sum z^2 leaves its acceptance interval when every posterior sd is
+    ``narrow`` times the true one (sum z^2 is then chi^2(ndim n) / narrow^2)."""
+    lo, hi = z_sum_limits(n_datasets, ndim)
+    k = ndim * n_datasets
+    return stats.chi2.sf(hi * narrow ** 2, k) + stats.chi2.cdf(lo * narrow ** 2, k)
+
+
+def narrowed(draws, factor):
+    """The same posterior draws, their spread about the mean scaled by ``factor`` (a sampler
+    or likelihood that reports too narrow a posterior, for the power check)."""
+    mean = draws.mean(axis=0)
+    return mean + factor * (draws - mean)
+
+
+def calibration_failures(truths, posteriors, bins, seed=0, ranks_from=19):
+    """The calibration tests that reject (an empty list when the posteriors are calibrated).
+    truths (n, ndim); posteriors: one (draws, ndim) array per dataset."""
+    rng = np.random.default_rng(seed)
+    n, ndim = truths.shape
+    a = 1 - (1 - ALPHA_SBC) ** (1 / family_size(ndim))
+    failed = []
+    draws_mean = np.array([d.mean(axis=0) for d in posteriors])
+    draws_sd = np.array([d.std(axis=0, ddof=1) for d in posteriors])
+    z = (truths - draws_mean) / draws_sd
+    lo, hi = z_sum_limits(n, ndim)
+    if not lo <= np.sum(z ** 2) <= hi:
+        failed.append(("sum z^2", float(np.sum(z ** 2)), (lo, hi)))
+    # coverage of the central 90 % interval: Binomial(n, 0.9), two-sided band at level a
+    bounds = np.array([np.quantile(d, [0.05, 0.95], axis=0) for d in posteriors])
+    counts = ((bounds[:, 0] < truths) & (truths < bounds[:, 1])).sum(axis=0)
+    c_lo, c_hi = stats.binom.ppf(a / 2, n, 0.9), stats.binom.ppf(1 - a / 2, n, 0.9)
+    for j in range(ndim):
+        if not c_lo <= counts[j] <= c_hi:
+            failed.append((f"coverage {j}", int(counts[j]), (c_lo, c_hi)))
+    # ranks of the truth among ranks_from draws: uniform on 0..ranks_from
+    ranks = np.array([np.sum(d[rng.choice(len(d), ranks_from, replace=False)] < t, axis=0)
+                      for d, t in zip(posteriors, truths, strict=True)])
+    for j in range(ndim):
+        hist = np.histogram(ranks[:, j], bins=bins, range=(0, ranks_from + 1))[0]
+        p = stats.chisquare(hist).pvalue
+        if not p > a:
+            failed.append((f"ranks {j}", hist.tolist(), p))
+    return failed
