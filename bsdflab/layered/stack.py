@@ -39,6 +39,10 @@ IOR_TOLERANCE = 1e-9
 MAX_WALKS = 1 << 24
 MAX_DEPTH = 1 << 16
 PDF_SAMPLES = 1
+# The walk's estimators (core/include/bsdflab/layered.h, docs/estimators.md): "pfmc2"
+# (estimator version 6, the default) and "pfmc" (version 5's numbers, the reference).
+ESTIMATORS = {"pfmc": 0, "pfmc2": 1}
+ESTIMATOR = "pfmc2"
 
 
 @dataclass(frozen=True)
@@ -87,12 +91,17 @@ class Layered(BSDF):
         (docs/estimators.md). 0: estimator version 4's
         deterministic approximation (for comparisons). Default 1 (bench/bench_layered_pdf.py:
         more walks cost more render time than their MIS weights save on the snake).
+    estimator : {"pfmc2", "pfmc"}
+        The walk. "pfmc2" (default): minimum-extinction free flights (spectral weights
+        <= 1), strategy B's BTDF evaluated under a roulette on its MIS-weighted density,
+        four walks per light chain (docs/estimators.md, docs/performance.md). "pfmc":
+        Guo et al.'s estimator exactly as estimator version 5 (the reference).
     """
 
     type_name = "layered"
 
     def __init__(self, interfaces, slabs, base, samples: int = 256, seed: int = 0,
-                 max_depth: int = MAX_DEPTH, pdf_samples: int = PDF_SAMPLES):
+                 max_depth: int = MAX_DEPTH, pdf_samples: int = PDF_SAMPLES, estimator: str = ESTIMATOR):
         super().__init__()
         if not isinstance(interfaces, (list, tuple)) or not interfaces:
             raise ValueError("interfaces must be a non-empty list (top first)")
@@ -114,6 +123,10 @@ class Layered(BSDF):
         self.seed = check.seed(seed)
         self.max_depth = _positive_int("max_depth", max_depth)
         self.pdf_samples = check.integer("pdf_samples", pdf_samples, 0, MAX_DEPTH)
+        if not isinstance(estimator, str) or estimator not in ESTIMATORS:
+            raise ValueError(f"estimator must be one of {', '.join(map(repr, ESTIMATORS))}, "
+                             f"got {check.brief(estimator)}")
+        self.estimator = estimator
         self._check_indices()
 
     def _check_indices(self) -> None:
@@ -133,7 +146,7 @@ class Layered(BSDF):
             list(wl), boundaries, [s.thickness_um for s in self.slabs],
             [list(s.sigma_a_at(wl)) for s in self.slabs], [s.sigma_s for s in self.slabs],
             [s.phase.core_kind for s in self.slabs], [s.phase.core_parameter for s in self.slabs],
-            self.samples, self.seed, self.max_depth, nee, self.pdf_samples)
+            self.samples, self.seed, self.max_depth, nee, self.pdf_samples, ESTIMATORS[self.estimator])
 
     def naive(self, wavelengths) -> Any:
         """The core estimator without next-event connections (for benchmarks only)."""
@@ -202,7 +215,8 @@ class Layered(BSDF):
         return {"interfaces": [m.to_dict() for m in self.interfaces],
                 "slabs": [s.to_dict() for s in self.slabs], "base": self.base.to_dict(),
                 "samples": self.samples, "seed": self.seed, "max_depth": self.max_depth,
-                **({} if self.pdf_samples == PDF_SAMPLES else {"pdf_samples": self.pdf_samples})}
+                **({} if self.pdf_samples == PDF_SAMPLES else {"pdf_samples": self.pdf_samples}),
+                **({} if self.estimator == ESTIMATOR else {"estimator": self.estimator})}
 
 
 def _positive_int(name: str, value) -> int:
