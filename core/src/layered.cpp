@@ -168,7 +168,8 @@ double LayeredBSDF::fly(const Slab &S, double room, double cz, PCG32 &rng, doubl
 // sigma_s exp(-sigma_t[c] t) / (sbar exp(-sbar t)) = (sigma_s / sbar) exp(-(sigma_a[c] - min) t)
 // and reaching the boundary (probability exp(-sbar L)) by exp(-(sigma_a[c] - min) L):
 // both <= 1, so a walk's spectral weights never grow, however many flights it has.
-double LayeredBSDF::fly_min_extinction(std::size_t j, double room, double cz, PCG32 &rng, double *beta) const {
+double LayeredBSDF::fly_min_extinction(std::size_t j, double room, double cz, PCG32 &rng,
+                                       double *beta) const {
     const Slab &S = slabs_[j];
     const int C = channels();
     const double length = room / cz, amin = min_sigma_a_[j];
@@ -412,7 +413,7 @@ bool LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
         const double room = up ? zx : S.thickness - zx;
 
         const double t = (v2 && min_extinction_[j]) ? fly_min_extinction(std::size_t(j), room, cz, rng, beta)
-                            : fly(S, room, cz, rng, beta, wk.fly_tr);
+                                                    : fly(S, room, cz, rng, beta, wk.fly_tr);
         if (t >= 0) { // scattering event at depth zx (measured from the exit side)
             zx += up ? -t * cz : t * cz;
             double to_exit_pdf = wk.ok[j] ? S.phase.eval(w, -wk.u[j]) : 0.0;
