@@ -39,10 +39,10 @@ IOR_TOLERANCE = 1e-9
 MAX_WALKS = 1 << 24
 MAX_DEPTH = 1 << 16
 PDF_SAMPLES = 1
-# The walk's estimators (core/include/bsdflab/layered.h, docs/estimators.md): "pfmc2"
-# (estimator version 6, the default) and "pfmc" (version 5's numbers, the reference).
+# The walk's estimators (core/include/bsdflab/layered.h, docs/estimators.md): "pfmc"
+# (Guo et al.'s, the default: estimator version 5's numbers) and "pfmc2".
 ESTIMATORS = {"pfmc": 0, "pfmc2": 1}
-ESTIMATOR = "pfmc2"
+ESTIMATOR = "pfmc"
 
 
 @dataclass(frozen=True)
@@ -91,11 +91,13 @@ class Layered(BSDF):
         (docs/estimators.md). 0: estimator version 4's
         deterministic approximation (for comparisons). Default 1 (bench/bench_layered_pdf.py:
         more walks cost more render time than their MIS weights save on the snake).
-    estimator : {"pfmc2", "pfmc"}
-        The walk. "pfmc2" (default): minimum-extinction free flights (spectral weights
-        <= 1), strategy B's BTDF evaluated under a roulette on its MIS-weighted density,
-        four walks per light chain (docs/estimators.md, docs/performance.md). "pfmc":
-        Guo et al.'s estimator exactly as estimator version 5 (the reference).
+    estimator : {"pfmc", "pfmc2"}
+        The walk. "pfmc" (default): Guo et al.'s estimator exactly as estimator version 5.
+        "pfmc2": four walks share one light chain, and bright slabs (albedo of the least
+        absorbed channel >= 0.95) draw flights by their smallest extinction, so spectral
+        weights stay <= 1 (no heavy tails when channels differ wildly). 1.3x pfmc's
+        efficiency on the snake, 1.0-1.4x elsewhere (docs/performance.md); not the default
+        because the goal for that was 2x on the snake (docs/estimators.md).
     """
 
     type_name = "layered"

@@ -190,7 +190,7 @@ def test_04_golden_values():
 
 
 def test_04b_golden_values_pfmc2():
-    # Recorded with estimator version 6 (pfmc2 is new: no earlier values to keep).
+    # Recorded when pfmc2 was added (issue 21; no earlier values to keep).
     got = golden_values("pfmc2")
     for key, want in GOLDEN_PFMC2.items():
         assert np.allclose(got[key], want, rtol=1e-9, atol=0), (key, got[key])
@@ -202,8 +202,9 @@ def test_05_estimator_version():
     # 5: walks end by roulette (the depth cap, 2^16 by default, is a counted safety net);
     # walks that never reached version 4's cap of 256 events draw the same numbers, so the
     # golden values above still hold.
-    # 6: the default estimator is pfmc2 (estimator="pfmc" keeps version 5's numbers, test_04).
-    assert _core.estimator_version == 6
+    # estimator="pfmc2" (issue 21) is chosen in the model (its dict, the table cache key); the
+    # default keeps version 5's numbers, so the version is unchanged.
+    assert _core.estimator_version == 5
 
 
 # -- defect 4: eta, non-finite walks, explicit state ----------------------------------------------
@@ -264,14 +265,17 @@ def test_08_nested_stochastic_models_keep_their_own_state():
 CORE_GRAIN = 2048
 
 
-def test_09_thread_count_does_not_change_any_bit(monkeypatch):
+@pytest.mark.parametrize("estimator", ["pfmc", "pfmc2"])
+def test_09_thread_count_does_not_change_any_bit(monkeypatch, estimator):
     """eval, estimate errors, sample and the stochastic pdf (version 5: walks seeded from
     (seed, wi, wo)) are bitwise the same on 1, 2 and 3 threads, for a rough top and a
     smooth transmissive stack (pdf's smooth-exit branch). The sample half draws 3 grains of
     rows, so 2 and 3 threads really split it (fewer rows than the grain run on one thread
     whatever the setting)."""
     smooth = bl.Layered([bl.Dielectric(1.5)], [bl.Slab(0.5, sigma_a=0.2, sigma_s=1.0)],
-                        bl.RoughDielectric(0.3, 1.0, 1.5), samples=32)
+                        bl.RoughDielectric(0.3, 1.0, 1.5), samples=32, estimator=estimator)
+    snake = bl.presets.xenopeltis()
+    snake = bl.Layered(list(snake.interfaces), list(snake.slabs), snake.base, samples=32, estimator=estimator)
     wi = random_unit_vectors(24, seed=8, hemisphere="upper")
     wo = random_unit_vectors(24, seed=9, hemisphere="upper")
     wo_any = random_unit_vectors(24, seed=10)
@@ -281,7 +285,7 @@ def test_09_thread_count_does_not_change_any_bit(monkeypatch):
     for threads in ("1", "2", "3"):
         monkeypatch.setenv("BSDFLAB_THREADS", threads)
         r = []
-        for m in (bl.presets.xenopeltis(samples=32), smooth):
+        for m in (snake, smooth):
             e = m.estimate(wi, wo, wavelengths=wl)
             s = m.sample(wi_many, seed=3, wavelengths=wl)
             r += [e.value, e.stderr, s.wo, s.weight, s.pdf, m.pdf(wi, wo_any, wavelengths=wl)]
@@ -303,3 +307,17 @@ def test_10_scattered_part_is_the_model_without_the_top_reflection():
     assert np.allclose(full.value, part.value + top, rtol=1e-12, atol=1e-15)
     assert np.array_equal(full.stderr, part.stderr)
     assert m.film_thickness_nm == bl.presets.FILM_THICKNESS_NM
+
+
+def test_11_estimator_option():
+    """estimator: validated, kept by to_dict / from_dict (the default is omitted), and
+    "pfmc2" is a different walk (other numbers) of the same BSDF."""
+    parts = [bl.Dielectric(1.5)], [bl.Slab(0.5, sigma_a=0.2, sigma_s=1.0)], bl.Diffuse(0.5)
+    with pytest.raises(ValueError, match="estimator must be one of 'pfmc', 'pfmc2'"):
+        bl.Layered(*parts, estimator="bidirectional")
+    m = bl.Layered(*parts, estimator="pfmc2")
+    d = m.to_dict()
+    assert d["estimator"] == "pfmc2" and "estimator" not in bl.Layered(*parts).to_dict()
+    assert bl.from_dict(d).estimator == "pfmc2"
+    wi, wo = directions_at(0.8), directions_at(0.6, 2.0)
+    assert not np.array_equal(m.eval(wi, wo, wavelengths=WL), bl.Layered(*parts).eval(wi, wo, wavelengths=WL))

@@ -61,11 +61,11 @@ struct LayeredOptions {
     int max_depth = 1 << 16; // events per walk: a safety net, counted when hit (capped_walks)
     bool nee = true;         // false: B alone wherever it can count a path (same BSDF, no MIS)
     int pdf_samples = 1;     // walks of one pdf() estimate (0: version 4's approximation)
-    // 0: Guo et al.'s PFMC as in estimator version 5 (the reference, bit-identical);
+    // 0: Guo et al.'s PFMC as in estimator version 5 (the default; bit-identical);
     // 1: "pfmc2" (version 6, docs/estimators.md): kWalksPerChain walks share one light
     //    chain (and the entry connection); in bright slabs (albedo of the least absorbed
     //    channel >= 0.95) free flights by the smallest extinction, spectral weights <= 1.
-    int estimator = 1;
+    int estimator = 0;
 };
 
 constexpr int kEstimatorPfmc = 0;
