@@ -95,9 +95,10 @@ class Layered(BSDF):
         The walk. "pfmc" (default): Guo et al.'s estimator exactly as estimator version 5.
         "pfmc2": four walks share one light chain, and bright slabs (albedo of the least
         absorbed channel >= 0.95) draw flights by their smallest extinction, so spectral
-        weights stay <= 1 (no heavy tails when channels differ wildly). 1.3x pfmc's
-        efficiency on the snake, 1.0-1.4x elsewhere (docs/performance.md); not the default
-        because the goal for that was 2x on the snake (docs/estimators.md).
+        weights stay <= 1 (no heavy tails when channels differ wildly). 1.34x pfmc's
+        efficiency on the snake's eval, 1.0-1.6x on the other measured stacks, 0.84x on
+        the snake's tabulation (docs/performance.md); not the default, because the goal
+        for that was 2x on the snake (docs/estimators.md).
     """
 
     type_name = "layered"

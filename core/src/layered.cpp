@@ -513,7 +513,9 @@ std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_
     // pfmc: one walk per chain, each walk one sample of the mean. pfmc2: groups of up to
     // kWalksPerChain walks share a chain (and its entry connection, added once at the
     // group's weight); a group's mean is one sample (its walks are correlated).
-    const int per_chain = options_.estimator == kEstimatorPfmc2 ? kWalksPerChain : 1;
+    // At least two groups whenever samples >= 2, so that the standard error is estimated.
+    const int per_chain =
+        options_.estimator == kEstimatorPfmc2 ? std::max(1, std::min(kWalksPerChain, samples / 2)) : 1;
     const int groups = (samples + per_chain - 1) / per_chain;
     for (int n = 1; n <= groups; ++n) {
         std::fill(wk.contrib, wk.contrib + C, 0.0);

@@ -321,3 +321,6 @@ def test_11_estimator_option():
     assert bl.from_dict(d).estimator == "pfmc2"
     wi, wo = directions_at(0.8), directions_at(0.6, 2.0)
     assert not np.array_equal(m.eval(wi, wo, wavelengths=WL), bl.Layered(*parts).eval(wi, wo, wavelengths=WL))
+    # Walks share chains in groups, yet a few walks still give two groups and an error.
+    for n in (2, 3, 5):
+        assert np.all(m.estimate(wi, wo, wavelengths=WL, samples=n).stderr > 0), n
