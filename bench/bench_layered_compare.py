@@ -2,8 +2,9 @@
 
 Efficiency = 1 / (variance x time): the relative variance of one estimate (of the
 configuration's projected output) times the CPU seconds it took (all threads; robust to
-other processes on a shared machine), per direction pair, median over the pairs; printed as the ratio pfmc2 / pfmc (> 1: pfmc2 reaches an error in less
-time). Both estimators run on the same pairs, alternating, best of `--repeats` timings.
+other processes on a shared machine), per direction pair, median over the pairs;
+printed as the ratio pfmc2 / pfmc (> 1: pfmc2 reaches an error in less time). Both
+estimators run on the same pairs, one after the other, best of `--repeats` timings.
 
 Configurations: the snake preset (luminance of 81 wavelengths), the scattering cases of
 tests/layered/test_layered_vs_adding_doubling.py (mean of their 3 channels), a thick
@@ -80,7 +81,7 @@ def efficiency(core, wi, wo, walks, row, repeats):
 
 def compare(pairs, walks, repeats):
     print(f"{_core.worker_count()} threads, {pairs} pairs, {walks} walks per pair, best of {repeats}")
-    print(f"  {'configuration':30s} {'us/walk pfmc':>12s} {'pfmc2':>7s} {'relvar/walk pfmc':>17s} "
+    print(f"  {'configuration':30s} {'CPU-us/walk pfmc':>16s} {'pfmc2':>7s} {'relvar/walk pfmc':>17s} "
           f"{'pfmc2':>8s} {'efficiency pfmc2/pfmc':>22s}")
     ratios = {}
     for name, ((ifs, slabs, base), wl, row, transmit) in configurations().items():
@@ -93,7 +94,7 @@ def compare(pairs, walks, repeats):
             core = bl.Layered(list(ifs), list(slabs), base, estimator=est)._core(np.asarray(wl, dtype=float))
             res[est] = efficiency(core, wi, wo, walks, row, repeats)
         ratios[name] = res["pfmc2"][0] / res["pfmc"][0]
-        print(f"  {name:30s} {1e6 * res['pfmc'][1] / walks:12.2f} {1e6 * res['pfmc2'][1] / walks:7.2f} "
+        print(f"  {name:30s} {1e6 * res['pfmc'][1] / walks:16.2f} {1e6 * res['pfmc2'][1] / walks:7.2f} "
               f"{res['pfmc'][2]:17.3g} {res['pfmc2'][2]:8.3g} {ratios[name]:21.2f}x")
     return ratios
 
