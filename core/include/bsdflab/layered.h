@@ -66,7 +66,7 @@ struct LayeredOptions {
     bool nee = true;         // false: B alone wherever it can count a path (same BSDF, no MIS)
     int pdf_samples = 1;     // walks of one pdf() estimate (0: version 4's approximation)
     // 0: Guo et al.'s PFMC as in estimator version 5 (the default; bit-identical);
-    // 1: "pfmc2" (version 6, docs/estimators.md): kWalksPerChain walks share one light
+    // 1: "pfmc2" (issue 21, docs/estimators.md): kWalksPerChain walks share one light
     //    chain (and the entry connection); in bright slabs (albedo of the least absorbed
     //    channel >= 0.95) free flights by the smallest extinction, spectral weights <= 1.
     int estimator = 0;
