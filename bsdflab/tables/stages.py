@@ -63,6 +63,7 @@ class PilotBlock:
     lum_error: np.ndarray  # its standard error
     nonfinite: int         # walks whose contribution was not finite (0 for a sound model)
     seconds: float = 0.0
+    capped: int = 0        # walks cut by the model's max_depth (biased low; 0 for a sound model)
 
 
 @dataclass(frozen=True)
@@ -77,6 +78,7 @@ class CellBlock:
     lum_error: np.ndarray  # (n,)
     nonfinite: int
     seconds: float = 0.0
+    capped: int = 0
 
 
 def cell_count(model: BSDF, grid: TableGrid) -> int:
@@ -99,7 +101,7 @@ def pilot_cells(model: BSDF, grid: TableGrid, cells, *, wavelengths=None,
     start = time.perf_counter()
     run_with_progress(job, progress, unit="cell", desc="tabulating (pilot)")
     return PilotBlock(idx, np.asarray(job.pilot_lum), np.asarray(job.pilot_error),
-                      int(job.pilot_nonfinite), time.perf_counter() - start)
+                      int(job.pilot_nonfinite), time.perf_counter() - start, int(job.pilot_capped))
 
 
 def merge_pilots(blocks: Sequence[PilotBlock], n_cells: int) -> PilotBlock:
@@ -110,7 +112,8 @@ def merge_pilots(blocks: Sequence[PilotBlock], n_cells: int) -> PilotBlock:
     lum = np.concatenate([b.lum for b in blocks])[order]
     err = np.concatenate([b.lum_error for b in blocks])[order]
     return PilotBlock(np.arange(n_cells, dtype=np.int64), lum, err,
-                      sum(b.nonfinite for b in blocks), sum(b.seconds for b in blocks))
+                      sum(b.nonfinite for b in blocks), sum(b.seconds for b in blocks),
+                      sum(b.capped for b in blocks))
 
 
 def floor_scale(model: BSDF, grid: TableGrid, pilot: PilotBlock, *, wavelengths=None,
@@ -143,7 +146,7 @@ def finish_cells(model: BSDF, grid: TableGrid, cells, pilot: PilotBlock, scale, 
     C = tab.out_channels
     return CellBlock(idx, np.asarray(job.value).reshape(len(idx), C), np.asarray(job.error).reshape(len(idx), C),
                      np.asarray(job.samples), np.asarray(job.lum_value), np.asarray(job.lum_error),
-                     int(job.nonfinite), time.perf_counter() - start)
+                     int(job.nonfinite), time.perf_counter() - start, int(job.capped))
 
 
 def assemble(model: BSDF, grid: TableGrid, blocks: Sequence[CellBlock], pilot: PilotBlock, *,
@@ -151,7 +154,7 @@ def assemble(model: BSDF, grid: TableGrid, blocks: Sequence[CellBlock], pilot: P
              max_samples: int = DEFAULT_MAX_SAMPLES, seed: int = 0) -> TableData:
     """The TableData from finish blocks covering every cell exactly once (any order) and
     the full pilot. ``meta`` records the settings, the summed stage times, the walks of
-    both stages, the non-finite walk count and the achieved error."""
+    both stages, the non-finite and the capped (max_depth) walk counts and the achieved error."""
     names, _, _, _ = table_channels(wavelengths)
     lobes = lobes_of(model)
     n = cell_count(model, grid)
@@ -164,13 +167,15 @@ def assemble(model: BSDF, grid: TableGrid, blocks: Sequence[CellBlock], pilot: P
     stderr = cat("stderr").reshape(*shape, len(names)).astype(np.float32)
     samples = cat("samples").reshape(shape).astype(np.int32)
     nonfinite = int(pilot.nonfinite + sum(b.nonfinite for b in blocks))
+    capped = int(pilot.capped + sum(b.capped for b in blocks))
     stochastic = _is_stochastic(model)
     meta = {"bsdflab_version": __version__, "estimator_version": int(_core.estimator_version),
             "seconds": round(pilot.seconds + sum(b.seconds for b in blocks), 3),
             "threads": _core.worker_count(), "min_samples": int(min_samples),
             "max_samples": int(max_samples), "seed": int(seed), "error_floor": ERROR_FLOOR,
             "pilot_walks": int(min_samples) * n if stochastic else 0,
-            "nonfinite_walks": nonfinite, "film_lookup_error": _film_lookup_error(model, grid, wavelengths),
+            "nonfinite_walks": nonfinite, "capped_walks": capped,
+            "film_lookup_error": _film_lookup_error(model, grid, wavelengths),
             **achieved_error(cat("lum"), cat("lum_error"))}
     table = TableData(model=model.to_dict(), grid=grid, lobes=lobes, channels=names,
                       split_direct=_splits(model), values=values, stderr=stderr, samples=samples,

@@ -74,7 +74,7 @@ void bind_layered(py::module_ &m) {
                          std::vector<double> thickness, std::vector<std::vector<double>> sigma_a,
                          std::vector<double> sigma_s, std::vector<int> phase_kind,
                          std::vector<double> phase_param, int samples, uint64_t seed, int max_depth, bool nee,
-                         int pdf_samples) {
+                         int pdf_samples, int estimator) {
                  std::size_t K = thickness.size();
                  if (sigma_a.size() != K || sigma_s.size() != K || phase_kind.size() != K ||
                      phase_param.size() != K)
@@ -88,13 +88,14 @@ void bind_layered(py::module_ &m) {
                  }
                  std::vector<std::shared_ptr<const BSDF>> b(boundaries.begin(), boundaries.end());
                  if (pdf_samples < 0) throw std::invalid_argument("pdf_samples must be >= 0");
-                 LayeredOptions opt{samples, seed, max_depth, nee, pdf_samples};
+                 LayeredOptions opt{samples, seed, max_depth, nee, pdf_samples, estimator};
                  return std::make_shared<LayeredBSDF>(std::move(wavelengths), std::move(b), std::move(slabs),
                                                       opt);
              }),
              py::arg("wavelengths"), py::arg("boundaries"), py::arg("thickness"), py::arg("sigma_a"),
              py::arg("sigma_s"), py::arg("phase_kind"), py::arg("phase_param"), py::arg("samples"),
-             py::arg("seed"), py::arg("max_depth"), py::arg("nee"), py::arg("pdf_samples") = 1)
+             py::arg("seed"), py::arg("max_depth"), py::arg("nee"), py::arg("pdf_samples") = 1,
+             py::arg("estimator") = kEstimatorPfmc)
         .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"), py::arg("thickness"),
              py::arg("samples"), py::arg("seed"),
              "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed")

@@ -87,7 +87,9 @@ void bind_tables(py::module_ &m) {
                                    return py::array_t<int>(j.finished.samples.size(),
                                                            j.finished.samples.data());
                                })
-        .def_property_readonly("nonfinite", [](const TabulationStageJob &j) { return j.finished.nonfinite; });
+        .def_property_readonly("nonfinite", [](const TabulationStageJob &j) { return j.finished.nonfinite; })
+        .def_property_readonly("pilot_capped", [](const TabulationStageJob &j) { return j.pilot.capped; })
+        .def_property_readonly("capped", [](const TabulationStageJob &j) { return j.finished.capped; });
 
     py::class_<TabulatedBSDF, BSDF, std::shared_ptr<TabulatedBSDF>>(m, "TabulatedBSDF")
         .def(py::init([](std::vector<double> channel_ids, int n_lobes, int n_theta_i, int n_theta_o,

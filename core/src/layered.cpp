@@ -12,6 +12,10 @@ namespace {
 
 constexpr int kMaxSlabs = 16;
 constexpr int kRouletteDepth = 4;
+// pfmc2 draws a slab's flights with its smallest extinction where scattering dominates the
+// least absorbed channel (single-scattering albedo >= this): long walks, where per-flight
+// spectral MIS weights multiply into heavy tails (docs/estimators.md).
+constexpr double kMinExtinctionAlbedo = 0.95;
 // A boundary that transmits through a non-delta lobe: strategy B can evaluate it.
 constexpr uint32_t kNonDeltaTransmission = kDiffuseTransmission | kGlossyTransmission;
 
@@ -101,6 +105,15 @@ LayeredBSDF::LayeredBSDF(std::vector<double> wavelengths, std::vector<std::share
     }
     if (options_.samples < 1 || options_.max_depth < 1)
         throw std::invalid_argument("samples and max_depth must be >= 1");
+    if (options_.estimator != kEstimatorPfmc && options_.estimator != kEstimatorPfmc2)
+        throw std::invalid_argument("estimator must be 0 (pfmc) or 1 (pfmc2)");
+    for (const Slab &s : slabs_) {
+        double m = s.sigma_a.empty() ? 0.0 : s.sigma_a[0];
+        for (double a : s.sigma_a) m = std::min(m, a);
+        min_sigma_a_.push_back(std::max(m, 0.0));
+        const double sbar = s.sigma_s + min_sigma_a_.back();
+        min_extinction_.push_back(s.sigma_s > 0 && s.sigma_s >= kMinExtinctionAlbedo * sbar);
+    }
 }
 
 uint32_t LayeredBSDF::lobes() const {
@@ -147,6 +160,33 @@ double LayeredBSDF::fly(const Slab &S, double room, double cz, PCG32 &rng, doubl
         return -1.0;
     }
     for (int c = 0; c < C; ++c) beta[c] *= (collide ? S.sigma_s : 1.0) * tr[c] / avg;
+    return collide ? t : -1.0;
+}
+
+// Distances drawn with density sbar exp(-sbar t), sbar = sigma_s + min_c sigma_a[c], a grey
+// extinction no channel's is below: a collision at t weighs channel c by
+// sigma_s exp(-sigma_t[c] t) / (sbar exp(-sbar t)) = (sigma_s / sbar) exp(-(sigma_a[c] - min) t)
+// and reaching the boundary (probability exp(-sbar L)) by exp(-(sigma_a[c] - min) L):
+// both <= 1, so a walk's spectral weights never grow, however many flights it has.
+double LayeredBSDF::fly_min_extinction(std::size_t j, double room, double cz, PCG32 &rng,
+                                       double *beta) const {
+    const Slab &S = slabs_[j];
+    const int C = channels();
+    const double length = room / cz, amin = min_sigma_a_[j];
+    const double sbar = S.sigma_s + amin;
+    if (!(S.sigma_s > 0)) { // pure absorption: attenuate deterministically
+        for (int c = 0; c < C; ++c) beta[c] *= std::exp(-S.sigma_a[c] * length);
+        return -1.0;
+    }
+    const double u_distance = rng.uniform();
+    const double t = -std::log(1.0 - u_distance) / sbar;
+    const bool collide = t < length;
+    const double d = collide ? t : length;
+    const double scale = collide ? S.sigma_s / sbar : 1.0;
+    for (int c = 0; c < C; ++c) {
+        const double extra = S.sigma_a[c] - amin;
+        beta[c] *= extra > 0 ? scale * std::exp(-extra * d) : scale;
+    }
     return collide ? t : -1.0;
 }
 
@@ -280,11 +320,13 @@ void LayeredBSDF::solve_delta_region(int exit, const Query &q, Walk &ch) const {
     }
 }
 
-bool LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng, Walk &wk) const {
+bool LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng, Walk &wk,
+                           double entry_scale) const {
     const int K = static_cast<int>(slabs_.size()), C = channels();
     double *beta = wk.beta, *tmp = wk.tmp, *tr = wk.tr, *wgt = wk.wgt, *contrib = wk.contrib;
     std::fill(beta, beta + C, 1.0); // the entry vertex connects before its own sample
     const bool nee = options_.nee;
+    const bool v2 = options_.estimator == kEstimatorPfmc2;
 
     auto xb = [&](int j) { return exit == 0 ? j : j + 1; };
     auto toward_exit = [&](const Vec3 &w) { return exit == 0 ? w.z > 0 : w.z < 0; };
@@ -342,8 +384,11 @@ bool LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
     int j = entry == 0 ? 0 : K - 1;
     const BSDF &E = *boundaries_[entry];
     if (entry != exit && !(E.lobes() & kDeltaTransmission) && wk.ok[j]) {
-        E.eval(wi, -wk.u[j], kTransmission, q, tmp);
-        connect(j, tmp, slabs_[j].thickness, E.pdf(wi, -wk.u[j], kTransmission, q));
+        if (entry_scale > 0) {
+            E.eval(wi, -wk.u[j], kTransmission, q, tmp);
+            for (int c = 0; c < C; ++c) tmp[c] *= entry_scale;
+            connect(j, tmp, slabs_[j].thickness, E.pdf(wi, -wk.u[j], kTransmission, q));
+        }
     }
     BSDFSample s = sample_boundary(E, wi, kTransmission, q, rng, wgt);
     if (!s.lobe) return false;
@@ -367,7 +412,8 @@ bool LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
         if (!(cz > 1e-9)) return false;
         const double room = up ? zx : S.thickness - zx;
 
-        const double t = fly(S, room, cz, rng, beta, wk.fly_tr);
+        const double t = (v2 && min_extinction_[j]) ? fly_min_extinction(std::size_t(j), room, cz, rng, beta)
+                                                    : fly(S, room, cz, rng, beta, wk.fly_tr);
         if (t >= 0) { // scattering event at depth zx (measured from the exit side)
             zx += up ? -t * cz : t * cz;
             double to_exit_pdf = wk.ok[j] ? S.phase.eval(w, -wk.u[j]) : 0.0;
@@ -464,17 +510,26 @@ std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_
     PCG32 rng(hash_directions(req.seed, wi, wo));
     std::uint64_t nonfinite = 0, capped = 0;
     const double cos_o = std::abs(wo.z);
-    for (int n = 1; n <= samples; ++n) {
+    // pfmc: one walk per chain, each walk one sample of the mean. pfmc2: groups of up to
+    // kWalksPerChain walks share a chain (and its entry connection, added once at the
+    // group's weight); a group's mean is one sample (its walks are correlated).
+    // At least two groups whenever samples >= 2, so that the standard error is estimated.
+    const int per_chain =
+        options_.estimator == kEstimatorPfmc2 ? std::max(1, std::min(kWalksPerChain, samples / 2)) : 1;
+    const int groups = (samples + per_chain - 1) / per_chain;
+    for (int n = 1; n <= groups; ++n) {
         std::fill(wk.contrib, wk.contrib + C, 0.0);
         build_chain(wo, exit, q, rng, wk);
-        if (one_walk(wi, entry, exit, q, rng, wk)) ++capped;
+        const int walks = std::min(per_chain, samples - (n - 1) * per_chain);
+        for (int k = 0; k < walks; ++k)
+            if (one_walk(wi, entry, exit, q, rng, wk, k == 0 ? double(walks) : 0.0)) ++capped;
         bool finite = true;
         for (int c = 0; c < C; ++c) finite = finite && std::isfinite(wk.contrib[c]);
         if (!finite) { // counted and reported by the caller; never part of the mean
-            ++nonfinite;
+            nonfinite += walks;
             std::fill(wk.contrib, wk.contrib + C, 0.0);
         }
-        for (int c = 0; c < C; ++c) wk.contrib[c] *= cos_o;
+        for (int c = 0; c < C; ++c) wk.contrib[c] *= cos_o / walks;
         project_rows(req.P, R, C, wk.contrib, x);
         for (int r = 0; r < R; ++r) { // Welford: running mean and sum of squared deviations
             double d = x[r] - mean[r];
@@ -488,7 +543,7 @@ std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_
     project_rows(req.P, R, C, direct, x);
     for (int r = 0; r < R; ++r) {
         out[r] = mean[r] + x[r];
-        err[r] = samples > 1 ? std::sqrt(m2[r] / (double(samples) * (samples - 1))) : 0.0;
+        err[r] = groups > 1 ? std::sqrt(m2[r] / (double(groups) * (groups - 1))) : 0.0;
     }
     if (capped) {
         if (req.capped) *req.capped += capped;
@@ -699,7 +754,9 @@ BSDFSample LayeredBSDF::walk(const Vec3 &wi, BSDFSample s, const Query &q, PCG32
         const double cz = std::abs(dir.z);
         if (!(cz > 1e-9)) return {};
         const double room = down ? S.thickness - zd : zd;
-        const double t = fly(S, room, cz, rng, beta, fly_tr);
+        const double t = options_.estimator == kEstimatorPfmc2 && min_extinction_[j]
+                             ? fly_min_extinction(std::size_t(j), room, cz, rng, beta)
+                             : fly(S, room, cz, rng, beta, fly_tr);
         if (t >= 0) {
             zd += down ? t * cz : -t * cz;
             dir = sample_phase(S.phase, dir, rng);

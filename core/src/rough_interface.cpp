@@ -144,7 +144,10 @@ double RoughInterface::pdf_single(const Vec3 &wi, const Vec3 &wo, uint32_t lobes
     if (dim * wi.z <= 0 || dom * wo.z <= 0) return 0.0;
     const int C = channels();
     double *R = scratch(0, C), *T = scratch(1, C);
-    term_->eval(dim, q, R, T);
+    // The Fresnel term (a thin film's every channel) only sets the choice between two
+    // requested lobes: with one lobe requested the probability is 0 or 1 without it.
+    const bool both = (lobes & kGlossyReflection) && term_->transmissive() && (lobes & kGlossyTransmission);
+    if (both) term_->eval(dim, q, R, T);
     double prob = choice_probability(R, T, lobes, reflect);
     if (!(prob > 0)) return 0.0;
     Vec3 wi_up = wi.z > 0 ? wi : -wi;

@@ -42,7 +42,8 @@ uint64_t Tabulator::cell_seed(std::size_t cell, uint64_t stage) const {
     return mix64(settings_.seed ^ mix64(cell * 8 + stage));
 }
 
-std::uint64_t Tabulator::estimate(std::size_t cell, int n, uint64_t seed, double *mean, double *err) const {
+std::uint64_t Tabulator::estimate(std::size_t cell, int n, uint64_t seed, double *mean, double *err,
+                                  std::uint64_t *capped) const {
     Vec3 wi, wo;
     int lobe, t;
     grid_.cell_directions(cell, wi, wo, lobe, t);
@@ -52,7 +53,7 @@ std::uint64_t Tabulator::estimate(std::size_t cell, int n, uint64_t seed, double
     std::uint64_t nonfinite = 0;
     if (estimator_) {
         ThreadWorkspace lease;
-        EstimateRequest req{n, seed, P_.data(), rows_};
+        EstimateRequest req{n, seed, P_.data(), rows_, capped};
         nonfinite = node_estimators_[t]->estimate(wi, wo, kAll, q, req, lease.get(), mean, err);
     } else { // deterministic model: one evaluation, no error
         ThreadWorkspace lease;
@@ -80,17 +81,20 @@ PilotCells Tabulator::pilot(const std::vector<std::size_t> &cells, const Tabulat
     PilotCells out;
     out.lum.assign(cells.size(), 0.0);
     out.lum_error.assign(cells.size(), 0.0);
-    std::atomic<std::uint64_t> nonfinite{0};
+    std::atomic<std::uint64_t> nonfinite{0}, capped{0};
     const int n = estimator_ ? settings_.min_samples : 1;
     parallel_for_each(cells.size(), [&](std::size_t i) {
         if (ctl.stop()) return;
         std::vector<double> m(rows_), e(rows_);
-        nonfinite += estimate(cells[i], n, cell_seed(cells[i], 0), m.data(), e.data());
+        std::uint64_t cut = 0;
+        nonfinite += estimate(cells[i], n, cell_seed(cells[i], 0), m.data(), e.data(), &cut);
+        capped += cut;
         out.lum[i] = m[rows_ - 1];
         out.lum_error[i] = e[rows_ - 1];
         ctl.tick();
     });
     out.nonfinite = nonfinite;
+    out.capped = capped;
     return out;
 }
 
@@ -132,7 +136,7 @@ FinishedCells Tabulator::finish(const std::vector<std::size_t> &cells, const std
     out.lum.assign(cells.size(), 0.0);
     out.lum_error.assign(cells.size(), 0.0);
     out.samples.assign(cells.size(), 0);
-    std::atomic<std::uint64_t> nonfinite{0};
+    std::atomic<std::uint64_t> nonfinite{0}, capped{0};
     // Largest effort first, so that no long cell starts last and leaves the other cores
     // idle (each result goes to its own slot: the order changes no bit).
     std::vector<int> efforts(cells.size());
@@ -148,7 +152,9 @@ FinishedCells Tabulator::finish(const std::vector<std::size_t> &cells, const std
         const std::size_t i = order[k], cell = cells[i];
         const int n = efforts[i];
         std::vector<double> m(rows_), e(rows_);
-        nonfinite += estimate(cell, n, cell_seed(cell, 1), m.data(), e.data());
+        std::uint64_t cut = 0;
+        nonfinite += estimate(cell, n, cell_seed(cell, 1), m.data(), e.data(), &cut);
+        capped += cut;
         std::copy(m.begin(), m.begin() + C, out.value.begin() + i * C);
         std::copy(e.begin(), e.begin() + C, out.error.begin() + i * C);
         out.lum[i] = m[C];
@@ -157,6 +163,7 @@ FinishedCells Tabulator::finish(const std::vector<std::size_t> &cells, const std
         ctl.tick();
     });
     out.nonfinite = nonfinite;
+    out.capped = capped;
     return out;
 }
 

@@ -143,6 +143,17 @@ def test_03b_reciprocity_across_smooth_interior_boundaries():
 # version 3 after the rough-interface rework (Beckmann / energy compensation share one
 # microfacet sampler) changed the streams of walks through the rough top ("split"; the
 # smooth-top xenopeltis values are unchanged, and every statistical test still passes).
+GOLDEN_PFMC2 = {
+    "xenopeltis-eval": [0.0005673003820538378, 0.0011462897266232952, 0.0009545003497064503],
+    "split-eval": [0.06546187496365273],
+    "split-sample": [0.03616208405316182, -0.355334642730394, 0.9340393971094558, -0.03741230769273851,
+                     -0.031037849875156648, 0.9988177867400188, -0.34168069294084996, -0.10202882431462401,
+                     0.9342614318703497, -0.6687177289116677, -0.20889500426727947, 0.713568130055844,
+                     0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.9779581754606677, 0.9886696944528138,
+                     0.9813392770139775, 0.9920978614191733, 0.9680386044796838, 0.9787342697229269,
+                     0.9493023182388595, 0.959739881438888, 0.0, 0.0, 0.0, 0.0,
+                     1.0, 1.0, 1.0, 1.0, 1.0, 1.0],
+}
 GOLDEN = {
     "xenopeltis-eval": [0.0005604921263125558, 0.0011472745673171644, 0.000979433523559332],
     "split-eval": [0.03255253098623811],
@@ -158,11 +169,13 @@ GOLDEN = {
 }
 
 
-def golden_values():
+def golden_values(estimator="pfmc"):
     wi, wo = directions_at(0.8), directions_at(0.6, 2.0)
-    x = bl.presets.xenopeltis(samples=64, seed=5)
+    snake = bl.presets.xenopeltis(samples=64, seed=5)
+    x = bl.Layered(list(snake.interfaces), list(snake.slabs), snake.base, samples=64, seed=5,
+                   estimator=estimator)
     split = bl.Layered([rough_top(), bl.Dielectric(1.3, 1.5)], [bl.Slab(0.5, sigma_s=0.4), bl.Slab(0.5)],
-                       silver(1.3), samples=64, seed=6)
+                       silver(1.3), samples=64, seed=6, estimator=estimator)
     s = split.sample(np.tile(directions_at(0.7), (6, 1)), seed=7, wavelengths=[450.0, 650.0])
     return {"xenopeltis-eval": x.eval(wi, wo, wavelengths=[450.0, 550.0, 650.0])[0].tolist(),
             "split-eval": split.eval(wi, wo, wavelengths=WL)[0].tolist(),
@@ -170,8 +183,16 @@ def golden_values():
 
 
 def test_04_golden_values():
-    got = golden_values()
+    # estimator="pfmc" keeps version 5's numbers exactly (the reference estimator).
+    got = golden_values("pfmc")
     for key, want in GOLDEN.items():
+        assert np.allclose(got[key], want, rtol=1e-9, atol=0), (key, got[key])
+
+
+def test_04b_golden_values_pfmc2():
+    # Recorded when pfmc2 was added (issue 21; no earlier values to keep).
+    got = golden_values("pfmc2")
+    for key, want in GOLDEN_PFMC2.items():
         assert np.allclose(got[key], want, rtol=1e-9, atol=0), (key, got[key])
 
 
@@ -181,6 +202,8 @@ def test_05_estimator_version():
     # 5: walks end by roulette (the depth cap, 2^16 by default, is a counted safety net);
     # walks that never reached version 4's cap of 256 events draw the same numbers, so the
     # golden values above still hold.
+    # estimator="pfmc2" (issue 21) is chosen in the model (its dict, the table cache key); the
+    # default keeps version 5's numbers, so the version is unchanged.
     assert _core.estimator_version == 5
 
 
@@ -242,14 +265,17 @@ def test_08_nested_stochastic_models_keep_their_own_state():
 CORE_GRAIN = 2048
 
 
-def test_09_thread_count_does_not_change_any_bit(monkeypatch):
+@pytest.mark.parametrize("estimator", ["pfmc", "pfmc2"])
+def test_09_thread_count_does_not_change_any_bit(monkeypatch, estimator):
     """eval, estimate errors, sample and the stochastic pdf (version 5: walks seeded from
     (seed, wi, wo)) are bitwise the same on 1, 2 and 3 threads, for a rough top and a
     smooth transmissive stack (pdf's smooth-exit branch). The sample half draws 3 grains of
     rows, so 2 and 3 threads really split it (fewer rows than the grain run on one thread
     whatever the setting)."""
     smooth = bl.Layered([bl.Dielectric(1.5)], [bl.Slab(0.5, sigma_a=0.2, sigma_s=1.0)],
-                        bl.RoughDielectric(0.3, 1.0, 1.5), samples=32)
+                        bl.RoughDielectric(0.3, 1.0, 1.5), samples=32, estimator=estimator)
+    snake = bl.presets.xenopeltis()
+    snake = bl.Layered(list(snake.interfaces), list(snake.slabs), snake.base, samples=32, estimator=estimator)
     wi = random_unit_vectors(24, seed=8, hemisphere="upper")
     wo = random_unit_vectors(24, seed=9, hemisphere="upper")
     wo_any = random_unit_vectors(24, seed=10)
@@ -259,7 +285,7 @@ def test_09_thread_count_does_not_change_any_bit(monkeypatch):
     for threads in ("1", "2", "3"):
         monkeypatch.setenv("BSDFLAB_THREADS", threads)
         r = []
-        for m in (bl.presets.xenopeltis(samples=32), smooth):
+        for m in (snake, smooth):
             e = m.estimate(wi, wo, wavelengths=wl)
             s = m.sample(wi_many, seed=3, wavelengths=wl)
             r += [e.value, e.stderr, s.wo, s.weight, s.pdf, m.pdf(wi, wo_any, wavelengths=wl)]
@@ -281,3 +307,20 @@ def test_10_scattered_part_is_the_model_without_the_top_reflection():
     assert np.allclose(full.value, part.value + top, rtol=1e-12, atol=1e-15)
     assert np.array_equal(full.stderr, part.stderr)
     assert m.film_thickness_nm == bl.presets.FILM_THICKNESS_NM
+
+
+def test_11_estimator_option():
+    """estimator: validated, kept by to_dict / from_dict (the default is omitted), and
+    "pfmc2" is a different walk (other numbers) of the same BSDF."""
+    parts = [bl.Dielectric(1.5)], [bl.Slab(0.5, sigma_a=0.2, sigma_s=1.0)], bl.Diffuse(0.5)
+    with pytest.raises(ValueError, match="estimator must be one of 'pfmc', 'pfmc2'"):
+        bl.Layered(*parts, estimator="bidirectional")
+    m = bl.Layered(*parts, estimator="pfmc2")
+    d = m.to_dict()
+    assert d["estimator"] == "pfmc2" and "estimator" not in bl.Layered(*parts).to_dict()
+    assert bl.from_dict(d).estimator == "pfmc2"
+    wi, wo = directions_at(0.8), directions_at(0.6, 2.0)
+    assert not np.array_equal(m.eval(wi, wo, wavelengths=WL), bl.Layered(*parts).eval(wi, wo, wavelengths=WL))
+    # Walks share chains in groups, yet a few walks still give two groups and an error.
+    for n in (2, 3, 5):
+        assert np.all(m.estimate(wi, wo, wavelengths=WL, samples=n).stderr > 0), n

@@ -23,15 +23,16 @@ FILMS = {
 WAVELENGTHS = [450.0, 550.0, 650.0]
 
 
+@pytest.mark.parametrize("estimator", ["pfmc", "pfmc2"])
 @pytest.mark.parametrize("film", list(FILMS))
 @pytest.mark.parametrize("sigma_a", [0.0, 0.15, 1.0])
-def test_01_pfmc_matches_oracle(film, sigma_a):
+def test_01_pfmc_matches_oracle(film, sigma_a, estimator):
     thickness, eta, rho = 2.0, 1.55, 0.7
     n = 32
     wi = random_unit_vectors(n, seed=1, hemisphere="upper")
     wo = random_unit_vectors(n, seed=2, hemisphere="upper")
     pfmc = bl.Layered([bl.Dielectric(eta, 1.0, film=FILMS[film])],
-                      [bl.Slab(thickness, sigma_a=sigma_a)], bl.Diffuse(rho))
+                      [bl.Slab(thickness, sigma_a=sigma_a)], bl.Diffuse(rho), estimator=estimator)
     value, err = pfmc.eval_with_error(wi, wo, wavelengths=WAVELENGTHS, samples=4000, seed=3)
     oracle = CoatedDiffuseOracle(int_ior=eta, ext_ior=1.0, film=FILMS[film], thickness_um=thickness,
                                  sigma_a=sigma_a, base_reflectance=rho)

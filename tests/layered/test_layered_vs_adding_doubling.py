@@ -83,9 +83,9 @@ def directions(n, seed, sides):
     return wi, wo
 
 
-def compare(case, n_pairs, samples, seed, family_size):
+def compare(case, n_pairs, samples, seed, family_size, estimator="pfmc"):
     interfaces, slabs, base, sides = case
-    m = bl.Layered(interfaces, slabs, base)
+    m = bl.Layered(interfaces, slabs, base, estimator=estimator)
     wi, wo = directions(n_pairs, seed, sides)
     value, err = m.eval_with_error(wi, wo, wavelengths=WL, samples=samples, seed=seed + 2)
     ref, ref_err = AddingDoublingOracle.from_layered(m).eval_with_error(wi, wo, wavelengths=WL)
@@ -111,13 +111,15 @@ def compare(case, n_pairs, samples, seed, family_size):
 
 
 N_FAST, N_SLOW = 16, 32
-FAST_FAMILY = len(FAST) * (N_FAST * len(WL) + 1)
+ESTIMATORS = ("pfmc", "pfmc2")  # both layered estimators against the oracle (issue 21)
+FAST_FAMILY = len(ESTIMATORS) * len(FAST) * (N_FAST * len(WL) + 1)
 SLOW_FAMILY = len(SLOW) * (N_SLOW * len(WL) + 1)
 
 
+@pytest.mark.parametrize("estimator", ESTIMATORS)
 @pytest.mark.parametrize("name", list(FAST))
-def test_01_pfmc_matches_adding_doubling(name):
-    compare(FAST[name], N_FAST, 8000, 11, FAST_FAMILY)
+def test_01_pfmc_matches_adding_doubling(name, estimator):
+    compare(FAST[name], N_FAST, 8000, 11, FAST_FAMILY, estimator)
 
 
 @pytest.mark.slow

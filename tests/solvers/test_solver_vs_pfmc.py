@@ -48,7 +48,8 @@ CASES = {
     "ggx 0.2": lambda: coat(0.2),
     "beckmann 0.5": lambda: coat(0.5, "beckmann"),
 }
-FAMILY = len(CASES) * (N_PAIRS * len(WL) + 1)
+ESTIMATORS = ("pfmc", "pfmc2")  # both layered estimators (issue 21)
+FAMILY = len(ESTIMATORS) * len(CASES) * (N_PAIRS * len(WL) + 1)
 
 
 def directions(n, seed):
@@ -59,9 +60,11 @@ def directions(n, seed):
     return wi, wo
 
 
+@pytest.mark.parametrize("estimator", ESTIMATORS)
 @pytest.mark.parametrize("name", list(CASES))
-def test_01_solver_matches_pfmc(name):
-    model = CASES[name]()
+def test_01_solver_matches_pfmc(name, estimator):
+    m = CASES[name]()
+    model = bl.Layered(list(m.interfaces), list(m.slabs), m.base, estimator=estimator)
     wi, wo = directions(N_PAIRS, 21)
     est = model.estimate(wi, wo, wavelengths=WL, samples=SAMPLES, seed=5, scattered_only=True)
     ref, ref_err = solve(model, WL).eval_with_error(wi, wo, scattered_only=True)

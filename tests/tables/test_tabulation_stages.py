@@ -168,3 +168,15 @@ def test_07_a_cells_value_depends_on_its_pilot_only_through_the_effort(small_set
     b = finish_cells(model, grid, range(n), fake, scale, max_samples=32, **kw)
     assert np.array_equal(a.values, b.values) and np.array_equal(a.samples, b.samples)
     assert not np.any(a.lum == pilot.lum)
+
+
+def test_07_capped_walks_are_recorded_in_the_table_metadata():
+    """A table whose walks max_depth cut is biased low: its metadata says how many were cut
+    (the count from both stages), and a sound model's says 0."""
+    grid = TableGrid(2, 2, 3)
+    bright = [bl.Dielectric(1.5)], [bl.Slab(1.0, sigma_a=0.0, sigma_s=10.0)], bl.Diffuse(1.0)
+    cut = tabulate(bl.Layered(*bright, max_depth=2), grid, min_samples=64, max_samples=64,
+                   wavelengths=WL, progress=False)
+    sound = tabulate(bl.Layered(*bright), grid, min_samples=64, max_samples=64, wavelengths=WL,
+                     progress=False)
+    assert cut.meta["capped_walks"] > 0 and sound.meta["capped_walks"] == 0

@@ -24,6 +24,8 @@ namespace bsdflab {
 // 4: the tabulator's walks read thin films from a per-thickness lookup (film_lookup.h).
 // 5: layered walks end by roulette alone (the depth cap, now 2^16 events by default, is a
 //    counted safety net); nee=false keeps the connections no other strategy replaces.
+// (The layered estimator "pfmc2" is selected in the model, and so in its dict and the table
+// cache key; the default "pfmc" keeps version 5's numbers, so the version stays 5.)
 constexpr int kEstimatorVersion = 5;
 
 // Growable scratch memory of one thread's estimates.

@@ -34,6 +34,10 @@
 // Paths whose every vertex is a delta event (e.g. a smooth coat over a smooth mirror) form
 // a delta lobe of the stack and are not part of eval.
 //
+// LayeredOptions::estimator selects the walk: 0 "pfmc" (the above, the default) or 1
+// "pfmc2" (groups of kWalksPerChain walks share a chain; bright slabs fly by their smallest
+// extinction so spectral weights stay <= 1); docs/estimators.md derives both.
+//
 // Random numbers are drawn into named locals, in program order, so that the streams (and
 // every estimate) are the same whatever compiler evaluates function arguments in which order.
 #pragma once
@@ -61,7 +65,17 @@ struct LayeredOptions {
     int max_depth = 1 << 16; // events per walk: a safety net, counted when hit (capped_walks)
     bool nee = true;         // false: B alone wherever it can count a path (same BSDF, no MIS)
     int pdf_samples = 1;     // walks of one pdf() estimate (0: version 4's approximation)
+    // 0: Guo et al.'s PFMC as in estimator version 5 (the default; bit-identical);
+    // 1: "pfmc2" (issue 21, docs/estimators.md): kWalksPerChain walks share one light
+    //    chain (and the entry connection); in bright slabs (albedo of the least absorbed
+    //    channel >= 0.95) free flights by the smallest extinction, spectral weights <= 1.
+    int estimator = 0;
 };
+
+constexpr int kEstimatorPfmc = 0;
+constexpr int kEstimatorPfmc2 = 1;
+// Walks that share one light chain (and its entry connection) in estimator pfmc2.
+constexpr int kWalksPerChain = 4;
 
 class LayeredBSDF final : public BSDF, public StochasticEstimator {
   public:
@@ -116,7 +130,9 @@ class LayeredBSDF final : public BSDF, public StochasticEstimator {
     // The exact all-delta continuations of the chain (bounces inside the delta region).
     void solve_delta_region(int exit, const Query &q, Walk &wk) const;
     // One walk; true if the depth cap cut it.
-    bool one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng, Walk &wk) const;
+    // `entry_scale` multiplies the entry vertex's connection (pfmc2 adds it once per chain).
+    bool one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng, Walk &wk,
+                  double entry_scale = 1.0) const;
     void transmittance(int slab, double distance, double *tr) const;
     // Advances a flight of at most `room` depth in slab j along a direction of |z| = cz,
     // sampled by spectral MIS over the channels' extinctions (so absorbing slabs scatter
@@ -125,9 +141,14 @@ class LayeredBSDF final : public BSDF, public StochasticEstimator {
     // (throughput updated), or a negative number if it reaches the boundary. `tr` is a
     // buffer of channels() doubles.
     double fly(const Slab &S, double room, double cz, PCG32 &rng, double *beta, double *tr) const;
+    // pfmc2's flight: distances drawn with the slab's smallest extinction (sigma_s plus the
+    // smallest sigma_a), so every channel's weight is <= 1 (docs/estimators.md).
+    double fly_min_extinction(std::size_t j, double room, double cz, PCG32 &rng, double *beta) const;
 
     std::vector<std::shared_ptr<const BSDF>> boundaries_;
     std::vector<Slab> slabs_;
+    std::vector<double> min_sigma_a_; // per slab: the smallest sigma_a over the channels
+    std::vector<bool> min_extinction_; // per slab: pfmc2 flies it by fly_min_extinction
     LayeredOptions options_;
     mutable std::atomic<std::uint64_t> capped_{0};
 };

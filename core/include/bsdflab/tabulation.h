@@ -61,6 +61,7 @@ struct TabulationControl {
 struct PilotCells {
     std::vector<double> lum, lum_error;
     std::uint64_t nonfinite = 0;
+    std::uint64_t capped = 0; // walks cut by the model's depth cap (biased; 0 for a sound model)
 };
 
 // Outputs of the finish stage, one entry per listed cell (value/error: out_channels each).
@@ -68,6 +69,7 @@ struct FinishedCells {
     std::vector<double> value, error, lum, lum_error;
     std::vector<int> samples;
     std::uint64_t nonfinite = 0;
+    std::uint64_t capped = 0;
 };
 
 // The stage functions. Immutable after construction: safe to share between threads;
@@ -99,7 +101,8 @@ class Tabulator {
 
   private:
     // Mean and standard error of f (no cosine) for one cell, all rows of P (luminance last).
-    std::uint64_t estimate(std::size_t cell, int n, uint64_t seed, double *mean, double *err) const;
+    std::uint64_t estimate(std::size_t cell, int n, uint64_t seed, double *mean, double *err,
+                           std::uint64_t *capped) const;
     uint64_t cell_seed(std::size_t cell, uint64_t stage) const;
 
     std::shared_ptr<const BSDF> model_;
