@@ -47,7 +47,9 @@ class Runner(abc.ABC):
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
-        if cls.name:
+        # Only a class that names itself: a subclass inheriting its parent's name would
+        # otherwise replace the parent in the registry.
+        if cls.__dict__.get("name"):
             RUNNERS.add(cls.name, cls)
 
     @abc.abstractmethod

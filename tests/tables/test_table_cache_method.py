@@ -20,11 +20,12 @@ GRID = TableGrid(2, 3, 2, thickness_nm=(360.0, 400.0, 440.0))
 BSDFLAB = [sys.executable, "-m", "bsdflab.cli.main"]
 
 
-class TwoWorkers(LocalRunner):
-    """The local runner, reporting two workers, so the driver plans two units."""
-
-    def workers(self) -> int:
-        return 2
+def two_workers() -> LocalRunner:
+    """The local runner reporting two workers, so the driver plans two units (an instance
+    attribute: a subclass would register itself in the runner registry under "local")."""
+    runner = LocalRunner()
+    runner.workers = lambda: 2
+    return runner
 
 
 @pytest.fixture(scope="module")
@@ -79,15 +80,14 @@ def test_03_target_met_follows_the_error_bound(ad_table):
 
 
 def test_04_thickness_nodes_split_over_workers_equal_the_local_table(model, ad_table):
-    remote = tabulate(model, GRID, wavelengths=WL, method="adding-doubling", progress=False,
-                      runner=TwoWorkers())
+    remote = tabulate(model, GRID, wavelengths=WL, method="adding-doubling", progress=False, runner=two_workers())
     assert remote.meta["units"] == 2
     for name in ("values", "stderr", "samples"):
         assert np.array_equal(getattr(ad_table, name), getattr(remote, name)), name
     for key in ("error_bound_max_rel", "rel_error_rms", "rel_error_p95"):
         assert remote.meta[key] == ad_table.meta[key], key
     no_nodes = TableGrid(2, 3, 2)
-    one = tabulate(model, no_nodes, wavelengths=WL, method="adding-doubling", progress=False, runner=TwoWorkers())
+    one = tabulate(model, no_nodes, wavelengths=WL, method="adding-doubling", progress=False, runner=two_workers())
     assert one.meta["units"] == 1 and one.values.shape[1] == 1
 
 

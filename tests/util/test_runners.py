@@ -62,3 +62,11 @@ def test_registry_and_resolve():
     assert resolve() is None
     with open_runner("local") as r:
         assert isinstance(r, LocalRunner)
+
+
+def test_a_subclass_without_its_own_name_does_not_replace_its_parent():
+    class Tweaked(LocalRunner):
+        def workers(self) -> int:
+            return 2
+
+    assert get_runner("local") is LocalRunner
