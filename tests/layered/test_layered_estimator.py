@@ -138,7 +138,7 @@ def test_03b_reciprocity_across_smooth_interior_boundaries():
 # -- defect 3: reproducible streams -------------------------------------------------------------
 
 # Fixed seed -> fixed value. Recorded with GCC 12 (-O3) and checked once against a Clang 14
-# build (see README, validation): the random draws happen in program order, so compilers
+# build (bench/compiler_identity.py, docs/estimators.md): the random draws happen in program order, so compilers
 # agree. A change here must come with a bump of _core.estimator_version. Re-recorded for
 # version 3 after the rough-interface rework (Beckmann / energy compensation share one
 # microfacet sampler) changed the streams of walks through the rough top ("split"; the
