@@ -48,6 +48,9 @@ wo = random_unit_vectors(16, seed=2, hemisphere="upper")
 snake = bl.presets.xenopeltis()._core(DEFAULT_WAVELENGTHS)
 v, e, nonfinite, _ = snake.estimate(wi, wo, int(bl.Lobe.ALL), None, 256, 7)
 res["snake_value"], res["snake_err"] = v, e
+snake2 = bl.presets.xenopeltis()
+snake2.estimator = "pfmc2"
+res["snake_pfmc2"] = snake2.eval(wi, wo, wavelengths=DEFAULT_WAVELENGTHS)
 slab = bl.Layered([bl.Dielectric(1.5)], [bl.Slab(thickness_um=10.0, sigma_a=0.001, sigma_s=0.999,
                   phase={"type": "hg", "g": 0.3})], bl.Diffuse(0.8), samples=64)
 res["slab_eval"] = slab.eval(wi, wo, wavelengths=[450.0, 550.0, 650.0])
