@@ -62,9 +62,12 @@ def predictive_plot(dataset: Dataset, model_draws: np.ndarray, predictive_draws:
         wl = dataset.wavelength_nm[idx]
         pq = np.quantile(predictive_draws[:, idx], [0.05, 0.95], axis=0)
         mq = np.quantile(model_draws[:, idx], [0.05, 0.5, 0.95], axis=0)
-        ax.fill_between(wl, pq[0], pq[1], color="tab:blue", alpha=0.18, lw=0, label="predictive 90 %")
-        ax.fill_between(wl, mq[0], mq[2], color="tab:blue", alpha=0.45, lw=0, label="model 90 %")
-        ax.plot(wl, mq[1], color="tab:blue", lw=1.0, label="model median")
+        x = wl
+        if len(wl) == 1:  # one wavelength (a gonio row): bands of zero width would not show
+            x, pq, mq = wl + np.array([-4.0, 4.0]), np.repeat(pq, 2, axis=1), np.repeat(mq, 2, axis=1)
+        ax.fill_between(x, pq[0], pq[1], color="tab:blue", alpha=0.18, lw=0, label="predictive 90 %")
+        ax.fill_between(x, mq[0], mq[2], color="tab:blue", alpha=0.45, lw=0, label="model 90 %")
+        ax.plot(x, mq[1], color="tab:blue", lw=1.0, label="model median")
         ax.errorbar(wl, dataset.reflectance[idx], dataset.sigma[idx], fmt=".", ms=3, color="k", lw=0.7,
                     label="data ± σ")
         ax.set_title(label, fontsize=9)
