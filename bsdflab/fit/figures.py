@@ -38,12 +38,13 @@ def corner_plot(draws: np.ndarray, names, path: str, truths=None) -> None:
     corner = require("corner", "fit")
     plt = _plt()
     k = draws.shape[1]
-    fig = corner.corner(draws, fig=plt.figure(figsize=(2.6 * k, 2.6 * k)), labels=[_label(n) for n in names],
+    side = max(2.6 * k, 4.0)  # one or two parameters: room for the title and the quantile labels
+    fig = corner.corner(draws, fig=plt.figure(figsize=(side, side)), labels=[_label(n) for n in names],
                         quantiles=[0.05, 0.5, 0.95], show_titles=True, title_fmt=".4g", title_kwargs={"fontsize": 7},
                         titles=[SYMBOLS.get(n, n) for n in names],
                         label_kwargs={"fontsize": 8}, truths=truths, truth_color="tab:red")
     fig.suptitle("posterior (lines: 5 %, 50 %, 95 %" + ("; red: truth)" if truths is not None else ")"),
-                 fontsize=9)
+                 fontsize=9, y=1.0)
     save_figure(fig, path)
     plt.close(fig)
 
