@@ -1,30 +1,56 @@
-"""Layered estimators side by side: efficiency of "pfmc2" against "pfmc" in one run.
+"""Layered estimators side by side, in one run: efficiency against today's PFMC.
 
 Efficiency = 1 / (variance x time): the relative variance of one estimate (of the
 configuration's projected output) times the CPU seconds it took (all threads; robust to
-other processes on a shared machine), per direction pair, median over the pairs;
-printed as the ratio pfmc2 / pfmc (> 1: pfmc2 reaches an error in less time). Both
-estimators run on the same pairs, one after the other, best of `--repeats` timings.
+other processes on a shared machine), per direction pair, median over the pairs. Every
+row is printed as a ratio against the reference column: with --baseline-core, "pfmc"
+run by an earlier build of the core (`bench/build_core_at.sh <commit>` builds one; that
+is "today's PFMC" when this code changes the core's speed), else this build's "pfmc".
+The baseline runs in a child process of this script (`--worker`), on the same pairs and
+seeds, so one invocation prints every column.
 
 Configurations: the snake preset (luminance of 81 wavelengths), the scattering cases of
 tests/layered/test_layered_vs_adding_doubling.py (mean of their 3 channels), a thick
-bright slab (tau 10, albedo 0.99, white base), a rough conductor base under a rough
-top. With --tabulate: the snake table's tabulation time (RGB, a small grid, equal target error); with
---service: the cost of one eval of the preset at 1 % luminance error (the service's eval).
-Run: python3 bench/bench_layered_compare.py [--pairs 16] [--walks 2000] [--tabulate] [--service]
+bright slab (tau 10, albedo 0.99, white base), a rough conductor base under a rough top,
+and the two configurations where an adversarial review found pfmc2's shared chains worst.
+With --service: the CPU time of one eval of the preset at 1 % luminance error, and the
+wall time of the same eval over HTTP on a real `bsdflab serve` (the baseline's server
+runs the baseline core); --tabulate: the snake table (RGB, small grid, equal target error);
+--render SECONDS: a direct-PFMC render of the snake (every layered material evaluated by
+the walk, no table) with each estimator for the same wall time, mean pixel variance over
+the snake's pixels.
+Run: python bench/bench_layered_compare.py [--pairs 16] [--walks 2000] [--service] [--tabulate]
+     [--render 20] [--baseline-core /tmp/core-v5.so]
 """
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import json
+import os
+import subprocess
+import sys
 import time
 
-import numpy as np
 
-import bsdflab as bl
-from bsdflab import _core
-from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, srgb_weights
-from bsdflab.tables.channels import LUMINANCE_RGB
-from bsdflab.testing import random_unit_vectors
+def _load_core(path: str) -> None:
+    """Import bsdflab with the compiled core at `path` (an earlier build) instead of its own."""
+    spec = importlib.util.spec_from_file_location("bsdflab._core", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["bsdflab._core"] = module
+    spec.loader.exec_module(module)
+
+
+if __name__ == "__main__" and "--core" in sys.argv:  # before bsdflab imports its own core
+    _load_core(sys.argv[sys.argv.index("--core") + 1])
+
+import numpy as np  # noqa: E402
+
+import bsdflab as bl  # noqa: E402
+from bsdflab import _core  # noqa: E402
+from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, srgb_weights  # noqa: E402
+from bsdflab.tables.channels import LUMINANCE_RGB  # noqa: E402
+from bsdflab.testing import random_unit_vectors  # noqa: E402
 
 ESTIMATORS = ("pfmc", "pfmc2")
 WL3 = [450.0, 550.0, 650.0]
@@ -62,11 +88,16 @@ def configurations():
                                     False),
         "rough conductor base": (([rough_top], [_slab(1.0, [0.6, 0.8, 0.95], FWD)],
                                   bl.RoughConductor(0.2, eta=0.2, k=3.0, ext_ior=1.5)), WL3, mean3, False),
+        # The adversarial review's worst cases for shared light chains (a wide exit lobe).
+        "rough .8 top, clear slab": (([bl.RoughDielectric(0.8, int_ior=1.5)], [bl.Slab(0.1)], bl.Diffuse(0.5)),
+                                     WL3, mean3, False),
+        "rough .5 top, rough gold": (([bl.RoughDielectric(0.5, int_ior=1.5)], [_slab(0.2, [0.8, 0.9, 0.95])],
+                                      bl.RoughConductor(0.3, eta=0.18, k=3.1, ext_ior=1.5)), WL3, mean3, False),
     }
 
 
 def efficiency(core, wi, wo, walks, row, repeats):
-    """Median over pairs of 1 / (relative variance of one estimate x seconds per pair)."""
+    """(efficiency, CPU seconds per pair, relative variance per walk): medians over pairs."""
     best = np.inf
     for _ in range(repeats):
         t0 = time.process_time()  # CPU seconds of all threads: robust to other processes' load
@@ -76,27 +107,20 @@ def efficiency(core, wi, wo, walks, row, repeats):
     mean, se = value @ row, err @ np.abs(row)
     ok = mean > 0
     rel_var = (se[ok] / mean[ok]) ** 2
-    return 1.0 / (np.median(rel_var) * best / len(wi)), best / len(wi), np.median(rel_var) * walks
+    return 1.0 / (np.median(rel_var) * best / len(wi)), best / len(wi), float(np.median(rel_var) * walks)
 
 
-def compare(pairs, walks, repeats):
-    print(f"{_core.worker_count()} threads, {pairs} pairs, {walks} walks per pair, best of {repeats}")
-    print(f"  {'configuration':30s} {'CPU-us/walk pfmc':>16s} {'pfmc2':>7s} {'relvar/walk pfmc':>17s} "
-          f"{'pfmc2':>8s} {'efficiency pfmc2/pfmc':>22s}")
-    ratios = {}
+def per_configuration(est, pairs, walks, repeats):
+    out = {}
     for name, ((ifs, slabs, base), wl, row, transmit) in configurations().items():
         wi = random_unit_vectors(pairs, seed=11, hemisphere="upper")
         wo = random_unit_vectors(pairs, seed=12, hemisphere="upper")
         if transmit:
             wo[pairs // 2:, 2] *= -1.0
-        res = {}
-        for est in ESTIMATORS:
-            core = bl.Layered(list(ifs), list(slabs), base, estimator=est)._core(np.asarray(wl, dtype=float))
-            res[est] = efficiency(core, wi, wo, walks, row, repeats)
-        ratios[name] = res["pfmc2"][0] / res["pfmc"][0]
-        print(f"  {name:30s} {1e6 * res['pfmc'][1] / walks:16.2f} {1e6 * res['pfmc2'][1] / walks:7.2f} "
-              f"{res['pfmc'][2]:17.3g} {res['pfmc2'][2]:8.3g} {ratios[name]:21.2f}x")
-    return ratios
+        core = bl.Layered(list(ifs), list(slabs), base, estimator=est)._core(np.asarray(wl, dtype=float))
+        eff, sec, var = efficiency(core, wi, wo, walks, row, repeats)
+        out[name] = {"efficiency": eff, "us_per_walk": 1e6 * sec / walks, "relvar_per_walk": var}
+    return out
 
 
 def time_to_one_percent(est, pairs):
@@ -108,23 +132,146 @@ def time_to_one_percent(est, pairs):
     core = bl.Layered(list(m.interfaces), list(m.slabs), m.base, estimator=est)._core(wl)
     wi = random_unit_vectors(pairs, seed=21, hemisphere="upper")
     wo = random_unit_vectors(pairs, seed=22, hemisphere="upper")
-    _, t, rv = efficiency(core, wi, wo, 1000, lum, 1)
+    _, _, rv = efficiency(core, wi, wo, 1000, lum, 1)
     walks = int(np.ceil(rv / 1e-4))
     t0 = time.process_time()
     value, err, _, _ = core.estimate(wi, wo, int(bl.Lobe.ALL), None, walks, 9)
     dt = (time.process_time() - t0) / pairs
-    rel = np.median((err @ np.abs(lum)) / (value @ lum))
-    return walks, dt, rel
+    rel = float(np.median((err @ np.abs(lum)) / (value @ lum)))
+    return {"walks": walks, "cpu_ms": 1e3 * dt, "reached": rel}
 
 
-def tabulate_snake(est, rel_error):
+def tabulate_snake(est, rel_error=0.02):
     """CPU seconds of a snake table (RGB) on a small grid with two film-thickness nodes."""
     from bsdflab.tables import TableGrid, tabulate
     m0 = bl.presets.xenopeltis()
     m = bl.Layered(list(m0.interfaces), list(m0.slabs), m0.base, estimator=est)
     t0 = time.process_time()
     table = tabulate(m, TableGrid(4, 8, 5, thickness_nm=(350.0, 450.0)), rel_error=rel_error, progress=False)
-    return time.process_time() - t0, table
+    return {"cpu_s": time.process_time() - t0, "walks": int(table.samples.sum()),
+            "rms": float(table.meta["rel_error_rms"])}
+
+
+def render_snake(est, seconds, width=96, height=54):
+    """Direct-PFMC snake render for `seconds` of wall time: mean pixel variance on the snake."""
+    import dataclasses
+
+    from bsdflab.render import render
+    from bsdflab.scenes import scene
+    sc = scene("snake", material="direct", width=width, height=height)
+    materials = {name: (dataclasses.replace(m, bsdf={**m.bsdf, "estimator": est})
+                        if m.bsdf.get("type") == "layered" else m) for name, m in sc.materials.items()}
+    sc = dataclasses.replace(sc, materials=materials)
+    probe = render(sc, spp=4, seed=2, progress=False)
+    spp = max(4, round(seconds / (probe.seconds / probe.spp)))
+    r = render(sc, spp=spp, seed=3, progress=False, aovs=True)
+    ids = [i for i, sh in enumerate(sc.shapes) if sh.name in ("body", "head")]
+    var = float(np.mean(r.variance[np.isin(r.aovs["mesh_id"], ids)]))
+    return {"spp": spp, "seconds": r.seconds, "variance": var, "efficiency": 1.0 / (var * r.seconds)}
+
+
+SITECUSTOMIZE = """import importlib.util, os, sys
+path = os.environ.get("BSDFLAB_BENCH_CORE")
+if path:  # the benchmark's baseline: an earlier build of the core, loaded before bsdflab's own
+    spec = importlib.util.spec_from_file_location("bsdflab._core", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["bsdflab._core"] = module
+    spec.loader.exec_module(module)
+"""
+
+
+def http_latency(est, walks, core=None, requests=12, pairs=16):
+    """Median wall ms of POST /v1/bsdf/eval on a real `bsdflab serve` (on `core` if given):
+    the snake with `est`, `pairs` outgoing angles, `walks` per pair (RGB, through 81 λ)."""
+    import tempfile
+    from pathlib import Path
+
+    import httpx2 as httpx
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+    from support.service_process import ServiceProcess
+    model = {**bl.presets.xenopeltis().to_dict(), "estimator": est}
+    body = {"model": model, "theta_i": [30.0], "theta_o": list(np.linspace(5.0, 85.0, pairs)), "samples": walks}
+    with tempfile.TemporaryDirectory() as data:
+        env = {}
+        if core:
+            (Path(data) / "site").mkdir()
+            (Path(data) / "site" / "sitecustomize.py").write_text(SITECUSTOMIZE)
+            env = {"BSDFLAB_BENCH_CORE": core,
+                   "PYTHONPATH": os.pathsep.join([str(Path(data) / "site"), os.environ.get("PYTHONPATH", "")])}
+        server = ServiceProcess(Path(data), workers=1, env=env)
+        try:
+            with httpx.Client(base_url=server.url, timeout=120) as client:
+                times = []
+                for _ in range(requests + 2):
+                    t0 = time.perf_counter()
+                    r = client.post("/v1/bsdf/eval", json=body)
+                    times.append(time.perf_counter() - t0)
+                    assert r.status_code == 200, r.text
+        finally:
+            server.stop()
+    return {"ms": 1e3 * float(np.median(times[2:])), "walks": walks}
+
+
+def measure(estimators, args):
+    res = {est: {"configurations": per_configuration(est, args.pairs, args.walks, args.repeats)}
+           for est in estimators}
+    for est in estimators:
+        if args.service:
+            res[est]["service"] = time_to_one_percent(est, args.pairs)
+            res[est]["http"] = http_latency(est, res[est]["service"]["walks"], args.core)
+        if args.tabulate:
+            res[est]["tabulate"] = tabulate_snake(est)
+        if args.render:
+            res[est]["render"] = render_snake(est, args.render)
+    return res
+
+
+def baseline(args):
+    """Today's PFMC: this script in a child process on the earlier core."""
+    cmd = [sys.executable, os.path.abspath(__file__), "--worker", "--core", args.baseline_core,
+           "--pairs", str(args.pairs), "--walks", str(args.walks), "--repeats", str(args.repeats)]
+    cmd += ["--service"] * args.service + ["--tabulate"] * args.tabulate
+    cmd += ["--render", str(args.render)] if args.render else []
+    out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])["pfmc"]
+
+
+def report(res, ref):
+    cols = list(res)
+    print(f"efficiency against {ref!r} (> 1: reaches an error in less CPU time); CPU-us per walk; "
+          "relative variance per walk")
+    print(f"  {'configuration':28s} " + " ".join(f"{c:>26s}" for c in cols))
+    for name in res[ref]["configurations"]:
+        cells = []
+        for c in cols:
+            r, r0 = res[c]["configurations"][name], res[ref]["configurations"][name]
+            cells.append(f"{r['efficiency'] / r0['efficiency']:5.2f}x {r['us_per_walk']:7.2f}us "
+                         f"{r['relvar_per_walk']:8.3g}")
+        print(f"  {name:28s} " + " ".join(f"{s:>26s}" for s in cells))
+    if "service" in res[ref]:
+        print("snake, 1 % relative luminance error per pair (walks from a pilot run), CPU-ms per pair:")
+        for c in cols:
+            s, s0 = res[c]["service"], res[ref]["service"]
+            print(f"  {c:26s} {s['walks']:6d} walks {s['cpu_ms']:8.2f} ms (reached {100 * s['reached']:.2f} %)"
+                  f"  {s0['cpu_ms'] * s0['reached'] ** 2 / (s['cpu_ms'] * s['reached'] ** 2):5.2f}x at equal error")
+    if "http" in res[ref]:
+        print("the same error over HTTP: POST /v1/bsdf/eval on a real `bsdflab serve`, 16 pairs, median wall ms:")
+        for c in cols:
+            h, h0, s, s0 = res[c]["http"], res[ref]["http"], res[c]["service"], res[ref]["service"]
+            print(f"  {c:26s} {h['walks']:6d} walks {h['ms']:8.1f} ms  "
+                  f"{h0['ms'] * s0['reached'] ** 2 / (h['ms'] * s['reached'] ** 2):5.2f}x at equal error")
+    if "tabulate" in res[ref]:
+        print("snake table (RGB, 4 x 8 x 5 x 2 thickness nodes, 2 % target), CPU seconds:")
+        for c in cols:
+            t, t0 = res[c]["tabulate"], res[ref]["tabulate"]
+            print(f"  {c:26s} {t['cpu_s']:7.1f} CPU-s {t['walks']:9d} walks  rms {t['rms']:.4f}  "
+                  f"{t0['cpu_s'] * t0['rms'] ** 2 / (t['cpu_s'] * t['rms'] ** 2):5.2f}x at equal error")
+    if "render" in res[ref]:
+        print("direct-PFMC snake render at equal wall time (96 x 54), mean pixel variance on the snake:")
+        for c in cols:
+            r, r0 = res[c]["render"], res[ref]["render"]
+            print(f"  {c:26s} {r['spp']:6d} spp in {r['seconds']:6.1f} s, variance {r['variance']:.4e}  "
+                  f"efficiency {r['efficiency'] / r0['efficiency']:5.2f}x")
 
 
 def main() -> None:
@@ -134,19 +281,21 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--tabulate", action="store_true", help="also time the snake table")
     ap.add_argument("--service", action="store_true", help="also time 1 %% luminance evals of the preset")
+    ap.add_argument("--render", type=float, default=0.0, help="direct-PFMC render, wall seconds per estimator")
+    ap.add_argument("--baseline-core", help="an earlier build's _core*.so: its pfmc is the reference")
+    ap.add_argument("--core", help=argparse.SUPPRESS)  # used by the child process
+    ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
-    compare(args.pairs, args.walks, args.repeats)
-    if args.service:
-        print("snake, 1 % relative luminance error per pair (walks from a pilot run):")
-        for est in ESTIMATORS:
-            walks, dt, rel = time_to_one_percent(est, args.pairs)
-            print(f"  {est:6s} {walks:6d} walks, {1e3 * dt:7.2f} CPU-ms per pair (reached {100 * rel:.2f} %)")
-    if args.tabulate:
-        print("snake table (RGB, 4 x 8 x 5 x 2 thickness nodes, 2 % target), CPU seconds:")
-        for est in ESTIMATORS:
-            dt, table = tabulate_snake(est, 0.02)
-            print(f"  {est:6s} {dt:7.1f} CPU-s  {int(table.samples.sum())} walks  "
-                  f"rms error {table.meta['rel_error_rms']:.4f}")
+    if args.worker:
+        print(json.dumps(measure(["pfmc"], args)))
+        return
+    print(f"{_core.worker_count()} threads, {args.pairs} pairs, {args.walks} walks per pair, best of "
+          f"{args.repeats}; load average {os.getloadavg()[0]:.1f} at start")
+    res = {}
+    if args.baseline_core:
+        res["pfmc, baseline core"] = baseline(args)
+    res.update(measure(ESTIMATORS, args))
+    report(res, "pfmc, baseline core" if args.baseline_core else "pfmc")
 
 
 if __name__ == "__main__":

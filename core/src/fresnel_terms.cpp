@@ -1,4 +1,5 @@
 #include "bsdflab/fresnel_terms.h"
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include "bsdflab/complex_fresnel.h"
@@ -35,7 +36,7 @@ FilmTerm::FilmTerm(std::vector<double> wavelengths, double ext_ior,
                   substrate_transmits && !n_substrate.empty() ? n_substrate[0].real() / ext_ior : 0.0),
       wavelengths_(std::move(wavelengths)), ext_ior_(ext_ior), layer_n_(std::move(layer_n)),
       layer_d_(std::move(layer_d_nm)), n_sub_(std::move(n_substrate)), transmits_(substrate_transmits),
-      total_d_(0.0) {
+      total_d_(0.0), uniform_(true) {
     for (double d : layer_d_) total_d_ += d;
     if (layer_d_.size() != layer_n_.size() || layer_d_.size() > kMaxFilmLayers)
         throw std::invalid_argument("a film stack needs one index list per layer, at most 32 layers");
@@ -44,6 +45,10 @@ FilmTerm::FilmTerm(std::vector<double> wavelengths, double ext_ior,
             throw std::invalid_argument("each film layer needs one index per wavelength");
     if (static_cast<int>(n_sub_.size()) != channels_)
         throw std::invalid_argument("the substrate needs one index per wavelength");
+    for (int c = 1; c < channels_; ++c) {
+        uniform_ = uniform_ && n_sub_[c] == n_sub_[0];
+        for (const auto &n : layer_n_) uniform_ = uniform_ && n[c] == n[0];
+    }
 }
 
 void FilmTerm::eval(double cos_i, const Query &q, double *R, double *T) const {
@@ -52,15 +57,15 @@ void FilmTerm::eval(double cos_i, const Query &q, double *R, double *T) const {
     double scale = (q.film_thickness_nm >= 0 && total_d_ > 0) ? q.film_thickness_nm / total_d_ : 1.0;
     bool from_above = cos_i >= 0;
     double ci = std::abs(cos_i);
+    if (!from_above && !transmits_) {
+        std::fill(R, R + channels_, 0.0);
+        std::fill(T, T + channels_, 0.0);
+        return;
+    }
     cplx n[kMaxLayers + 2];
     double d[kMaxLayers];
-    for (int c = 0; c < channels_; ++c) {
-        if (!from_above && !transmits_) {
-            R[c] = 0.0;
-            T[c] = 0.0;
-            continue;
-        }
-        // Media in the order the light meets them.
+    // Media in the order the light meets them, at channel c.
+    auto media = [&](int c) {
         n[0] = from_above ? cplx(ext_ior_, 0.0) : n_sub_[c];
         n[L + 1] = from_above ? n_sub_[c] : cplx(ext_ior_, 0.0);
         for (std::size_t j = 0; j < L; ++j) {
@@ -68,8 +73,20 @@ void FilmTerm::eval(double cos_i, const Query &q, double *R, double *T) const {
             n[j + 1] = layer_n_[src][c];
             d[j] = layer_d_[src] * scale;
         }
-        FilmResponse f = film_stack(n, d, L, ci, wavelengths_[c]);
-        double r = 0.5 * (f.R_s + f.R_p), t = transmits_ ? 0.5 * (f.T_s + f.T_p) : 0.0;
+    };
+    if (uniform_) {
+        media(0);
+        film_stack_spectrum(n, d, L, ci, wavelengths_.data(), channels_, R, T);
+    } else {
+        for (int c = 0; c < channels_; ++c) {
+            media(c);
+            FilmResponse f = film_stack(n, d, L, ci, wavelengths_[c]);
+            R[c] = 0.5 * (f.R_s + f.R_p);
+            T[c] = 0.5 * (f.T_s + f.T_p);
+        }
+    }
+    for (int c = 0; c < channels_; ++c) {
+        const double r = R[c], t = transmits_ ? T[c] : 0.0;
         R[c] = std::isfinite(r) ? std::min(std::max(r, 0.0), 1.0) : 0.0;
         T[c] = std::isfinite(t) ? std::min(std::max(t, 0.0), 1.0 - R[c]) : 0.0;
     }

@@ -1,5 +1,6 @@
 #include "bsdflab/thin_film.h"
 #include <cmath>
+#include "bsdflab/vector_math.h"
 
 namespace bsdflab {
 
@@ -161,6 +162,61 @@ FilmReflectance thin_film_reflectance(cplx n0, cplx n1, cplx n2, double d_nm, do
     return {f.R_s, f.R_p};
 }
 
+namespace {
+
+// Everything of a stack that does not depend on the wavelength when no index does: the
+// media (media[0] incident, media[layers + 1] exit) and the interfaces between neighbours.
+struct StackAtAngle {
+    std::size_t layers;
+    Medium media[kFilmSpectrumMaxLayers + 2];
+    Interface faces[kFilmSpectrumMaxLayers + 1]; // faces[j]: media[j] -> media[j + 1]
+
+    StackAtAngle(const cplx *n, std::size_t L, double cos0) : layers(L) {
+        const Incidence in = incidence(n[0], cos0);
+        media[0] = in.m0;
+        for (std::size_t j = 1; j <= L + 1; ++j) media[j] = medium(n[j], in);
+        for (std::size_t j = 0; j <= L; ++j) faces[j] = interface(media[j], media[j + 1]);
+    }
+
+    // The stack folded from the exit side upwards at one wavelength: film_stack's
+    // operations in its order, with the media and interfaces taken from above.
+    FilmResponse at(const double *d_nm, double wavelength_nm) const {
+        const Interface &bottom = faces[layers];
+        Z g_s = bottom.r_s, g_p = bottom.r_p, tau_s = bottom.t_s, tau_p = bottom.t_p;
+        for (std::size_t j = layers; j >= 1; --j) {
+            const Interface &top = faces[j - 1];
+            const Z e = phase(media[j], d_nm[j - 1], wavelength_nm);
+            fold(top.r_s, top.t_s, e, g_s, tau_s);
+            fold(top.r_p, top.t_p, e, g_p, tau_p);
+        }
+        return with_power(g_s, g_p, tau_s, tau_p, media[0], media[layers + 1]);
+    }
+
+    // One film with every medium real and propagating (real amplitudes, no loss), whose
+    // closed form is well conditioned: its denominator 1 + p^2 + 2 p cos 2delta, p = r01 r12,
+    // falls to (1 - |p|)^2 and loses digits as |p| -> 1 (a film between equal media at
+    // grazing incidence, or at its own critical angle); the fold keeps them there.
+    bool closed_form() const {
+        if (layers != 1) return false;
+        for (std::size_t j = 0; j < 3; ++j)
+            if (media[j].q.im != 0 || !(media[j].q.re > 0) || media[j].eps.im != 0) return false;
+        return std::abs(faces[0].r_s.re * faces[1].r_s.re) <= kMaxAiryProduct &&
+               std::abs(faces[0].r_p.re * faces[1].r_p.re) <= kMaxAiryProduct;
+    }
+    // (1 - 0.5)^2: at most 2 bits lost to the denominator's cancellation.
+    static constexpr double kMaxAiryProduct = 0.5;
+};
+
+// |r01 + r12 e|^2 / |1 + r01 r12 e|^2 for real r01, r12 and |e| = 1 as (a + b c) / (d + b c),
+// c = Re e.
+struct AirySum {
+    double a, b, d;
+    AirySum(double r01, double r12) : a(r01 * r01 + r12 * r12), b(2.0 * r01 * r12), d(1.0 + r01 * r01 * r12 * r12) {}
+    double at(double c) const { return (a + b * c) / (d + b * c); }
+};
+
+} // namespace
+
 FilmResponse film_stack(const cplx *n, const double *d_nm, std::size_t layers, double cos0,
                         double wavelength_nm) {
     if (!(cos0 > 0)) return grazing();
@@ -179,6 +235,37 @@ FilmResponse film_stack(const cplx *n, const double *d_nm, std::size_t layers, d
         below = above;
     }
     return with_power(g_s, g_p, tau_s, tau_p, in.m0, exit);
+}
+
+void film_stack_spectrum(const cplx *n, const double *d_nm, std::size_t layers, double cos0,
+                         const double *wavelengths_nm, int count, double *R, double *T) {
+    if (!(cos0 > 0) || layers > kFilmSpectrumMaxLayers) { // the grazing limit; a deep stack
+        for (int c = 0; c < count; ++c) {
+            const FilmResponse f = film_stack(n, d_nm, layers, cos0, wavelengths_nm[c]);
+            R[c] = 0.5 * (f.R_s + f.R_p);
+            T[c] = 0.5 * (f.T_s + f.T_p);
+        }
+        return;
+    }
+    const StackAtAngle stack(n, layers, cos0);
+    if (stack.closed_form()) {
+        const AirySum s(stack.faces[0].r_s.re, stack.faces[1].r_s.re);
+        const AirySum p(stack.faces[0].r_p.re, stack.faces[1].r_p.re);
+        // 2 delta = 4 pi d q1 / lambda (phase(): e = e^{i delta}, the fold's e^2).
+        const double two_delta_nm = 2.0 * kTwoPi * d_nm[0] * stack.media[1].q.re;
+        for (int c = 0; c < count; ++c) R[c] = two_delta_nm / wavelengths_nm[c];
+        cos_array(R, R, count); // R holds cos 2delta per wavelength until overwritten
+        for (int c = 0; c < count; ++c) {
+            R[c] = 0.5 * (s.at(R[c]) + p.at(R[c]));
+            T[c] = 1.0 - R[c];
+        }
+        return;
+    }
+    for (int c = 0; c < count; ++c) {
+        const FilmResponse f = stack.at(d_nm, wavelengths_nm[c]);
+        R[c] = 0.5 * (f.R_s + f.R_p);
+        T[c] = 0.5 * (f.T_s + f.T_p);
+    }
 }
 
 } // namespace bsdflab

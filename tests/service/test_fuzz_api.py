@@ -236,7 +236,11 @@ MIN_FINITE_SHARE = 0.1   # an API that refused (nearly) everything would pass th
 def run_counted(prop, **hypothesis_settings) -> None:
     """Run the property; then at least MIN_FINITE_SHARE of its cases must have answered."""
     before = Counter(COUNTS)
-    given(st.data())(settings(**hypothesis_settings)(prop))()
+
+    def case(data):  # a fresh function: hypothesis refuses to set a function's settings twice,
+        prop(data)   # and the fast and slow variants run the same property in one session
+
+    given(st.data())(settings(**hypothesis_settings)(case))()
     cases, finite_results = COUNTS["cases"] - before["cases"], COUNTS["finite results"] - before["finite results"]
     assert cases > 0 and finite_results >= MIN_FINITE_SHARE * cases, (
         f"{prop.__name__}: only {finite_results} of {cases} cases gave a result")

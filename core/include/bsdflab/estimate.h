@@ -24,9 +24,11 @@ namespace bsdflab {
 // 4: the tabulator's walks read thin films from a per-thickness lookup (film_lookup.h).
 // 5: layered walks end by roulette alone (the depth cap, now 2^16 events by default, is a
 //    counted safety net); nee=false keeps the connections no other strategy replaces.
-// (The layered estimator "pfmc2" is selected in the model, and so in its dict and the table
-// cache key; the default "pfmc" keeps version 5's numbers, so the version stays 5.)
-constexpr int kEstimatorVersion = 5;
+// 6: the layered default is "pfmc2" (issue 21); thin films of non-dispersive indices share
+//    their angular part over the channels (closed form for one lossless film), exp and cos
+//    over channels come from libmvec: values change in the last bits, "pfmc" is still
+//    version 5's estimator (its golden values hold to 1e-9).
+constexpr int kEstimatorVersion = 6;
 
 // Growable scratch memory of one thread's estimates.
 class EstimateWorkspace {

@@ -69,6 +69,9 @@ class FilmTerm final : public FresnelTerm {
     std::vector<std::complex<double>> n_sub_;                // [channel]
     bool transmits_;
     double total_d_;
+    // No index depends on the channel: the stack's angular part is shared by all channels
+    // (film_stack_spectrum), the fast path for non-dispersive films.
+    bool uniform_;
 };
 
 } // namespace bsdflab

@@ -65,17 +65,23 @@ struct LayeredOptions {
     int max_depth = 1 << 16; // events per walk: a safety net, counted when hit (capped_walks)
     bool nee = true;         // false: B alone wherever it can count a path (same BSDF, no MIS)
     int pdf_samples = 1;     // walks of one pdf() estimate (0: version 4's approximation)
-    // 0: Guo et al.'s PFMC as in estimator version 5 (the default; bit-identical);
-    // 1: "pfmc2" (issue 21, docs/estimators.md): kWalksPerChain walks share one light
-    //    chain (and the entry connection); in bright slabs (albedo of the least absorbed
-    //    channel >= 0.95) free flights by the smallest extinction, spectral weights <= 1.
-    int estimator = 0;
+    // 0: Guo et al.'s PFMC as in estimator version 5 (the reference);
+    // 1: "pfmc2" (issue 21, docs/estimators.md; the default): kWalksPerChain walks share
+    //    one light chain (and the entry connection) unless the exit boundary is wider than
+    //    kShareChainMaxAlpha; in thick bright slabs (albedo of the least absorbed channel
+    //    >= 0.95, optical depth >= 1) free flights by the smallest extinction, spectral
+    //    weights <= 1.
+    int estimator = 1;
 };
 
 constexpr int kEstimatorPfmc = 0;
 constexpr int kEstimatorPfmc2 = 1;
 // Walks that share one light chain (and its entry connection) in estimator pfmc2.
 constexpr int kWalksPerChain = 4;
+// pfmc2 shares chains only through exit boundaries no rougher than this (GGX/Beckmann
+// alpha): a wide exit lobe makes the chain's own spread dominate the walks' (measured
+// 0.51x at alpha 0.8, bench/bench_layered_compare.py), and a shared chain repeats it.
+constexpr double kShareChainMaxAlpha = 0.3;
 
 class LayeredBSDF final : public BSDF, public StochasticEstimator {
   public:
@@ -143,12 +149,16 @@ class LayeredBSDF final : public BSDF, public StochasticEstimator {
     double fly(const Slab &S, double room, double cz, PCG32 &rng, double *beta, double *tr) const;
     // pfmc2's flight: distances drawn with the slab's smallest extinction (sigma_s plus the
     // smallest sigma_a), so every channel's weight is <= 1 (docs/estimators.md).
-    double fly_min_extinction(std::size_t j, double room, double cz, PCG32 &rng, double *beta) const;
+    double fly_min_extinction(std::size_t j, double room, double cz, PCG32 &rng, double *beta,
+                              double *tmp) const;
+    // beta[c] *= exp(-sigma_a[c] length): a flight through a slab that does not scatter.
+    void absorb(const Slab &S, double length, double *beta, double *tmp) const;
 
     std::vector<std::shared_ptr<const BSDF>> boundaries_;
     std::vector<Slab> slabs_;
     std::vector<double> min_sigma_a_; // per slab: the smallest sigma_a over the channels
     std::vector<bool> min_extinction_; // per slab: pfmc2 flies it by fly_min_extinction
+    int walks_per_chain_[2] = {1, 1};  // pfmc2, leaving through the top (0) or the bottom (1)
     LayeredOptions options_;
     mutable std::atomic<std::uint64_t> capped_{0};
 };

@@ -46,4 +46,20 @@ FilmReflectance thin_film_reflectance(cplx n0, cplx n1, cplx n2, double d_nm, do
 FilmResponse film_stack(const cplx *n, const double *d_nm, std::size_t layers, double cos0,
                         double wavelength_nm);
 
+// Unpolarised R = (R_s + R_p) / 2 and T = (T_s + T_p) / 2 of one stack at `count`
+// wavelengths, for indices that are the same at every wavelength (non-dispersive films such
+// as guanine on keratin): the media and interface amplitudes depend on the angle only and
+// are computed once; per wavelength only the layers' phases and the Airy folds remain.
+// Equals film_stack at each wavelength bit for bit, except for one lossless film (every
+// medium real and propagating) with |r01 r12| <= 0.5 for both polarisations, where the
+// Airy sum's closed form
+//     R_pol = (r01^2 + r12^2 + 2 r01 r12 cos 2delta) / (1 + r01^2 r12^2 + 2 r01 r12 cos 2delta),
+//     T = 1 - R
+// takes one cosine per wavelength (equal to film_stack to rounding; its denominator
+// cancels as |r01 r12| -> 1, where the fold is kept). A stack deeper than
+// kFilmSpectrumMaxLayers is evaluated by film_stack per wavelength. Allocates nothing.
+constexpr std::size_t kFilmSpectrumMaxLayers = 32;
+void film_stack_spectrum(const cplx *n, const double *d_nm, std::size_t layers, double cos0,
+                         const double *wavelengths_nm, int count, double *R, double *T);
+
 } // namespace bsdflab
