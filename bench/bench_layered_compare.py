@@ -248,30 +248,32 @@ def report(res, ref):
             cells.append(f"{r['efficiency'] / r0['efficiency']:5.2f}x {r['us_per_walk']:7.2f}us "
                          f"{r['relvar_per_walk']:8.3g}")
         print(f"  {name:28s} " + " ".join(f"{s:>26s}" for s in cells))
-    if "service" in res[ref]:
-        print("snake, 1 % relative luminance error per pair (walks from a pilot run), CPU-ms per pair:")
+    for key, title, line, cost in SECTIONS:
+        if key not in res[ref]:
+            continue
+        print(title)
         for c in cols:
-            s, s0 = res[c]["service"], res[ref]["service"]
-            print(f"  {c:26s} {s['walks']:6d} walks {s['cpu_ms']:8.2f} ms (reached {100 * s['reached']:.2f} %)"
-                  f"  {s0['cpu_ms'] * s0['reached'] ** 2 / (s['cpu_ms'] * s['reached'] ** 2):5.2f}x at equal error")
-    if "http" in res[ref]:
-        print("the same error over HTTP: POST /v1/bsdf/eval on a real `bsdflab serve`, 16 pairs, median wall ms:")
-        for c in cols:
-            h, h0, s, s0 = res[c]["http"], res[ref]["http"], res[c]["service"], res[ref]["service"]
-            print(f"  {c:26s} {h['walks']:6d} walks {h['ms']:8.1f} ms  "
-                  f"{h0['ms'] * s0['reached'] ** 2 / (h['ms'] * s['reached'] ** 2):5.2f}x at equal error")
-    if "tabulate" in res[ref]:
-        print("snake table (RGB, 4 x 8 x 5 x 2 thickness nodes, 2 % target), CPU seconds:")
-        for c in cols:
-            t, t0 = res[c]["tabulate"], res[ref]["tabulate"]
-            print(f"  {c:26s} {t['cpu_s']:7.1f} CPU-s {t['walks']:9d} walks  rms {t['rms']:.4f}  "
-                  f"{t0['cpu_s'] * t0['rms'] ** 2 / (t['cpu_s'] * t['rms'] ** 2):5.2f}x at equal error")
-    if "render" in res[ref]:
-        print("direct-PFMC snake render at equal wall time (96 x 54), mean pixel variance on the snake:")
-        for c in cols:
-            r, r0 = res[c]["render"], res[ref]["render"]
-            print(f"  {c:26s} {r['spp']:6d} spp in {r['seconds']:6.1f} s, variance {r['variance']:.4e}  "
-                  f"efficiency {r['efficiency'] / r0['efficiency']:5.2f}x")
+            ratio = cost(res[ref][key], res[ref]) / cost(res[c][key], res[c])
+            print(f"  {c:26s} {line(res[c][key])}  {ratio:5.2f}x at equal error")
+
+
+# The extra measurements: key, title, one row's text, and its cost (time x squared error;
+# the ratio printed is the reference's cost over the row's). Arguments: the section's
+# result and the column's whole result (the HTTP eval takes its error from "service").
+SECTIONS = [
+    ("service", "snake, 1 % relative luminance error per pair (walks from a pilot run), CPU-ms per pair:",
+     lambda s: f"{s['walks']:6d} walks {s['cpu_ms']:8.2f} ms (reached {100 * s['reached']:.2f} %)",
+     lambda s, col: s["cpu_ms"] * s["reached"] ** 2),
+    ("http", "the same error over HTTP: POST /v1/bsdf/eval on a real `bsdflab serve`, 16 pairs, median wall ms:",
+     lambda h: f"{h['walks']:6d} walks {h['ms']:8.1f} ms",
+     lambda h, col: h["ms"] * col["service"]["reached"] ** 2),
+    ("tabulate", "snake table (RGB, 4 x 8 x 5 x 2 thickness nodes, 2 % target), CPU seconds:",
+     lambda t: f"{t['cpu_s']:7.1f} CPU-s {t['walks']:9d} walks  rms {t['rms']:.4f}",
+     lambda t, col: t["cpu_s"] * t["rms"] ** 2),
+    ("render", "direct-PFMC snake render at equal wall time (96 x 54), mean pixel variance on the snake:",
+     lambda r: f"{r['spp']:6d} spp in {r['seconds']:6.1f} s, variance {r['variance']:.4e}",
+     lambda r, col: r["seconds"] * r["variance"]),
+]
 
 
 def main() -> None:

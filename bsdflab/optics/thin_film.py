@@ -388,14 +388,20 @@ def _solve_stack(p: _Problem) -> list[np.ndarray]:
     return [np.reshape(a, p.shape) for a in out]
 
 
+# A layer thinner than this many wavelengths has no phase a double can hold next to 1.
+ABSENT_THICKNESS = 1e-300
+
+
 def _with_bare_fallback(p: _Problem, out: list[np.ndarray]) -> list[np.ndarray]:
-    """Where every layer has zero thickness the film is absent and the answer is the bare
-    interface's. The kernels clear their fractions into one denominator, which cancels to
-    0 / 0 for such a film near grazing incidence; those entries take the bare interface."""
+    """Where every layer has zero thickness (or one below ABSENT_THICKNESS wavelengths: the
+    slow fuzz found 2e-311 nm) the film is absent and the answer is the bare interface's.
+    The kernels clear their fractions into one denominator, which cancels to 0 / 0 for such
+    a film near grazing incidence; those entries take the bare interface."""
     bad = ~np.all([np.isfinite(a) for a in out], axis=0)
     if not np.any(bad):
         return out
-    absent = np.all([np.broadcast_to(t, p.shape) == 0 for t in p.thicknesses], axis=0)
+    absent = np.all([np.broadcast_to(np.abs(t) <= ABSENT_THICKNESS * np.asarray(p.wavelength_nm), p.shape)
+                     for t in p.thicknesses], axis=0)
     use = bad & absent
     if not np.any(use):
         return out

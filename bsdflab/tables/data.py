@@ -67,8 +67,9 @@ class TableGrid:
         if len(self.thickness_nm) > MAX_THICKNESS_NODES:
             raise ValueError(f"thickness_nm must have at most {MAX_THICKNESS_NODES} nodes, "
                              f"got {len(self.thickness_nm)}")
-        t = tuple(float(x) for x in check.film_thickness("thickness_nm", list(self.thickness_nm), array=True)
-                  ) if len(self.thickness_nm) else ()
+        nodes = check.film_thickness("thickness_nm", list(self.thickness_nm), array=True, ndim=1) \
+            if len(self.thickness_nm) else ()
+        t = tuple(float(x) for x in nodes)
         if list(t) != sorted(set(t)):
             raise ValueError("thickness_nm must be strictly increasing")
         object.__setattr__(self, "thickness_nm", t)

@@ -161,10 +161,11 @@ def wavelengths_nm(name: str, value: Any) -> np.ndarray:
     return real_array(name, value, MIN_WAVELENGTH_NM, MAX_WAVELENGTH_NM)
 
 
-def film_thickness(name: str, value: Any, array: bool = False):
-    """Film thickness(es) in nm within [0, MAX_FILM_THICKNESS_NM]."""
+def film_thickness(name: str, value: Any, array: bool = False, ndim: int | None = None):
+    """Film thickness(es) in nm within [0, MAX_FILM_THICKNESS_NM] (an array of `ndim`
+    dimensions if given)."""
     if array:
-        return real_array(name, value, 0.0, MAX_FILM_THICKNESS_NM)
+        return real_array(name, value, 0.0, MAX_FILM_THICKNESS_NM, ndim=ndim)
     return real_scalar(name, value, 0.0, MAX_FILM_THICKNESS_NM)
 
 

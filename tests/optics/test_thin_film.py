@@ -238,6 +238,17 @@ def test_09_zero_thickness_is_the_bare_interface(n0, n1, n2):
         assert np.max(np.abs(x - y)) < 1e-13
 
 
+def test_09b_a_subnormal_thickness_between_equal_media_at_grazing_incidence():
+    # Found by the slow fuzz (tests/service/test_fuzz_api.py): 2e-311 nm of index 2 in air at
+    # cos 1.5e-205 read NaN (the cleared denominator cancels to 0); such a film is absent.
+    for cos0 in (1.4862829579885843e-205, 1e-100, 1e-20):
+        for pol in ("s", "p", "unpolarised"):
+            R = film_reflectance((1.0, 2.0, 2.225073858507e-311, 1.0), 550.0, cos_theta=cos0, polarisation=pol)
+            assert np.allclose(R, 0.0, rtol=0, atol=1e-13), (cos0, pol, R)
+        T = film_transmittance((1.0, 2.0, 2.225073858507e-311, 1.0), 550.0, cos_theta=cos0)
+        assert np.allclose(T, 1.0, rtol=0, atol=1e-13), (cos0, T)
+
+
 def test_10_opaque_layer_is_stable_and_hides_what_is_below():
     n0, n1 = 1.0, 1.2 + 2.0j
     for d in (2e3, 1e5, 1e9):

@@ -518,6 +518,7 @@ def test_12_bad_tabulation_arguments(kwargs, match):
     ((4, 4, 0), "n_phi"), ((4.0, 4, 4), "n_theta_i"), ((4, 4, 513), "n_phi"),
     ((4, 4, 4, (-1.0,)), "thickness_nm"), ((4, 4, 4, (400.0, 300.0)), "thickness_nm"),
     ((4, 4, 4, (300.0, 300.0)), "thickness_nm"), ((4, 4, 4, (float("nan"),)), "thickness_nm"),
+    ((2, 4, 3, [[1.0]]), "thickness_nm must be 1-dimensional"),  # the slow fuzz: was a TypeError
 ])
 def test_13_bad_grids(args, match):
     with pytest.raises(ValueError, match=match):
