@@ -92,14 +92,15 @@ class Layered(BSDF):
         deterministic approximation (for comparisons). Default 1 (bench/bench_layered_pdf.py:
         more walks cost more render time than their MIS weights save on the snake).
     estimator : {"pfmc2", "pfmc"}
-        The walk. "pfmc2" (default): four walks share one light chain (unless the exit
-        boundary is rougher than alpha 0.3), and thick bright slabs (albedo of the least
+        The walk. "pfmc2" (default): four walks share one light chain where it is
+        deterministic (smooth boundaries on its way), and thick bright slabs (albedo of the least
         absorbed channel >= 0.95, optical depth >= 1) draw flights by their smallest
         extinction, so spectral weights stay <= 1 (no heavy tails when channels differ
         wildly). "pfmc": Guo et al.'s estimator as estimator version 5, the reference.
-        Efficiency against version 5's core: 4.4x on the snake (most of it from cheaper
-        thin films and vectorised exp, which pfmc shares), 1.0-1.6x against pfmc in the
-        same build (docs/performance.md, docs/estimators.md).
+        Efficiency against version 5's core: 4.1x on the snake (all of it from cheaper
+        thin films and vectorised exp, which pfmc shares: there pfmc2 walks as pfmc),
+        1.05-1.58x on stacks with smooth boundaries or bright slabs (docs/performance.md,
+        docs/estimators.md).
     """
 
     type_name = "layered"

@@ -3,7 +3,6 @@
 #include <cmath>
 #include <stdexcept>
 #include "bsdflab/frame.h"
-#include "bsdflab/interfaces.h"
 #include "bsdflab/sampling.h"
 #include "bsdflab/scratch.h"
 #include "bsdflab/vector_math.h"
@@ -121,11 +120,17 @@ LayeredBSDF::LayeredBSDF(std::vector<double> wavelengths, std::vector<std::share
         min_extinction_.push_back(s.sigma_s > 0 && s.sigma_s >= kMinExtinctionAlbedo * sbar &&
                                   sbar * s.thickness >= kMinExtinctionDepth);
     }
-    for (int side = 0; side < 2; ++side) {
-        const auto *rough = dynamic_cast<const RoughInterface *>(boundaries_[side == 0 ? 0 : slabs_.size()].get());
-        const bool wide = rough && !rough->pass_through() && rough->microfacet().alpha() > kShareChainMaxAlpha;
-        walks_per_chain_[side] = options_.estimator == kEstimatorPfmc2 && !wide ? kWalksPerChain : 1;
-    }
+    // Walks share a chain only where it is deterministic: the chain from wo's side crosses
+    // every boundary but the far outer one, and a non-delta transmission lobe on any of them
+    // makes it random, its spread shared by the group (docs/estimators.md, "Version 6").
+    const std::size_t K = slabs_.size();
+    auto random = [&](std::size_t b) { return (boundaries_[b]->lobes() & kNonDeltaTransmission) != 0; };
+    bool random_from_top = false, random_from_bottom = false;
+    for (std::size_t b = 0; b < K; ++b) random_from_top = random_from_top || random(b);
+    for (std::size_t b = 1; b <= K; ++b) random_from_bottom = random_from_bottom || random(b);
+    const bool v2 = options_.estimator == kEstimatorPfmc2;
+    walks_per_chain_[0] = v2 && !random_from_top ? kWalksPerChain : 1;
+    walks_per_chain_[1] = v2 && !random_from_bottom ? kWalksPerChain : 1;
 }
 
 uint32_t LayeredBSDF::lobes() const {
@@ -532,8 +537,9 @@ std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_
     std::uint64_t nonfinite = 0, capped = 0;
     const double cos_o = std::abs(wo.z);
     // pfmc: one walk per chain, each walk one sample of the mean. pfmc2: groups of up to
-    // kWalksPerChain walks (1 through an exit rougher than kShareChainMaxAlpha) share a chain (and its entry connection, added once at the
-    // group's weight); a group's mean is one sample (its walks are correlated).
+    // kWalksPerChain walks (1 where the chain is random: a non-delta boundary on its way)
+    // share a chain (and its entry connection, added once at the group's weight); a group's
+    // mean is one sample (its walks are correlated).
     // At least two groups whenever samples >= 2, so that the standard error is estimated.
     const int per_chain = std::max(1, std::min(walks_per_chain_[exit == 0 ? 0 : 1], samples / 2));
     const int groups = (samples + per_chain - 1) / per_chain;

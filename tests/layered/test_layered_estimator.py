@@ -13,6 +13,7 @@ import pytest
 
 import bsdflab as bl
 from bsdflab import Lobe, _core
+from bsdflab.spectra import Spectrum
 from bsdflab.testing import albedo_sampled, albedo_uniform, random_unit_vectors, sidak_z_limit
 from support.directions import directions_at
 
@@ -144,6 +145,8 @@ def test_03b_reciprocity_across_smooth_interior_boundaries():
 # microfacet sampler) changed the streams of walks through the rough top ("split"; the
 # smooth-top xenopeltis values are unchanged, and every statistical test still passes).
 GOLDEN = {
+    # added in version 6 (no version-5 value was recorded for this stack)
+    "bright-eval": [0.10420334692311474, 0.05577554373815085],
     "xenopeltis-eval": [0.0005604921263125558, 0.0011472745673171644, 0.000979433523559332],
     "split-eval": [0.03255253098623811],
     "split-sample": [  # wo (6 x 3), weight (6 x 2), eta (6)
@@ -156,12 +159,11 @@ GOLDEN = {
         0.883770197265396, 0.893487235885266, 0.9557066741079675, 0.9787226167247359,
         0.8906047092154844, 0.8997922772613044, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0],
 }
-GOLDEN_PFMC2 = {  # re-recorded for version 6: the split stack's slab (tau 0.2) no longer flies by
-    # its minimum extinction (optical depth < 1), so its walks draw other numbers
-    "xenopeltis-eval": [0.0005673003820538378, 0.0011462897266232952, 0.0009545003497064503],
-    "split-eval": [0.07021677249662532],
-    # sample() of a stack with no bright slab draws pfmc's walk: the same numbers
-    "split-sample": GOLDEN["split-sample"],
+GOLDEN_PFMC2 = {  # re-recorded for version 6: pfmc2 shares only deterministic chains and flies
+    # grey only at optical depth >= 1, so on the snake and the split stack it is pfmc's walk
+    # (the same numbers); "bright-eval" has a smooth top (shared chains) and a bright slab
+    **{key: GOLDEN[key] for key in ("xenopeltis-eval", "split-eval", "split-sample")},
+    "bright-eval": [0.1309907686028372, 0.06404045183576214],
 }
 
 
@@ -173,7 +175,13 @@ def golden_values(estimator="pfmc"):
     split = bl.Layered([rough_top(), bl.Dielectric(1.3, 1.5)], [bl.Slab(0.5, sigma_s=0.4), bl.Slab(0.5)],
                        silver(1.3), samples=64, seed=6, estimator=estimator)
     s = split.sample(np.tile(directions_at(0.7), (6, 1)), seed=7, wavelengths=[450.0, 650.0])
-    return {"xenopeltis-eval": x.eval(wi, wo, wavelengths=[450.0, 550.0, 650.0])[0].tolist(),
+    # pfmc2's own paths: a smooth top (walks share its chain) over a thick bright slab (grey
+    # flights); for pfmc, version 5's walk of the same stack.
+    bright = bl.Layered([bl.Dielectric(1.5)], [bl.Slab(1.0, sigma_a=Spectrum.tabulated([450.0, 650.0], [0.01, 0.2]),
+                                                       sigma_s=3.0)], bl.Diffuse(0.8), samples=64, seed=8,
+                        estimator=estimator)
+    return {"bright-eval": bright.eval(wi, wo, wavelengths=[450.0, 650.0])[0].tolist(),
+            "xenopeltis-eval": x.eval(wi, wo, wavelengths=[450.0, 550.0, 650.0])[0].tolist(),
             "split-eval": split.eval(wi, wo, wavelengths=WL)[0].tolist(),
             "split-sample": np.concatenate([s.wo.ravel(), s.weight.ravel(), s.eta]).tolist()}
 

@@ -67,8 +67,8 @@ struct LayeredOptions {
     int pdf_samples = 1;     // walks of one pdf() estimate (0: version 4's approximation)
     // 0: Guo et al.'s PFMC as in estimator version 5 (the reference);
     // 1: "pfmc2" (issue 21, docs/estimators.md; the default): kWalksPerChain walks share
-    //    one light chain (and the entry connection) unless the exit boundary is wider than
-    //    kShareChainMaxAlpha; in thick bright slabs (albedo of the least absorbed channel
+    //    one light chain (and the entry connection) where the chain is deterministic (no
+    //    non-delta transmission on its way); in thick bright slabs (albedo of the least absorbed channel
     //    >= 0.95, optical depth >= 1) free flights by the smallest extinction, spectral
     //    weights <= 1.
     int estimator = 1;
@@ -78,10 +78,6 @@ constexpr int kEstimatorPfmc = 0;
 constexpr int kEstimatorPfmc2 = 1;
 // Walks that share one light chain (and its entry connection) in estimator pfmc2.
 constexpr int kWalksPerChain = 4;
-// pfmc2 shares chains only through exit boundaries no rougher than this (GGX/Beckmann
-// alpha): a wide exit lobe makes the chain's own spread dominate the walks' (measured
-// 0.51x at alpha 0.8, bench/bench_layered_compare.py), and a shared chain repeats it.
-constexpr double kShareChainMaxAlpha = 0.3;
 
 class LayeredBSDF final : public BSDF, public StochasticEstimator {
   public:
