@@ -123,3 +123,15 @@ def _spread_against_reported(model, pairs, replicates, walks, error_scale=1.0):
     ratio = v.var(axis=0, ddof=1) / reported
     kurtosis = np.mean((v - v.mean(axis=0)) ** 4, axis=0) / v.var(axis=0) ** 2
     return (ratio - 1.0) / np.sqrt((kurtosis - 1.0) / replicates), ratio
+
+
+def test_05_grey_flights_need_an_optical_depth_of_one():
+    # Third review: no test sat between optical depth 0.5 and 1, so a threshold moved there
+    # passed. A rough top (its chain is not shared) over a bright slab (albedo 0.99 in every
+    # channel): below depth 1 pfmc2 flies as pfmc, bit for bit; above, by the grey extinction.
+    def stack(depth):
+        slab = bl.Slab(1.0, sigma_a=0.01 * depth, sigma_s=0.99 * depth)
+        return lambda e: bl.Layered([bl.RoughDielectric(0.3, 1.5)], [slab], bl.Diffuse(0.8), estimator=e)
+
+    assert _same_as_pfmc(stack(0.8), UP, UP) and _same_as_pfmc(stack(0.55), UP, UP)
+    assert not _same_as_pfmc(stack(1.2), UP, UP)
