@@ -13,11 +13,15 @@ pairs, measures in one run, on every core:
   * with --allocations (under LD_PRELOAD of bench/malloc_count.c, see there): heap
     allocations per walk and per eval() call, counted, not timed.
 Run: python3 bench/bench_layered.py [--pairs 32] [--samples 2000] [--per-walk] [--allocations]
+     python3 bench/bench_layered.py --compare [...]   the estimators side by side, against a
+         baseline core: bench/bench_layered_compare.py with the arguments that follow
 """
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -45,6 +49,12 @@ def run(core, wi, wo, samples, seed=1):
 
 
 def main() -> None:
+    if "--compare" in sys.argv[1:]:  # the issue's name for the side-by-side benchmark
+        import runpy
+        sys.argv = [str(Path(__file__).with_name("bench_layered_compare.py"))] + [
+            a for a in sys.argv[1:] if a != "--compare"]
+        runpy.run_path(sys.argv[0], run_name="__main__")
+        return
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--pairs", type=int, default=32)
     ap.add_argument("--samples", type=int, default=2000)
