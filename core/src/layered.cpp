@@ -438,8 +438,9 @@ bool LayeredBSDF::one_walk(const Vec3 &wi, int entry, int exit, const Query &q, 
         if (!(cz > 1e-9)) return false;
         const double room = up ? zx : S.thickness - zx;
 
-        const double t = (v2 && min_extinction_[j]) ? fly_min_extinction(std::size_t(j), room, cz, rng, beta, wk.fly_tr)
-                                                    : fly(S, room, cz, rng, beta, wk.fly_tr);
+        const double t = (v2 && min_extinction_[j])
+                             ? fly_min_extinction(std::size_t(j), room, cz, rng, beta, wk.fly_tr)
+                             : fly(S, room, cz, rng, beta, wk.fly_tr);
         if (t >= 0) { // scattering event at depth zx (measured from the exit side)
             zx += up ? -t * cz : t * cz;
             double to_exit_pdf = wk.ok[j] ? S.phase.eval(w, -wk.u[j]) : 0.0;

@@ -211,7 +211,8 @@ struct StackAtAngle {
 // c = Re e.
 struct AirySum {
     double a, b, d;
-    AirySum(double r01, double r12) : a(r01 * r01 + r12 * r12), b(2.0 * r01 * r12), d(1.0 + r01 * r01 * r12 * r12) {}
+    AirySum(double r01, double r12)
+        : a(r01 * r01 + r12 * r12), b(2.0 * r01 * r12), d(1.0 + r01 * r01 * r12 * r12) {}
     double at(double c) const { return (a + b * c) / (d + b * c); }
 };
 

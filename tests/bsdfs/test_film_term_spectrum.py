@@ -21,17 +21,11 @@ def term(ext, layers, thick, sub, transmits=True, wl=WL):
 
 def reference(ext, layers, thick, sub, cos_i, transmits=True, wl=WL, scale=1.0):
     """(R, T) per channel from film_stack, one wavelength per row, as FilmTerm defines them."""
-    from_above = cos_i >= 0
-    rows = []
-    for k, lam in enumerate(wl):
-        pick = lambda n: np.broadcast_to(np.asarray(n, dtype=complex), wl.shape)[k]  # noqa: E731
-        media = [ext] + [pick(n) for n in layers] + [pick(sub)]
-        d = [t * scale for t in thick]
-        if not from_above:
-            media, d = media[::-1], d[::-1]
-        rows.append((media, d))
-    n = np.array([m for m, _ in rows], dtype=complex)
-    d = np.array([d for _, d in rows], dtype=float).reshape(len(wl), len(thick))
+    per_channel = [np.broadcast_to(np.asarray(x, dtype=complex), wl.shape) for x in [ext, *layers, sub]]
+    n = np.stack(per_channel, axis=1)                      # (channels, media) in the order from above
+    d = np.tile(np.asarray(thick, dtype=float) * scale, (len(wl), 1)).reshape(len(wl), len(thick))
+    if cos_i < 0:                                          # from below: the media met in reverse
+        n, d = n[:, ::-1], d[:, ::-1]
     out = _core.film_stack(n, d, np.full(len(wl), abs(cos_i)), wl)
     R = 0.5 * (out[4] + out[5])
     T = 0.5 * (out[6] + out[7]) if transmits else np.zeros_like(R)
