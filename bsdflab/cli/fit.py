@@ -2,12 +2,15 @@
 
     bsdflab fit data.csv --config fit.toml --out study/
     bsdflab fit simulate --config truth.toml --out data.csv
+    bsdflab fit import FILE... --out data.csv   (bsdflab/cli/fit_import.py)
 """
 from __future__ import annotations
 
 import argparse
 import shlex
 import sys
+
+from bsdflab.cli import fit_import
 
 
 def register(sub) -> None:
@@ -16,7 +19,9 @@ def register(sub) -> None:
                                    "data (docs/fit_data.md) and write a study folder: posterior (netCDF), "
                                    "parameter table, corner plot, predictive bands, traces, appearance "
                                    "posterior, renders, posterior-mean material. 'bsdflab fit simulate "
-                                   "--config truth.toml --out data.csv' writes synthetic data instead.")
+                                   "--config truth.toml --out data.csv' writes synthetic data instead; "
+                                   "'bsdflab fit import FILE... --out data.csv' reads instrument files "
+                                   "(bsdflab fit import --help).")
     p.add_argument("data", metavar="DATA.csv|simulate",
                    help="data file to fit, or the word 'simulate' to make synthetic data")
     p.add_argument("--config", required=True, help="fit.toml (priors, sampler) or, with simulate, truth.toml")
@@ -24,6 +29,7 @@ def register(sub) -> None:
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(run=run)
+    fit_import.attach(p)
 
 
 def run(args: argparse.Namespace) -> int:
