@@ -1,11 +1,12 @@
 """Spectra from instrument files -> the fit's long dataset.
 
-Each curve gets its geometry, angles and series (the sidecar's entry for the column or file;
-then ``angles_deg`` in order; then ``name_pattern``; then the sidecar's ``angle_deg``; then
-the angle in the column's or file's name), its units (declared, else what the file states,
-else the units rule) and the wavelength grid (``[wavelengths]``, resampled by linear
-interpolation, else the files' own, which must then agree), cropped to the model's range.
-Curves with the same series, geometry and angles are replicates: their mean is the value and
+Each curve gets its geometry, angles and series: the sidecar's entry for the column or
+file; then ``angles_deg`` in order; then ``name_pattern`` on the column's name, else the
+file's; then the sidecar's ``angle_deg``; then the angle in the column's name, then in the
+file's name. Its units: declared, else what the file states, else the units rule. The
+wavelength grid: ``[wavelengths]`` (resampled by linear interpolation), else the files' own,
+which must then agree; cropped to the model's range. Curves with the same series, geometry
+and angles are replicates: their mean is the value and
 sigma^2 = SE^2 + absolute^2 + (relative * mean)^2, SE = sample std / sqrt(n) over the
 replicates (0 for one curve, or with ``replicates = false``). A reference standard multiplies
 value and sigma (its own uncertainty is not propagated).
@@ -72,7 +73,7 @@ def place(spectra: list[Spectrum], spec: ImportSpec) -> list[Placed]:
                          f"({', '.join(_label(s) for _, s in kept)})")
     out = []
     for k, (curve, s) in enumerate(kept):
-        groups = pattern_match(spec.name_pattern, _label(s), s.where) if spec.name_pattern else {}
+        groups = _pattern(spec.name_pattern, s) if spec.name_pattern else {}
         angle = curve.angle_deg
         if angle is None and spec.angles_deg is not None:
             angle = spec.angles_deg[k]
@@ -82,6 +83,8 @@ def place(spectra: list[Spectrum], spec: ImportSpec) -> list[Placed]:
             angle = spec.angle_deg
         if angle is None:
             angle = angle_from_name(_label(s), s.where)
+        if angle is None and s.name:
+            angle = angle_from_name(stem(s.file), s.where)   # one file per angle, columns per sample
         if angle is None:
             raise ValueError(f"{s.where}: no angle of incidence: the name {_label(s)!r} holds none (e.g. R_15deg, "
                              f"theta=15) and the sidecar gives none (angle_deg, angles_deg, [columns] or [files])")
@@ -114,6 +117,16 @@ def place(spectra: list[Spectrum], spec: ImportSpec) -> list[Placed]:
         out.append(Placed(s, geometry, float(angle), np.nan if out_angle is None else float(out_angle),
                           np.nan if phi is None else float(phi), series, units or s.units))
     return out
+
+
+def _pattern(pattern: str, s: Spectrum) -> dict[str, str]:
+    """name_pattern's groups in the column's name, else in the file's name."""
+    if s.name:
+        try:
+            return pattern_match(pattern, s.name, s.where)
+        except ValueError:
+            pass
+    return pattern_match(pattern, stem(s.file), s.where)
 
 
 def _group_number(text: str, where: str) -> float:
