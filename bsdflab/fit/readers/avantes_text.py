@@ -45,8 +45,8 @@ class AvantesText(Reader):
         units_line = head + 1 if head + 1 < len(lines) and lines[head + 1].strip().startswith("[") else None
         units = [c.strip() for c in lines[units_line].split(sep)] if units_line is not None else []
         processed = [j for j, k in enumerate(kinds) if k is None]
-        body = [(i + 1, ln) for i, ln in enumerate(lines[(units_line or head) + 1:], (units_line or head) + 2)
-                if ln.strip()]
+        last = head if units_line is None else units_line
+        body = [(n, ln) for n, ln in enumerate(lines[last + 1:], last + 2) if ln.strip()]
         if not body:
             raise ValueError(f"{path}: line {head + 1}: no data rows after the column line")
         table = np.empty((len(body), len(names)))
