@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bsdflab.fit.units import percent_suspect, refuse_percent, scale, units_comment
+from bsdflab.fit.units import near_mirror, percent_suspect, refuse_percent, scale, units_comment
 from bsdflab.util.files import write_atomically
 
 # index = the geometry code (0-2: the smooth C++ model's; brdf rows become diffuse ones there)
@@ -118,7 +118,9 @@ class Dataset:
     def percent_suspect(self, series: str) -> tuple[str, int] | None:
         """bsdflab.fit.units.percent_suspect on one series: (why, row index) or None."""
         rows = np.flatnonzero(self.series == series)
-        found = percent_suspect([GEOMETRIES[g] for g in self.geometry[rows]], self.reflectance[rows])
+        names = [GEOMETRIES[g] for g in self.geometry[rows]]
+        near = near_mirror(names, self.angle_deg[rows], self.angle_out_deg[rows], self.phi_deg[rows])
+        found = percent_suspect(names, self.reflectance[rows], near)
         return None if found is None else (found[0], int(rows[found[1]]))
 
     def write_csv(self, path: str | os.PathLike) -> None:

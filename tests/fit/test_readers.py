@@ -170,6 +170,15 @@ def test_long_csv_units_rule(tmp_path):
                                       "30,30,0,550,4.44,0.044,brdf\n30,45,90,550,0.0105,0.0002,brdf\n"
                                       "30,60,180,550,0.0039,0.0001,brdf\n")
     assert len(read_csv(gonio)) == 3
+    # ... but off-specular factors in percent are: a gonio set at 20-30 % (median 25 > 1.5),
+    # while the gloss row (within 15° of the mirror) is left out of the median. Mutation caught:
+    # including the mirror row and excluding none lets a 1-row off-specular set decide alone.
+    pct = write(tmp_path / "p.csv", "angle_deg,angle_out_deg,phi_deg,wavelength_nm,reflectance,sigma,geometry\n"
+                                    "30,30,0,550,0.9,0.1,brdf\n30,0,0,550,25,0.5,brdf\n30,60,180,550,20,0.5,brdf\n"
+                                    "30,45,90,550,30,0.5,brdf\n")
+    with pytest.raises(ValueError, match=r"p\.csv: line 5: column reflectance: the values look like percent "
+                                         r"\(off-specular diffuse/brdf reflectance factors with median 25"):
+        read_csv(pct)
 
 
 def test_series_column_round_trip(tmp_path):
@@ -240,3 +249,59 @@ def test_cli_import(tmp_path):
                 cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert read_csv(tmp_path / "p.csv").angle_deg.tolist() == [8.0, 20.0]
+
+
+@pytest.mark.parametrize("files, spec, match", [
+    ({"w.csv": "wavelength_nm,a,b\n400,0.2,0.3\n"}, dict(geometry="specular", angles_deg=(10.0,), sigma_absolute=0.01),
+     r"angles_deg gives 1 angles for 2 curves \(a, b\)"),
+    ({"w.csv": "wavelength_nm,R_15deg\n400,0.2\n"}, dict(geometry="diffuse", sigma_absolute=0.01),
+     r"column 2 'R_15deg': a diffuse curve needs angle_out_deg"),
+    ({"w.csv": "wavelength_nm,R_15deg\n400,0.2\n"}, dict(geometry="diffuse", angle_out_deg=15.0, sigma_absolute=0.01),
+     r"a diffuse curve at the mirror direction"),
+    ({"w.csv": "wavelength_nm,R_95deg\n400,0.2\n"}, dict(geometry="specular", sigma_absolute=0.01),
+     r"angle of incidence must be in \[0, 90\), got 95"),
+    ({"w.xyz": "x"}, dict(geometry="specular"), r"w\.xyz: cannot tell the format from the suffix '\.xyz'"),
+    ({"a.csv": "angle_deg,wavelength_nm,reflectance,sigma,geometry\n10,500,0.2,0.01,specular\n",
+      "b.csv": "wavelength_nm,R_15deg\n400,0.2\n"}, dict(sigma_absolute=0.01), r"cannot mix the long CSV"),
+    ({"a.csv": "wavelength_nm,R_15deg\n400,0.2\n410,0.3\n", "b.csv": "wavelength_nm,R_20deg\n400,0.2\n420,0.3\n"},
+     dict(geometry="specular", sigma_absolute=0.01), r"b\.csv: column 2 'R_20deg': its wavelengths differ"),
+    ({"w.csv": "wavelength_nm,R_15deg\n300,0.2\n340,0.3\n"}, dict(geometry="specular", sigma_absolute=0.01),
+     r"no wavelength inside the model's range"),
+    ({"w.csv": "wavelength_nm,R_15deg\n400,0.2\n410,0.3\n"},
+     dict(geometry="specular", sigma_absolute=0.01, wavelengths=np.array([400.0, 420.0])),
+     r"covers 400-410 nm, the grid asks for 400-420 nm"),
+    ({"w.csv": "wavelength_nm,R_15deg\n400,0.2\n"}, dict(format="procspec", geometry="specular"),
+     r"w\.csv: not a readable ProcSpec \(zip\) archive"),
+])
+def test_bad_imports(tmp_path, files, spec, match):
+    paths = [write(tmp_path / name, text) for name, text in files.items()]
+    with pytest.raises(ValueError, match=match):
+        import_files(paths, ImportSpec(**spec))
+
+
+def test_stem_sidecar_and_comments_kept(tmp_path):
+    from bsdflab.fit.readers import default_sidecar
+
+    data = write(tmp_path / "run.csv", "# truth: film_thickness_nm=430\nwavelength_nm,R_15deg\n400,0.2\n")
+    assert default_sidecar(data) is None
+    side = write(tmp_path / "run.toml", 'geometry = "total"\n[sigma]\nabsolute = 0.01\n')
+    assert default_sidecar(data) == side
+    write(tmp_path / "run.csv.toml", 'geometry = "specular"\n')
+    assert default_sidecar(data) == str(tmp_path / "run.csv.toml")
+    ds, _ = import_files([data], load_spec(side))
+    assert ds.comments[0] == "truth: film_thickness_nm=430" and ds.geometry.tolist() == [2]
+
+
+def test_the_shipped_wide_example_imports_to_852_rows():
+    """examples/fit/wide: 12 angles x 71 wavelengths, two replicates each, percent relative
+    to a 0.99 standard; the first row checked against the file's own cells."""
+    here = os.path.join(os.path.dirname(__file__), "..", "..", "examples", "fit", "wide")
+    path = os.path.join(here, "angles.csv")
+    ds, notes = import_files([path], load_spec(path + ".toml"))
+    assert len(ds) == 852 and sorted(set(ds.angle_deg)) == list(range(15, 71, 5))
+    with open(path, encoding="utf-8") as f:
+        row = [ln for ln in f if not ln.startswith("#")][1].split(",")
+    a, b = float(row[1]), float(row[2])
+    np.testing.assert_allclose(ds.reflectance[0], (a + b) / 2 / 100 * 0.99, rtol=1e-9, atol=0)
+    np.testing.assert_allclose(ds.sigma[0], np.hypot(abs(a - b) / 2, 0.1) / 100 * 0.99, rtol=1e-5, atol=0)
+    assert any(c.startswith("truth:") for c in ds.comments)

@@ -22,7 +22,7 @@ from bsdflab.fit.data import GEOMETRIES, MODEL_RANGE_NM, SPECULAR_TOLERANCE_DEG,
 from bsdflab.fit.readers.angles import angle_from_name, pattern_match, stem
 from bsdflab.fit.readers.base import Spectrum, reader_for
 from bsdflab.fit.readers.sidecar import Curve, ImportSpec
-from bsdflab.fit.units import check_units, percent_suspect, refuse_percent, scale
+from bsdflab.fit.units import check_units, near_mirror, percent_suspect, refuse_percent, scale
 
 UNITS_HOW = "units = \"percent\" in the sidecar or --units percent"
 
@@ -186,10 +186,12 @@ def _check_units(placed: list[Placed]) -> None:
             continue
         geometry = np.concatenate([np.full(len(p.spectrum.value), p.geometry, dtype=object) for p in loose])
         values = np.concatenate([p.spectrum.value for p in loose])
+        near = np.concatenate([near_mirror(np.full(len(p.spectrum.value), p.geometry, dtype=object), p.angle_deg,
+                                           p.angle_out_deg, p.phi_deg) for p in loose])
         # only what the fit will see: the model's wavelength range
         inside = np.concatenate([(p.spectrum.wavelength_nm >= MODEL_RANGE_NM[0])
                                  & (p.spectrum.wavelength_nm <= MODEL_RANGE_NM[1]) for p in loose])
-        found = percent_suspect(geometry[inside], values[inside])
+        found = percent_suspect(geometry[inside], values[inside], near[inside])
         if found:
             k = int(np.flatnonzero(inside)[found[1]])
             sizes = np.cumsum([len(p.spectrum.value) for p in loose])
@@ -265,10 +267,12 @@ def assemble(spectra: list[Spectrum], spec: ImportSpec) -> tuple[Dataset, list[s
         cols["sigma"] += (sigma * ref).tolist()
         cols["series"] += [series] * m
     files = list(dict.fromkeys(os.path.basename(s.file) for s in spectra))
-    comments = [f"imported by bsdflab fit import from {', '.join(files)}"]
+    comments = list(dict.fromkeys(c for s in spectra for c in s.comments))
+    comments.append(f"imported by bsdflab fit import from {', '.join(files)}")
     units_used = sorted({p.units or "fraction (undeclared)" for p in placed})
     comments.append(f"source units {', '.join(units_used)}" + (f"; {ref_note}" if ref_note else ""))
-    comments.append(f"sigma: replicate standard error (replicates per curve {min(reps)}-{max(reps)})"
+    span = f"{min(reps)}" if min(reps) == max(reps) else f"{min(reps)}-{max(reps)}"
+    comments.append(f"sigma: replicate standard error (replicates per curve {span})"
                     if spec.sigma_replicates and max(reps) > 1 else "sigma: no replicate term")
     if spec.sigma_absolute or spec.sigma_relative:
         comments[-1] += f", absolute {spec.sigma_absolute:g} (source units), relative {spec.sigma_relative:g}"
@@ -283,7 +287,7 @@ def assemble(spectra: list[Spectrum], spec: ImportSpec) -> tuple[Dataset, list[s
             notes.append(f"kept {len(grid)} of {len(full)} wavelengths (the model's range "
                          f"{MODEL_RANGE_NM[0]:g}-{MODEL_RANGE_NM[1]:g} nm)")
     if max(reps) > 1:
-        notes.append(f"averaged replicates: {min(reps)}-{max(reps)} per curve")
+        notes.append(f"averaged replicates: {span} per curve")
     # the dataset's own checks (duplicates, ranges) on what will be written
     return parse_csv(ds.to_csv_text().splitlines(), "the imported dataset", units="fraction"), notes
 

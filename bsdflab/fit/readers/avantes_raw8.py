@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from bsdflab.fit.readers.base import Reader, Spectrum
+from bsdflab.util.extras import require
 
 
 class AvantesRaw8(Reader):
@@ -20,16 +21,15 @@ class AvantesRaw8(Reader):
     description = "Avantes AvaSoft 8 binary (.raw8, .rfl8, .trm8; via avaread)"
 
     def read(self, path: str, spec) -> list[Spectrum]:
-        from avaread.reader import AvaReadException, AVSFile
-
+        avaread = require("avaread.reader", "fit")
         with open(path, "rb") as f:
             magic = f.read(3)
         if magic != b"AVS":
             raise ValueError(f"{path}: byte 1: not an AvaSoft 8 file (no 'AVS' magic bytes; an AvaSoft 7 .trm/.rfl "
                              f"binary has no kept reader: export it as text, .ttt, from AvaSoft)")
         try:
-            f8 = AVSFile(path)
-        except (AvaReadException, ValueError, OSError, EOFError) as e:   # AvaReadException is a BaseException
+            f8 = avaread.AVSFile(path)
+        except (avaread.AvaReadException, ValueError, OSError, EOFError) as e:   # AvaReadException is a BaseException
             raise ValueError(f"{path}: cannot read the AvaSoft 8 file (truncated?): {e}") from None
         if len(f8.channels) != 1:
             raise ValueError(f"{path}: {len(f8.channels)} channels; only single-channel files are read "

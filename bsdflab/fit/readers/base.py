@@ -44,6 +44,7 @@ class Spectrum:
     where: str
     lines: np.ndarray
     units: str | None = None
+    comments: tuple[str, ...] = ()    # the file's own comment lines (kept in the dataset)
 
     def at(self, i: int) -> str:
         """The message prefix for value ``i``."""

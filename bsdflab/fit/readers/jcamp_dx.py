@@ -13,6 +13,7 @@ import numpy as np
 
 from bsdflab.fit.readers.base import Reader, Spectrum
 from bsdflab.fit.readers.text import read_lines
+from bsdflab.util.extras import require
 
 
 def _block(lines: list[str]) -> tuple[int, int]:
@@ -29,8 +30,7 @@ class JcampDX(Reader):
     description = "JCAMP-DX spectrum (via the jcamp package)"
 
     def read(self, path: str, spec) -> list[Spectrum]:
-        import jcamp
-
+        jcamp = require("jcamp", "fit")
         lines = read_lines(path)
         start, end = _block(lines)
         if not start:

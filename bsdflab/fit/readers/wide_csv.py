@@ -3,7 +3,7 @@
     wavelength_nm,R_15deg,R_20deg,R_20deg
     400,25.3,24.1,24.4
 
-A header row names the columns; lines starting with ``#`` are comments. The delimiter is
+A header row names the columns; lines starting with ``#`` are comments (kept in the dataset). The delimiter is
 the sidecar's ``delimiter``, else a tab or a semicolon if the header has one, else a comma.
 The wavelength column is ``wavelength_column``, else the first whose name starts with
 "wave", "lambda", "wl" or "nm", else the first. Every other column is one curve; the angle
@@ -78,8 +78,9 @@ class WideCSV(Reader):
                 table[r, j] = number(cell, f"{path}: line {number_}, column {j + 1} ({header[j]!r})",
                                      "the value", spec.decimal)
         rows = np.array([n for n, _ in numbered[1:]])
-        return [Spectrum(table[:, wcol], table[:, j], path, header[j], f"{path}: column {j + 1} {header[j]!r}", rows)
-                for j in range(len(header)) if j != wcol]
+        comments = tuple(ln.lstrip().lstrip("#").strip() for ln in lines if ln.lstrip().startswith("#"))
+        return [Spectrum(table[:, wcol], table[:, j], path, header[j], f"{path}: column {j + 1} {header[j]!r}", rows,
+                         comments=comments) for j in range(len(header)) if j != wcol]
 
 
 def _is_number(text: str) -> bool:
