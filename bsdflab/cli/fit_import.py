@@ -73,6 +73,8 @@ def run(args: argparse.Namespace) -> int:
             float_option(option, str(value))
             if option.startswith("--sigma") and value < 0:
                 raise ValueError(f"{option} must be >= 0, got {value:g}")
+            if option == "--reference" and not 0 < value <= 1.5:
+                raise ValueError(f"--reference is the standard's reflectance as a fraction (e.g. 0.99), got {value:g}")
     spec = spec.with_options(
         format=args.format, geometry=args.geometry, units=args.units, angle_deg=args.angle,
         angle_out_deg=args.angle_out, phi_deg=args.phi, series=args.series,

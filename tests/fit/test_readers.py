@@ -165,6 +165,12 @@ def test_long_csv_units_rule(tmp_path):
     np.testing.assert_allclose(imported.reflectance, [0.253], rtol=1e-12, atol=0)
     with pytest.raises(ValueError, match="do not apply to the long CSV"):
         import_files([bad], ImportSpec(units="percent", geometry="specular"))
+    with pytest.raises(ValueError, match="wavelengths do not apply to the long CSV"):
+        import_files([bad], ImportSpec(units="percent", wavelengths=np.array([400.0, 500.0])))
+    imported, _ = import_files([bad], ImportSpec(units="percent", series="run"))
+    assert imported.series.tolist() == ["run"]
+    with pytest.raises(ValueError, match="line 3: duplicate of line 2"):   # two files, the same row
+        import_files([bad, good], ImportSpec(units="percent"))
     # gonio brdf data with a gloss peak above 1.5 is not percent (median of the series)
     gonio = write(tmp_path / "g.csv", "angle_deg,angle_out_deg,phi_deg,wavelength_nm,reflectance,sigma,geometry\n"
                                       "30,30,0,550,4.44,0.044,brdf\n30,45,90,550,0.0105,0.0002,brdf\n"

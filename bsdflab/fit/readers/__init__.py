@@ -54,7 +54,8 @@ def import_files(paths: list[str], spec: ImportSpec) -> tuple[Dataset, list[str]
 
 
 def _long(paths: list[str], readers: list[Reader], spec: ImportSpec) -> tuple[Dataset, list[str]]:
-    given = [k for k in _SPECTRAL if getattr(spec, k) not in (None, {}, ())]
+    given = [k for k in _SPECTRAL if getattr(spec, k) is not None and not (isinstance(getattr(spec, k), dict)
+                                                                       and not getattr(spec, k))]
     if given or spec.sigma_absolute or spec.sigma_relative:
         raise ValueError(f"{spec.source}: {', '.join(given) or '[sigma]'} do not apply to the long CSV (each row "
                          f"names its geometry, angles and sigma); only units and series do")
@@ -66,5 +67,6 @@ def _long(paths: list[str], readers: list[Reader], spec: ImportSpec) -> tuple[Da
     ds = Dataset(*(np.concatenate([getattr(d, f) for d in parts]) for f in fields),
                  [c for d in parts for c in d.comments],
                  np.concatenate([d.phi_deg for d in parts]), np.concatenate([d.series for d in parts]))
-    ds = parse_csv(ds.to_csv_text().splitlines(), "the imported dataset", units="fraction")
+    # the rows of all files together (a row repeated across files: a duplicate, unless their series differ)
+    ds = parse_csv(ds.to_csv_text().splitlines(), f"the files {', '.join(paths)} together", units="fraction")
     return ds, [f"{len(ds)} rows from {len(paths)} long CSV file(s)"]

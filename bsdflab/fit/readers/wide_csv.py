@@ -47,6 +47,9 @@ class WideCSV(Reader):
             raise ValueError(f"{path}: empty file (no header, no rows)")
         header_line, header_text = numbered[0]
         delimiter = _delimiter(header_text, spec)
+        if delimiter == "," and spec.decimal == ",":
+            raise ValueError(f"{path}: line {header_line}: decimal \",\" needs another delimiter (\";\" or a tab); "
+                             f"set delimiter in the sidecar")
         header = [h.strip() for h in next(csv.reader([header_text], delimiter=delimiter))]
         if len(header) < 2:
             raise ValueError(f"{path}: line {header_line}: the header must name a wavelength column and at "
