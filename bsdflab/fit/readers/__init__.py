@@ -67,6 +67,15 @@ def _long(paths: list[str], readers: list[Reader], spec: ImportSpec) -> tuple[Da
     ds = Dataset(*(np.concatenate([getattr(d, f) for d in parts]) for f in fields),
                  [c for d in parts for c in d.comments],
                  np.concatenate([d.phi_deg for d in parts]), np.concatenate([d.series for d in parts]))
-    # the rows of all files together (a row repeated across files: a duplicate, unless their series differ)
-    ds = parse_csv(ds.to_csv_text().splitlines(), f"the files {', '.join(paths)} together", units="fraction")
+    seen: dict[tuple, str] = {}
+    for path, d in zip(paths, parts):
+        for i in range(len(d)):
+            key = (d.series[i], int(d.geometry[i]), float(d.angle_deg[i]), str(d.angle_out_deg[i]), str(d.phi_deg[i]),
+                   float(d.wavelength_nm[i]))
+            if key in seen and seen[key] != path:
+                raise ValueError(f"{path}: the row at {d.angle_deg[i]:g}° and {d.wavelength_nm[i]:g} nm (series "
+                                 f"{d.series[i]!r}) repeats one of {seen[key]}: give the files different series "
+                                 f"(a series column) or import them apart")
+            seen[key] = path
+    ds = parse_csv(ds.to_csv_text().splitlines(), "the imported dataset", units="fraction")
     return ds, [f"{len(ds)} rows from {len(paths)} long CSV file(s)"]
