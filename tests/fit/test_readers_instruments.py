@@ -45,6 +45,9 @@ def write_procspec(path, xml, member="ps_0.xml"):
 
 
 def test_procspec(tmp_path):
+    """The processed spectrum, not the raw sample counts beside it (pixelValues are 40x the
+    processed values here: a reader taking the first <double> list would be caught), and the
+    angle from the file name."""
     path = write_procspec(tmp_path / "scan_20deg.ProcSpec", procspec_xml(WL, PCT))
     assert reader_for(path).name == "procspec"
     ds, _ = import_files([path], ImportSpec(geometry="specular", units="percent", sigma_absolute=0.5))
@@ -135,6 +138,8 @@ def test_avantes_ttt(tmp_path, processed):
 
 
 def test_bad_avantes_ttt(tmp_path):
+    """Lines counted from 1 in the file (the column line is line 6; a data row two below the
+    unit line and a blank is line 11: an off-by-one in the count is caught)."""
     path = tmp_path / "f.ttt"
     path.write_text(ttt(PCT).replace("30,250", "30;250"), encoding="latin-1")
     with pytest.raises(ValueError, match=r"f\.ttt: line 11: expected 5 values as in the column line \(line 6\), got 6"):
