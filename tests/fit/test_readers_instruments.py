@@ -201,3 +201,25 @@ def test_jcamp(tmp_path):
     with pytest.raises(ValueError, match=r"f_20deg\.jdx: lines 14-18: the data block gives 4 points but ##NPOINTS "
                                          r"says 5"):
         import_files([str(path)], SPEC)
+
+
+def test_several_procspec_files_angles_from_the_sidecar(tmp_path):
+    """One file per scan, angles and series from [files] entries (names without numbers in
+    them), replicates averaged with SE = std(ddof=1)/sqrt(n) from numpy. Mutations caught: a
+    population std (ddof=0), files keyed by path instead of name (the entries would not match)."""
+    from bsdflab.fit.readers import parse_spec
+
+    scans = {"a.ProcSpec": (25.0, PCT), "b.ProcSpec": (25.0, PCT * 1.1), "c.ProcSpec": (25.0, PCT * 0.95),
+             "d.ProcSpec": (40.0, PCT * 0.8)}
+    paths = [write_procspec(tmp_path / name, procspec_xml(WL, values)) for name, (_, values) in scans.items()]
+    spec = parse_spec({"geometry": "specular", "units": "percent", "sigma": {"absolute": 0.2},
+                       "files": {name: {"angle_deg": angle, "series": "bird"} for name, (angle, _) in scans.items()}},
+                      "sidecar")
+    ds, _ = import_files(paths, spec)
+    reps = np.array([v for _, (a, v) in scans.items() if a == 25.0])
+    at25 = ds.angle_deg == 25.0
+    assert set(ds.series) == {"bird"} and at25.sum() == 5 and (ds.angle_deg == 40.0).sum() == 5
+    np.testing.assert_allclose(ds.reflectance[at25], reps.mean(axis=0) / 100, rtol=1e-9, atol=0)
+    se = reps.std(axis=0, ddof=1) / np.sqrt(3)
+    np.testing.assert_allclose(ds.sigma[at25], np.hypot(se, 0.2) / 100, rtol=1e-5, atol=0)
+    np.testing.assert_allclose(ds.sigma[~at25], 0.2 / 100, rtol=1e-5, atol=0)
