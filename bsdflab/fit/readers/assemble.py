@@ -288,6 +288,9 @@ def assemble(spectra: list[Spectrum], spec: ImportSpec) -> tuple[Dataset, list[s
                          f"{MODEL_RANGE_NM[0]:g}-{MODEL_RANGE_NM[1]:g} nm)")
     if max(reps) > 1:
         notes.append(f"averaged replicates: {span} per curve")
+    if not resample and len(grid) > 200:
+        notes.append(f"{len(grid)} wavelengths per curve (the instrument's pixels): each costs forward-model time; "
+                     f"a grid such as [wavelengths] step = 5 (--wavelengths 400:700:5) is usually enough")
     # the dataset's own checks (duplicates, ranges) on what will be written
     return parse_csv(ds.to_csv_text().splitlines(), "the imported dataset", units="fraction"), notes
 
