@@ -61,4 +61,9 @@ def run(args: argparse.Namespace) -> int:
         print(f.read())
     print(summary["appearance"]["statement"])
     print(f"wrote {args.out}")
+    if summary["warnings"]:
+        from bsdflab.fit.alerts import Alert, render_block
+
+        sys.stdout.flush()
+        sys.stderr.write(render_block([Alert(**w) for w in summary["warnings"]]))
     return 0

@@ -138,3 +138,42 @@ def appearance_plot(app: AppearancePosterior, path: str) -> float:
     save_figure(fig, path)
     plt.close(fig)
     return exposure
+
+
+def residual_plot(dataset: Dataset, residuals: np.ndarray, checks, path: str) -> None:
+    """Normalised residuals (y - model) / (s sigma) per measured curve, with the +-2 and +-3
+    lines and each curve's predictive p-value (bsdflab.fit.checks). More than 12 curves (gonio
+    rows, one wavelength each) are drawn one panel per geometry against the row number."""
+    plt = _plt()
+    p_of = {c.series: c for c in checks}
+    groups = dataset.groups()
+    if len(groups) > 12:
+        from bsdflab.fit.data import GEOMETRIES
+
+        groups = [(GEOMETRIES[g], np.flatnonzero(dataset.geometry == g)) for g in np.unique(dataset.geometry)]
+    cols = min(3, len(groups))
+    rows = math.ceil(len(groups) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 2.6 * rows), squeeze=False)
+    for ax in axes.ravel()[len(groups):]:
+        ax.axis("off")
+    for ax, (label, idx) in zip(axes.ravel(), groups):
+        per_curve = label in p_of
+        x = dataset.wavelength_nm[idx] if per_curve else np.arange(len(idx))
+        r = residuals[idx]
+        for k, style in ((2, ":"), (3, "--")):
+            ax.axhline(k, color="0.5", ls=style, lw=0.7)
+            ax.axhline(-k, color="0.5", ls=style, lw=0.7)
+        ax.axhline(0, color="k", lw=0.6)
+        ax.plot(x, r, ".-" if per_curve else ".", ms=3, lw=0.6, color="tab:red" if per_curve and p_of[label].flagged
+                else "tab:blue")
+        title = label
+        if per_curve:
+            c = p_of[label]
+            title += f"  p = {c.p_value:.2g}  χ²/n = {c.chi2_per_row:.2f}" + ("  FAILS" if c.flagged else "")
+        ax.set_title(title, fontsize=8)
+        ax.set_xlabel("wavelength [nm]" if per_curve else "row", fontsize=8)
+        ax.set_ylabel("(y − model) / (s σ)", fontsize=8)
+        ax.tick_params(labelsize=7)
+    fig.tight_layout()
+    save_figure(fig, path)
+    plt.close(fig)

@@ -4,9 +4,10 @@ Everything is written into a temporary folder beside ``out`` and renamed into pl
 end, so an interrupted study (Ctrl-C, an error) leaves no half-written folder.
 
 Folder contents: posterior.nc (ArviZ InferenceData), parameters.md / parameters.csv,
-corner.png, predictive.png, trace.png, appearance.png + appearance.csv, renders.png,
+corner.png, predictive.png, residuals.png (normalised residuals and the posterior predictive
+check of each series, bsdflab.fit.checks), trace.png, appearance.png + appearance.csv, renders.png,
 material.json (posterior-mean model dict), sphere.json (a scene file with it, for
-``bsdflab render``), summary.json, and copies of the data and config files.
+``bsdflab render``), summary.json (with ``warnings``: bsdflab.fit.alerts), and copies of the data and config files.
 """
 from __future__ import annotations
 
@@ -22,11 +23,13 @@ from dataclasses import replace
 import numpy as np
 
 from bsdflab.bsdfs import from_dict
+from bsdflab.fit.alerts import Alert, bound_alerts, emulator_alert, mode_alerts, noise_alert
 from bsdflab.fit.appearance import appearance_posterior, gloss_vectors
+from bsdflab.fit.checks import ALPHA, normalised_residuals, predictive_checks, sidak_level
 from bsdflab.fit.config import FitConfig
 from bsdflab.fit.data import Dataset, read_csv
 from bsdflab.fit.diagnostics import inference_data, summary_rows, table_markdown
-from bsdflab.fit.figures import appearance_plot, corner_plot, predictive_plot, trace_plot
+from bsdflab.fit.figures import appearance_plot, corner_plot, predictive_plot, residual_plot, trace_plot
 from bsdflab.fit.material import material_dict
 from bsdflab.fit.parameters import ALL_NAMES
 from bsdflab.fit.posterior import LogPosterior
@@ -108,6 +111,9 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
     noise = logpost.full(pick)[:, ALL_NAMES.index("noise_scale")][:, None] * data.sigma[None, :]
     predictive_plot(data, model_draws, model_draws + noise * rng.standard_normal(model_draws.shape),
                     os.path.join(folder, "predictive.png"))
+    scales = logpost.full(pick)[:, ALL_NAMES.index("noise_scale")]
+    checks = predictive_checks(data, model_draws, scales)
+    residual_plot(data, normalised_residuals(data, model_draws, scales), checks, os.path.join(folder, "residuals.png"))
     trace_plot(run, os.path.join(folder, "trace.png"), config.sampler.tau_multiple)
 
     mean_full = logpost.full(np.mean(draws, axis=0))[0]
@@ -129,6 +135,8 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
         _text(os.path.join(folder, "data.csv"), data.to_csv_text())
     if config.source and os.path.isfile(config.source):
         shutil.copyfile(config.source, os.path.join(folder, "config.toml"))
+    forward = _forward_summary(logpost)
+    alerts = study_alerts(run, draws, config, checks, forward)
     ess_min = float(np.min(run.ess_tau()))
     summary = {
         "data": data_path, "rows": len(data), "free": list(run.names), "fixed": config.fixed,
@@ -141,7 +149,10 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
         "posterior_draws": int(len(draws)), "ess_tau_min": ess_min,
         "sampling_seconds": run.seconds, "ess_per_second": ess_min / run.seconds,
         "forward_evaluations": run.evaluations + run.map.evaluations,
-        "appearance": appearance, "forward_model": _forward_summary(logpost),
+        "appearance": appearance, "forward_model": forward,
+        "predictive_checks": {"alpha": ALPHA, "level_per_check": sidak_level(len(checks)),
+                              "draws": int(len(pick)), "series": [c.to_dict() for c in checks]},
+        "warnings": [a.to_dict() for a in alerts],
         "posterior_mean": dict(zip(ALL_NAMES, map(float, mean_full))),
         "material_note": "material.json carries the mean film thickness: the thickness spread is a spatial "
                          "average with no counterpart in one BSDF",
@@ -149,6 +160,25 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
     }
     _text(os.path.join(folder, "summary.json"), json.dumps(summary, indent=1, default=float) + "\n")
     return summary
+
+
+def study_alerts(run, draws: np.ndarray, config: FitConfig, checks, forward: dict) -> list[Alert]:
+    """Every warning of the study, in the order a reader should act on them."""
+    alerts = []
+    if not run.converged:
+        alerts.append(Alert("NOT_CONVERGED", run.stop_reason))
+    alerts += bound_alerts(run.names, draws, config.priors)
+    alerts += noise_alert(run.names, draws)
+    failed = [c for c in checks if c.flagged]
+    if failed:
+        alerts.append(Alert("PREDICTIVE_CHECK", f"{len(failed)} of {len(checks)} posterior predictive checks fail "
+                            f"(family-wise alpha {ALPHA:g}): " + "; ".join(
+                                f"{c.series}: p = {c.p_value:.2g}, chi2/n = {c.chi2_per_row:.2f}" for c in failed[:6])
+                            + ("; ..." if len(failed) > 6 else "") + " -- the model does not describe these data "
+                            "(see residuals.png)"))
+    alerts += mode_alerts(run.names, draws, run.map.optima)
+    alerts += emulator_alert(forward)
+    return alerts
 
 
 def _write_appearance(app_draws, mean_full, config: FitConfig, folder: str) -> dict:
