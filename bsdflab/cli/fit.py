@@ -55,8 +55,12 @@ def run(args: argparse.Namespace) -> int:
         print(f"\nbsdflab fit: interrupted; nothing was written to {args.out}", file=sys.stderr)
         return 130
     print(summary["stop_reason"])
-    print(f"acceptance fraction {summary['acceptance_fraction']['mean']:.3f}; "
-          f"min ESS {summary['ess_tau_min']:.0f} ({summary['ess_per_second']:.1f}/s)")
+    if summary["sampler"] == "nested":
+        print(f"evidence ln Z = {summary['log_evidence']:.3f} +- {summary['log_evidence_error']:.3f}; "
+              f"ESS (Kish) {summary['ess_kish']:.0f}")
+    else:
+        print(f"acceptance fraction {summary['acceptance_fraction']['mean']:.3f}; "
+              f"min ESS {summary['ess_tau_min']:.0f} ({summary['ess_per_second']:.1f}/s)")
     with open(os.path.join(args.out, "parameters.md"), encoding="utf-8") as f:
         print(f.read())
     print(summary["appearance"]["statement"])

@@ -42,7 +42,9 @@ def corner_plot(draws: np.ndarray, names, path: str, truths=None) -> None:
     fig = corner.corner(draws, fig=plt.figure(figsize=(side, side)), labels=[_label(n) for n in names],
                         quantiles=[0.05, 0.5, 0.95], show_titles=True, title_fmt=".4g", title_kwargs={"fontsize": 7},
                         titles=[SYMBOLS.get(n, n) for n in names],
-                        label_kwargs={"fontsize": 8}, truths=truths, truth_color="tab:red")
+                        label_kwargs={"fontsize": 8}, truths=truths if k > 1 else None, truth_color="tab:red")
+    if k == 1 and truths is not None and truths[0] is not None:
+        fig.axes[0].axvline(truths[0], color="tab:red")   # corner's truth lines index a 2-D axes grid
     fig.suptitle("posterior (lines: 5 %, 50 %, 95 %" + ("; red: truth)" if truths is not None else ")"),
                  fontsize=9, y=1.0)
     save_figure(fig, path)
@@ -124,10 +126,14 @@ def appearance_plot(app: AppearancePosterior, path: str) -> float:
               extent=(a[0] - step / 2, a[-1] + step / 2, len(app.rgb) + 0.5, -0.5))
     a0.axhline(0.5, color="w", lw=1.0)
     a0.set_ylabel("row 0: posterior mean; 1..: draws", fontsize=8)
-    a0.set_title(f"specular colour vs angle (sRGB, D65; display exposure +{exposure:.1f} stops)", fontsize=9)
+    what = "specular" if app.body_delta_e is None else "gloss"
+    a0.set_title(f"{what} colour vs angle (sRGB, D65; display exposure +{exposure:.1f} stops)", fontsize=9)
     a1.fill_between(a, iv["low"], iv["high"], color="tab:purple", alpha=0.3, lw=0, label="5-95 %")
     a1.plot(a, iv["median"], color="tab:purple", label="median")
     a1.plot(a, iv["bound"], "k--", lw=0.9, label="90 % of draws below")
+    if app.body_delta_e is not None:
+        a1.axhline(float(np.quantile(app.body_delta_e, 0.9)), color="tab:brown", lw=0.9,
+                   label="body colour 45°:0°, 90 % below")
     a1.set_xlabel("angle of incidence = viewing angle [deg]", fontsize=8)
     a1.set_ylabel("ΔE00 to posterior mean", fontsize=8)
     a1.legend(fontsize=7)
@@ -173,6 +179,28 @@ def residual_plot(dataset: Dataset, residuals: np.ndarray, checks, path: str) ->
         ax.set_title(title, fontsize=8)
         ax.set_xlabel("wavelength [nm]" if per_curve else "row", fontsize=8)
         ax.set_ylabel("(y − model) / (s σ)", fontsize=8)
+        ax.tick_params(labelsize=7)
+    fig.tight_layout()
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def nested_plot(res, path: str) -> None:
+    """A nested run: ln L of the dead points against the prior volume ln X, and their
+    posterior weights (the mass the run found; several peaks in the weights over ln X do
+    not mean several modes, which the corner plot shows)."""
+    plt = _plt()
+    r = res.results
+    logx = np.asarray(r.logvol)
+    w = np.exp(r.logwt - np.max(r.logwt))
+    fig, (a0, a1) = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+    a0.plot(logx, r.logl, lw=0.8, color="k")
+    a0.set_ylabel("ln L", fontsize=8)
+    a0.set_title(res.stop_reason, fontsize=7)
+    a1.plot(logx, w / np.max(w), lw=0.8, color="tab:blue")
+    a1.set_ylabel("posterior weight (max 1)", fontsize=8)
+    a1.set_xlabel("ln X (prior volume left)", fontsize=8)
+    for ax in (a0, a1):
         ax.tick_params(labelsize=7)
     fig.tight_layout()
     save_figure(fig, path)

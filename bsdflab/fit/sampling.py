@@ -69,7 +69,7 @@ class RunResult:
         return (self.steps - self.burn) * self.chain.shape[1] / self.tau
 
 
-def find_map(logpost: LogPosterior, starts: int, rng: np.random.Generator) -> MapResult:
+def find_map(logpost: LogPosterior, starts: int, rng: np.random.Generator, progress: bool = False) -> MapResult:
     """Best of ``starts`` L-BFGS-B runs from the most probable of many prior draws
     (thin-film likelihoods have a mode per interference order: one local start is not
     enough). Coordinates are scaled by the prior sd; the gradient is a central difference
@@ -98,6 +98,10 @@ def find_map(logpost: LogPosterior, starts: int, rng: np.random.Generator) -> Ma
         return f0, (fp - fm) / (2 * FD_STEP)
 
     best, optima = None, []
+    if progress:
+        from tqdm import tqdm
+
+        order = tqdm(order, desc="MAP starts", unit="start", leave=False)
     for i in order:
         res = optimize.minimize(value_and_gradient, pool[i] / scale, jac=True, method="L-BFGS-B",
                                 bounds=bounds, options={"maxiter": 500, "ftol": 1e-12, "gtol": 1e-8})
@@ -150,7 +154,7 @@ def stop_reason(steps: int, tau: np.ndarray, history: list[tuple[int, np.ndarray
 def run_sampler(logpost: LogPosterior, settings: SamplerSettings, progress: bool = True) -> RunResult:
     rng = np.random.default_rng(settings.seed)
     t0 = time.perf_counter()
-    map_result = find_map(logpost, settings.map_starts, rng)
+    map_result = find_map(logpost, settings.map_starts, rng, progress)
     p0 = initial_ball(logpost, map_result.x, settings.walkers, rng)
     before = logpost.evaluations
     sampler = emcee.EnsembleSampler(settings.walkers, logpost.ndim, logpost, vectorize=True)

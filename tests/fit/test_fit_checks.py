@@ -187,3 +187,53 @@ def test_study_warns_loudly(tmp_path):
         seed=0, steps=300, extra='noise_scale = { prior = "lognormal", median = 1.0, sigma = 2.0 }') + APPEARANCE))
     summary = run_study(str(path), free, tmp_path / "s2", progress=False)
     assert "NOISE_SCALE" in [w["code"] for w in summary["warnings"]]
+
+
+TWO_ORDERS = """
+[truth]
+film_thickness_nm = 400.0
+[noise]
+relative = 0.01
+absolute = 0.0005
+seed = 3
+[[measurement]]
+geometry = "specular"
+angles_deg = [15]
+wavelengths_nm = [450, 600]
+"""
+
+
+def two_orders_config(sampler: str) -> FitConfig:
+    return FitConfig.parse(tomllib.loads(
+        '[parameters]\nfilm_thickness_nm = { prior = "uniform", low = 300.0, high = 700.0 }\n'
+        f"[model]\nthickness_nodes = 1\n[sampler]\n{sampler}\n" + APPEARANCE))
+
+
+def test_nested_study_reports_evidence_and_both_orders(tmp_path):
+    """Two interference orders of equal mass (400.6 and 593.0 nm, test_fit_nested.py): a
+    ``[sampler] kind = "nested"`` study puts ln Z (with its error) in summary.json, warns
+    THICKNESS_MODES from the draws, and builds material.json from the heavier mode alone
+    (not the mean between the orders, ~500 nm, which no draw has). The emcee study of the same
+    data, started in one mode, warns THICKNESS_MODES from its MAP starts' optima."""
+    d = simulate(SimulationConfig.parse(tomllib.loads(TWO_ORDERS)))[0]
+    nested = run_study(d, two_orders_config('kind = "nested"\nlive_points = 60\nseed = 1'), tmp_path / "n",
+                       progress=False)
+    assert nested["sampler"] == "nested" and np.isfinite(nested["log_evidence"])
+    assert 0 < nested["log_evidence_error"] < 1
+    modes = [w for w in nested["warnings"] if w["code"] == "THICKNESS_MODES"]
+    assert modes and "2 separate modes" in modes[0]["message"], nested["warnings"]
+    d_mat = nested["posterior_mean"]["film_thickness_nm"]
+    assert min(abs(d_mat - 400.6), abs(d_mat - 593.0)) < 10, d_mat
+    assert "ESS (Kish)" in (tmp_path / "n" / "parameters.md").read_text()
+    emcee = run_study(d, two_orders_config("walkers = 8\nmax_steps = 200\nmap_starts = 8\nseed = 2"),
+                      tmp_path / "e", progress=False)
+    assert "THICKNESS_MODES" in [w["code"] for w in emcee["warnings"]], emcee["warnings"]
+
+
+def test_sampler_kind_is_checked():
+    import pytest
+
+    with pytest.raises(ValueError, match="kind must be one of emcee, nested"):
+        two_orders_config('kind = "tempering"')
+    with pytest.raises(ValueError, match="live_points"):
+        two_orders_config('kind = "nested"\nlive_points = 1')
