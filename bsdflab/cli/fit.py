@@ -64,6 +64,11 @@ def run(args: argparse.Namespace) -> int:
     with open(os.path.join(args.out, "parameters.md"), encoding="utf-8") as f:
         print(f.read())
     print(summary["appearance"]["statement"])
+    checks = summary["predictive_checks"]["series"]
+    worst = min(checks[1:] or checks, key=lambda c: c["p_value"])
+    print(f"posterior predictive checks (alpha {summary['predictive_checks']['alpha']:g}): all rows p = "
+          f"{checks[0]['p_value']:.3g} (chi2/n {checks[0]['chi2_per_row']:.2f}); lowest series {worst['series']} "
+          f"p = {worst['p_value']:.3g}; {sum(c['flagged'] for c in checks)} of {len(checks)} fail")
     print(f"wrote {args.out}")
     if summary["warnings"]:
         from bsdflab.fit.alerts import Alert, render_block

@@ -2,8 +2,10 @@
 them as a block on stderr; summary.json lists them with their codes).
 
 Codes
-    PRIOR_BOUND       a parameter's posterior piles at an end of its prior (or the model's
-                      domain): the data push it past what the prior allows
+    PRIOR_BOUND       a parameter's posterior piles at an end of its prior: the data push
+                      it past what the prior allows
+    DOMAIN_BOUND      ... at an end of the model's domain (a thickness spread of 0): the
+                      data are consistent with the limit; a one-sided interval
     NOISE_SCALE       a free noise_scale far from 1: the model misfits the data (or the
                       stated sigmas are wrong) by that factor
     NOT_CONVERGED     the run stopped at the step cap, not by the convergence rule
@@ -58,10 +60,17 @@ def bound_alerts(names, draws: np.ndarray, priors: dict) -> list[Alert]:
         if not width > 0:
             continue
         x = draws[:, j]
-        for end, side, near in ((lo, "lower", x <= lo + EDGE * width), (hi, "upper", x >= hi - EDGE * width)):
-            if np.isfinite(end) and np.mean(near) >= PILE:
-                out.append(Alert("PRIOR_BOUND", f"{name}: {np.mean(near):.0%} of the posterior lies within "
-                                 f"{EDGE:.0%} of the prior's {side} bound {end:g} ({priors[name].describe()}): "
+        p = parameter(name)
+        for end, side, near, limit in ((lo, "lower", x <= lo + EDGE * width, p.lo),
+                                       (hi, "upper", x >= hi - EDGE * width, p.hi)):
+            if not (np.isfinite(end) and np.mean(near) >= PILE):
+                continue
+            share = f"{name}: {np.mean(near):.0%} of the posterior lies within {EDGE:.0%} of the "
+            if end == limit:   # the model's own limit (a spread of 0, an albedo of 1): no prior to widen
+                out.append(Alert("DOMAIN_BOUND", share + f"model's {side} limit {end:g}: the data are consistent "
+                                 "with the limit (quote a one-sided interval, or fix it there)", name))
+            else:
+                out.append(Alert("PRIOR_BOUND", share + f"prior's {side} bound {end:g} ({priors[name].describe()}): "
                                  "the data push it beyond the prior; widen the prior or question the model", name))
     return out
 

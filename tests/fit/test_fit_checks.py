@@ -132,7 +132,8 @@ def test_draw_modes():
 
 
 def test_bound_noise_and_mode_alerts():
-    """A posterior piled at a uniform prior's end warns (one centred in it does not); a noise
+    """A posterior piled at a uniform prior's end warns (one centred in it does not; one piled
+    at the model's own limit says so with another code); a noise
     scale of 23 warns, 1.1 does not; MAP optima two orders apart with similar density warn,
     a far-worse second optimum does not."""
     rng = np.random.default_rng(1)
@@ -141,6 +142,9 @@ def test_bound_noise_and_mode_alerts():
     alerts = bound_alerts(("film_index_A",), piled, priors)
     assert [a.code for a in alerts] == ["PRIOR_BOUND"] and "lower bound 1.3" in alerts[0].message
     assert bound_alerts(("film_index_A",), 1.6 + rng.normal(0, 0.05, (500, 1)), priors) == []
+    spread = {"film_thickness_spread_nm": Prior.make("s", {"prior": "uniform", "low": 0.0, "high": 40.0})}
+    alerts = bound_alerts(("film_thickness_spread_nm",), np.abs(rng.normal(0, 0.3, (500, 1))), spread)
+    assert [a.code for a in alerts] == ["DOMAIN_BOUND"], alerts   # a spread of 0 is the model's limit
     assert noise_alert(("noise_scale",), np.full((10, 1), 23.0))[0].code == "NOISE_SCALE"
     assert noise_alert(("noise_scale",), np.full((10, 1), 1.1)) == []
     draws = rng.normal(430, 2, (400, 1))
