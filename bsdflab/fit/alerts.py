@@ -6,6 +6,8 @@ Codes
                       it past what the prior allows
     DOMAIN_BOUND      ... at an end of the model's domain (a thickness spread of 0): the
                       data are consistent with the limit; a one-sided interval
+    PRIOR_CONFLICT    a parameter's posterior median lies in its prior's outer 0.27 % (beyond
+                      +-3 sd of a normal prior): the data and the prior disagree
     NOISE_SCALE       a free noise_scale far from 1: the model misfits the data (or the
                       stated sigmas are wrong) by that factor
     NOT_CONVERGED     the run stopped at the step cap, not by the convergence rule
@@ -31,6 +33,7 @@ MODE_MIN_MASS = 0.05     # a mode in the draws holds >= 5 % of them
 MODE_GAP = 3.0           # ... and is separated from the next by a gap >= 3 sd of its neighbours
 THICKNESS_NAMES = ("film_thickness_nm", "platelet_nm")
 PRIOR_TAIL = 1e-4        # an unbounded prior's range: its 1e-4 and 1 - 1e-4 quantiles
+CONFLICT_TAIL = 0.00135  # prior-data conflict: the posterior median beyond the prior's +-3 sd quantiles
 
 
 @dataclass(frozen=True)
@@ -72,6 +75,23 @@ def bound_alerts(names, draws: np.ndarray, priors: dict) -> list[Alert]:
             else:
                 out.append(Alert("PRIOR_BOUND", share + f"prior's {side} bound {end:g} ({priors[name].describe()}): "
                                  "the data push it beyond the prior; widen the prior or question the model", name))
+    return out
+
+
+def conflict_alerts(names, draws: np.ndarray, priors: dict) -> list[Alert]:
+    """Posterior medians in the prior's far tails (uniform priors have none: their piling is
+    PRIOR_BOUND's)."""
+    out = []
+    for j, name in enumerate(names):
+        prior = priors[name]
+        if prior.kind == "uniform":
+            continue
+        m = float(np.median(draws[:, j]))
+        u = float(prior.dist.cdf(m))
+        if u < CONFLICT_TAIL or u > 1 - CONFLICT_TAIL:
+            out.append(Alert("PRIOR_CONFLICT", f"{name}: the posterior median {m:.5g} lies at prior quantile "
+                             f"{u:.2g} ({prior.describe()}): the data and the prior disagree (a wrong prior, or the "
+                             "model compensates for something it lacks)", name))
     return out
 
 

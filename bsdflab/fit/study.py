@@ -27,6 +27,7 @@ from bsdflab.fit.alerts import (
     THICKNESS_NAMES,
     Alert,
     bound_alerts,
+    conflict_alerts,
     draw_modes,
     emulator_alert,
     mode_alerts,
@@ -233,6 +234,7 @@ def study_alerts(run, draws: np.ndarray, config: FitConfig, checks, forward: dic
     if not run.converged:
         alerts.append(Alert("NOT_CONVERGED", run.stop_reason))
     alerts += bound_alerts(run.names, draws, config.priors)
+    alerts += conflict_alerts(run.names, draws, config.priors)
     alerts += noise_alert(run.names, draws)
     failed = [c for c in checks if c.flagged]
     if failed:

@@ -12,7 +12,7 @@ import numpy as np
 import tomllib
 
 from bsdflab.fit import FitConfig, LogPosterior, SimulationConfig, run_sampler, run_study, simulate
-from bsdflab.fit.alerts import bound_alerts, draw_modes, mode_alerts, noise_alert
+from bsdflab.fit.alerts import bound_alerts, conflict_alerts, draw_modes, mode_alerts, noise_alert
 from bsdflab.fit.checks import ALPHA, predictive_checks, sidak_level
 from bsdflab.fit.config import SamplerSettings
 from bsdflab.fit.parameters import ALL_NAMES
@@ -133,9 +133,9 @@ def test_draw_modes():
 
 def test_bound_noise_and_mode_alerts():
     """A posterior piled at a uniform prior's end warns (one centred in it does not; one piled
-    at the model's own limit says so with another code); a noise
-    scale of 23 warns, 1.1 does not; MAP optima two orders apart with similar density warn,
-    a far-worse second optimum does not."""
+    at the model's own limit says so with another code); a median 5 prior sd out conflicts,
+    1.5 sd does not; a noise scale of 23 warns, 1.1 does not; MAP optima two orders apart
+    with similar density warn, a far-worse second optimum does not."""
     rng = np.random.default_rng(1)
     priors = {"film_index_A": Prior.make("film_index_A", {"prior": "uniform", "low": 1.3, "high": 1.9})}
     piled = 1.3 + np.abs(rng.normal(0, 0.005, (500, 1)))
@@ -145,6 +145,10 @@ def test_bound_noise_and_mode_alerts():
     spread = {"film_thickness_spread_nm": Prior.make("s", {"prior": "uniform", "low": 0.0, "high": 40.0})}
     alerts = bound_alerts(("film_thickness_spread_nm",), np.abs(rng.normal(0, 0.3, (500, 1))), spread)
     assert [a.code for a in alerts] == ["DOMAIN_BOUND"], alerts   # a spread of 0 is the model's limit
+    normal = {"film_index_A": Prior.make("film_index_A", {"prior": "normal", "mean": 1.83, "sd": 0.02})}
+    assert [a.code for a in conflict_alerts(("film_index_A",), np.full((10, 1), 1.726), normal)] == ["PRIOR_CONFLICT"]
+    assert conflict_alerts(("film_index_A",), np.full((10, 1), 1.80), normal) == []   # 1.5 sd: no conflict
+    assert conflict_alerts(("film_index_A",), piled, priors) == []                     # uniform: PRIOR_BOUND's
     assert noise_alert(("noise_scale",), np.full((10, 1), 23.0))[0].code == "NOISE_SCALE"
     assert noise_alert(("noise_scale",), np.full((10, 1), 1.1)) == []
     draws = rng.normal(430, 2, (400, 1))
