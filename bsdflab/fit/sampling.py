@@ -132,15 +132,15 @@ def stop_reason(steps: int, tau: np.ndarray, history: list[tuple[int, np.ndarray
     ratio = steps / np.max(tau)
     k = settings.tau_multiple
     if converged:
-        return (f"converged: N / max tau = {ratio:.1f} >= {k:g} (N = {steps}, max tau {np.max(tau):.1f}) "
+        return (f"converged: N / max tau = {ratio:.1f} > {k:g} (N = {steps}, max tau {np.max(tau):.1f}) "
                 f"and tau stable to {TAU_CHANGE:.0%} between checks")
     failed = []
     if not np.all(np.isfinite(tau)):
         failed.append("tau undefined for some parameter")
     elif not ratio > k:
-        failed.append(f"N / max tau = {ratio:.1f} < {k:g}")
+        failed.append(f"N / max tau = {ratio:.1f} {'<' if ratio < k else '<='} {k:g}")
     else:
-        failed.append(f"N / max tau = {ratio:.1f} >= {k:g} passed")
+        failed.append(f"N / max tau = {ratio:.1f} > {k:g} passed")
     if len(history) >= 2 and np.all(np.isfinite(history[-1][1])) and np.all(np.isfinite(history[-2][1])):
         old, new = history[-2][1], history[-1][1]
         change = float(np.max(np.abs(old - new) / new))

@@ -160,17 +160,17 @@ def test_bound_noise_and_mode_alerts():
 
 def test_stop_reason_says_which_criterion():
     """The issue's "50.3 < 50": a capped run that passes the length test says so and names
-    the stability test it failed; a converged run says ">=" (the mutation: the old text)."""
+    the stability test it failed; a converged run says ">" (the mutation: the old text)."""
     s = SamplerSettings(max_steps=5000, tau_multiple=50)
     tau = np.array([99.4])
     hist = [(4800, np.array([90.0])), (5000, tau)]
     r = stop_reason(5000, tau, hist, False, s)
-    assert r.startswith("step cap 5000 reached") and "50.3 >= 50 passed" in r and "not stable" in r
+    assert r.startswith("step cap 5000 reached") and "50.3 > 50 passed" in r and "not stable" in r
     assert "(not converged)" in r
     r = stop_reason(5000, np.array([400.0]), [(4800, np.array([400.0])), (5000, np.array([400.0]))], False, s)
     assert "N / max tau = 12.5 < 50" in r and "stable" in r
     r = stop_reason(5100, np.array([100.0]), [(5000, np.array([100.2])), (5100, np.array([100.0]))], True, s)
-    assert r.startswith("converged: N / max tau = 51.0 >= 50")
+    assert r.startswith("converged: N / max tau = 51.0 > 50")
 
 
 def test_study_warns_loudly(tmp_path):
