@@ -46,7 +46,7 @@ class Alert:
         return asdict(self)
 
 
-def prior_range(name: str, prior) -> tuple[float, float, tuple[float, float]]:
+def prior_range(name: str, prior) -> tuple[float, float, float]:
     """(lo, hi, width): the finite ends of the prior's support within the model's domain
     (+-inf where open) and the width of its central mass."""
     p = parameter(name)
