@@ -23,6 +23,8 @@ def register(sub) -> None:
     p.add_argument("--out", required=True, help="study folder (fit) or data file (simulate)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--strict", action="store_true",
+                   help="exit with status 3 when the study raises a warning (the folder is still written)")
     p.set_defaults(run=run)
 
 
@@ -75,4 +77,6 @@ def run(args: argparse.Namespace) -> int:
 
         sys.stdout.flush()
         sys.stderr.write(render_block([Alert(**w) for w in summary["warnings"]]))
+        if args.strict:
+            return 3
     return 0

@@ -176,15 +176,15 @@ def test_stop_reason_says_which_criterion():
 def test_study_warns_loudly(tmp_path):
     """A study of data scaled by 0.8, fitted without a scale, at a step cap too short to
     converge: summary.json lists NOT_CONVERGED and PREDICTIVE_CHECK, residuals.png is
-    written, and the CLI prints the warning block on stderr. With a free noise scale the
-    common misfit moves to NOISE_SCALE."""
+    written, and the CLI prints the warning block on stderr (exit 3 under --strict). With a
+    free noise scale the common misfit moves to NOISE_SCALE."""
     path = tmp_path / "d.csv"
     data(5, scale=0.8).write_csv(path)
     cfg = tmp_path / "fit.toml"
     cfg.write_text(FIT.format(seed=0, steps=100, extra="") + APPEARANCE)
     r = subprocess.run([sys.executable, "-m", "bsdflab.cli.main", "fit", str(path), "--config", str(cfg),
-                        "--out", str(tmp_path / "s"), "--quiet"], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
+                        "--out", str(tmp_path / "s"), "--quiet", "--strict"], capture_output=True, text=True)
+    assert r.returncode == 3, r.stderr   # --strict: a study with warnings fails (0 without it)
     summary = json.loads((tmp_path / "s" / "summary.json").read_text())
     codes = [w["code"] for w in summary["warnings"]]
     assert "NOT_CONVERGED" in codes and "PREDICTIVE_CHECK" in codes, codes
