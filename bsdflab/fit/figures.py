@@ -17,7 +17,9 @@ from bsdflab.util.extras import require
 # short titles over the corner plot's diagonal (the axis labels carry the full names)
 SYMBOLS = {"film_thickness_nm": "d", "film_thickness_spread_nm": "σ_d", "film_index_A": "A", "film_index_B": "B",
            "substrate_index": "n_s", "exterior_index": "n_e", "sigma_a_550": "σ_a(550)",
-           "absorption_exponent": "exponent", "slab_thickness_um": "h", "base_albedo": "ρ", "noise_scale": "s"}
+           "absorption_exponent": "exponent", "slab_thickness_um": "h", "base_albedo": "ρ", "noise_scale": "s",
+           "roughness": "α", "sigma_s": "σ_s", "hg_g": "g", "platelet_nm": "d_p", "gap_nm": "d_gap",
+           "gap_index": "n_gap"}
 
 
 def _plt():
@@ -127,7 +129,7 @@ def appearance_plot(app: AppearancePosterior, path: str) -> float:
     a0.axhline(0.5, color="w", lw=1.0)
     a0.set_ylabel("row 0: posterior mean; 1..: draws", fontsize=8)
     what = "specular" if app.body_delta_e is None else "gloss"
-    a0.set_title(f"{what} colour vs angle (sRGB, D65; display exposure +{exposure:.1f} stops)", fontsize=9)
+    a0.set_title(f"{what} colour vs angle (sRGB, D65; display exposure {exposure:+.1f} stops)", fontsize=9)
     a1.fill_between(a, iv["low"], iv["high"], color="tab:purple", alpha=0.3, lw=0, label="5-95 %")
     a1.plot(a, iv["median"], color="tab:purple", label="median")
     a1.plot(a, iv["bound"], "k--", lw=0.9, label="90 % of draws below")

@@ -46,6 +46,7 @@ from bsdflab.fit.diagnostics import (
 )
 from bsdflab.fit.emulator import SHOW_PROGRESS
 from bsdflab.fit.figures import (
+    SYMBOLS,
     appearance_plot,
     corner_plot,
     nested_plot,
@@ -165,7 +166,7 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
     _write_scene(mean_full, folder, config.model)
     if ap.renders:
         _write_renders(app_draws[:ap.renders], mean_full, ap, folder, config.sampler.seed,
-                       config.model, progress)
+                       config.model, progress, config.free)
 
     if data_path:
         shutil.copyfile(data_path, os.path.join(folder, "data.csv"))
@@ -300,21 +301,26 @@ def _write_scene(values, folder: str, model) -> None:
     save_scene(full, os.path.join(folder, "sphere.json"))
 
 
-def render_label(name: str, v: np.ndarray, model) -> str:
-    """A render's caption with the thickness it was rendered with (film or platelets)."""
-    if model.kind == "full" and model.film == "none":
-        return name
+def render_label(name: str, v: np.ndarray, model, free=()) -> str:
+    """A render's caption with the thickness it was rendered with (film or platelets) and the
+    values of up to three other free parameters (what differs between the draws)."""
+    parts = []
     if model.kind == "full" and model.film == "stack":
-        return f"{name}: {model.platelets} x {v[ALL_NAMES.index('platelet_nm')]:.1f} nm"
-    return f"{name}: d = {v[ALL_NAMES.index('film_thickness_nm')]:.1f} nm"
+        parts.append(f"{model.platelets} x {v[ALL_NAMES.index('platelet_nm')]:.1f} nm")
+    elif not (model.kind == "full" and model.film == "none"):
+        parts.append(f"d = {v[ALL_NAMES.index('film_thickness_nm')]:.1f} nm")
+    others = [n for n in free if n not in ("film_thickness_nm", "platelet_nm", "noise_scale")][:3]
+    parts += [f"{SYMBOLS.get(n, n)} {v[ALL_NAMES.index(n)]:.3g}" for n in others]
+    return f"{name}: " + ", ".join(parts) if parts else name
 
 
-def _write_renders(draws_full, mean_full, ap, folder: str, seed: int, model, progress: bool = False) -> None:
+def _write_renders(draws_full, mean_full, ap, folder: str, seed: int, model, progress: bool = False,
+                   free=()) -> None:
     from bsdflab.fit.renders import render_draws
     from bsdflab.plots.contact_sheet import contact_sheet
 
     values = [mean_full, *draws_full]
-    labels = [render_label(name, v, model) for name, v in
+    labels = [render_label(name, v, model, free) for name, v in
               zip(["posterior mean"] + [f"draw {i + 1}" for i in range(len(draws_full))], values)]
     items = render_draws(values, labels, ap.render_size, ap.render_spp, seed, model, progress)
     contact_sheet(items, os.path.join(folder, "renders.png"), title="sphere renders of posterior draws",

@@ -245,3 +245,20 @@ def test_sampler_kind_is_checked():
         two_orders_config('kind = "tempering"')
     with pytest.raises(ValueError, match="live_points"):
         two_orders_config('kind = "nested"\nlive_points = 1')
+
+
+def test_render_labels_carry_the_rendered_values():
+    """Each render's caption shows the thickness it was rendered with and the other free
+    parameters' values (the mutation: a fixed thickness in every label)."""
+    from bsdflab.fit.config import ModelSettings
+    from bsdflab.fit.parameters import ALL
+    from bsdflab.fit.study import render_label
+
+    v = np.array([ALL[n].default for n in ALL_NAMES])
+    v[ALL_NAMES.index("film_thickness_nm")] = 437.25
+    v[ALL_NAMES.index("roughness")] = 0.123
+    assert render_label("draw 2", v, ModelSettings(kind="full"), ("roughness", "noise_scale")) == \
+        "draw 2: d = 437.2 nm, α 0.123"
+    v[ALL_NAMES.index("platelet_nm")] = 91.0
+    assert render_label("mean", v, ModelSettings(kind="full", film="stack", platelets=4), ()) == "mean: 4 x 91.0 nm"
+    assert render_label("mean", v, ModelSettings(kind="full", film="none"), ()) == "mean"
