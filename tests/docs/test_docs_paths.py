@@ -34,9 +34,9 @@ TOP_FOLDERS = ("bsdflab", "core", "service", "tests", "bench", "docs", "examples
 SOURCE_EXT = ("py", "h", "cpp")
 
 BACKTICKED = re.compile(r"`([^`\n]+)`")
-REPO_PATH = re.compile(r"^(?:\./)?((?:%s)/[\w./*\-{},]*)(::[\w\[\]\-]+)?$" % "|".join(TOP_FOLDERS))
+REPO_PATH = re.compile(r"^(?:\./)?((?:" + "|".join(TOP_FOLDERS) + r")/[\w./*\-{},]*)(::[\w\[\]\-]+)?$")
 LINE_REF = re.compile(r"(?<![\w/.])((?:[\w\-]+/)*[\w\-]+\.(?:py|h|cpp|md|toml)):(\d+)(?:-(\d+))?\b")
-BARE_FILE = re.compile(r"^[\w\-]+\.(?:%s)$" % "|".join(SOURCE_EXT))
+BARE_FILE = re.compile(r"^[\w\-]+\.(?:" + "|".join(SOURCE_EXT) + r")$")
 DOTTED = re.compile(r"^(bsdflab(?:\.\w+)+)(?:\(.*\))?$")
 MD_LINK = re.compile(r"\]\(([^)\s#]*[./][^)\s#]*)(?:#[^)]*)?\)")
 # the table format's EXR header attributes are namespaced `bsdflab.*` but are not modules
