@@ -14,7 +14,7 @@ def register(sub) -> None:
                                    "then reusing the cached tables) or a scene file (.json). Writes a "
                                    "linear EXR and a tone-mapped sRGB PNG beside it; scenes that are "
                                    "a set (appearance-grid, ablation) become a labelled contact sheet.")
-    p.add_argument("scene", help="scene name (see --list) or a scene file path ending in .json")
+    p.add_argument("scene", nargs="?", help="scene name (see --list) or a scene file path ending in .json")
     p.add_argument("--list", action="store_true", help="list the built-in scenes and exit")
     p.add_argument("--width", type=int, default=None, help="image width in pixels (default: the scene's)")
     p.add_argument("--height", type=int, default=None, help="image height in pixels (default: the scene's)")
@@ -79,6 +79,8 @@ def run(args: argparse.Namespace) -> int:
             first = ((make.__doc__ or "").strip().splitlines() or [""])[0]
             print(f"{name:<18} {first}")
         return 0
+    if args.scene is None:
+        raise ValueError("name a scene or a scene file (.json); bsdflab render --list lists the scenes")
     if not (abs(args.exposure) <= 64):  # also rejects NaN
         raise ValueError(f"--exposure must be a number of stops in [-64, 64], got {args.exposure}")
     if not args.out.lower().endswith(".exr"):
