@@ -129,13 +129,28 @@ CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 
 
 def test_page_in_chromium(server, tmp_path):
+    """The lobe explorer in a real browser: it plots what the API answers and shows the render.
+
+    After a slider change, the polar plot's R curve equals the R column the API returns for
+    the page's own last lobe request (re-sent here; seeded, so bit-identical), and the
+    screenshot's pixels where the render image sits have the colour of the PNG the API
+    serves (mean over the box within 6 levels of 255). Mutations caught: the page plotting
+    another channel (values[c + 1]) or a stale lobe; the render image not drawn (the box
+    shows the page's background)."""
+    from io import BytesIO
+
+    from PIL import Image
+
     if not os.path.exists(CHROMIUM):
         pytest.fail("Debian's chromium is required (apt-get install chromium; dev.sh installs it)")
+    lobe_requests = []
     with playwright.sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
         page = browser.new_page(viewport={"width": 1440, "height": 1100})
         errors = []
         page.on("pageerror", lambda e: errors.append(str(e)))
+        page.on("request", lambda r: lobe_requests.append(r.post_data_json)
+                if r.url.endswith("/v1/bsdf/lobe") and r.method == "POST" else None)
         page.goto(server.url + "/")
         page.select_option("#quality", "4")
         page.wait_for_function("+(document.body.dataset.lobeUpdates || 0) >= 1", timeout=120_000)
@@ -154,6 +169,12 @@ def test_page_in_chromium(server, tmp_path):
                                timeout=60_000)
         assert lobe_red() != before_lobe
         assert swatches() != before_swatches and len(swatches()) == 18
+        shown = lobe_red()
+        assert lobe_requests[-1]["overrides"]["film_thickness_nm"] == 650
+        answer = httpx.post(server.url + "/v1/bsdf/lobe", json=lobe_requests[-1], timeout=120)
+        assert answer.status_code == 200, answer.text
+        expected = [v[0] for v in answer.json()["plane"]["values"]]
+        assert np.allclose(np.asarray(shown, float), np.asarray(expected, float), rtol=0, atol=1e-12)
 
         page.select_option("#scene", "sphere")
         page.select_option("#variant", "diffuse")
@@ -163,7 +184,17 @@ def test_page_in_chromium(server, tmp_path):
         page.wait_for_selector("#render-image:not([hidden])", timeout=180_000)
         page.wait_for_function("document.getElementById('render-image').naturalWidth === 160", timeout=60_000)
         page.evaluate("window.scrollTo(0, 0)")
+        src = page.evaluate("document.getElementById('render-image').src")
+        box = page.locator("#render-image").bounding_box()
         shot = tmp_path / "service.png"
         page.screenshot(path=str(shot), full_page=True)
         browser.close()
-    assert shot.stat().st_size > 50_000 and not errors, errors
+    assert not errors, errors
+    served = np.asarray(Image.open(BytesIO(httpx.get(src, timeout=60).content)).convert("RGB"), float)
+    seen = np.asarray(Image.open(shot).convert("RGB"), float)
+    x0, y0 = int(box["x"]) + 2, int(box["y"]) + 2      # inside the box: no border or antialiased edge
+    x1, y1 = int(box["x"] + box["width"]) - 2, int(box["y"] + box["height"]) - 2
+    region = seen[y0:y1, x0:x1]
+    assert region.size and served.std() > 5           # a picture, not a flat colour
+    assert np.abs(region.mean(axis=(0, 1)) - served.mean(axis=(0, 1))).max() < 6, (
+        region.mean(axis=(0, 1)), served.mean(axis=(0, 1)))
