@@ -16,6 +16,7 @@ from bsdflab.cli.main import main
 from bsdflab.render import read_exr
 from bsdflab.scenes import scene
 from bsdflab.scenes.scene_file import save_scene
+from support.png_check import assert_png_shows_exr
 
 BSDFLAB = [sys.executable, "-m", "bsdflab.cli.main"]
 
@@ -27,7 +28,7 @@ def test_01_render_writes_exr_png_and_a_summary(tmp_path, capsys):
     image = read_exr(out)
     assert image.shape == (12, 16, 3)
     assert abs(image.mean() - 1) < 0.05  # the white furnace: every pixel about 1
-    assert (tmp_path / "f.png").stat().st_size > 0
+    assert_png_shows_exr(tmp_path / "f.png", image)  # mutation: a PNG of another image or size
     summary = json.loads(capsys.readouterr().out.split("\nwrote")[0])
     assert summary["spp"] == 4 and summary["samples_per_second"] > 0
 
@@ -98,7 +99,7 @@ def test_05_scene_set_becomes_a_labelled_contact_sheet(tmp_path):
                  "--quiet"]) == 0
     mosaic = read_exr(out)
     assert mosaic.shape == (2 * 6 + 4, 3 * 8 + 2 * 4, 3)  # 2 rows x 3 columns, 4-pixel gaps
-    assert (tmp_path / "grid.png").stat().st_size > 0
+    assert (tmp_path / "grid.png").stat().st_size > 0  # a labelled matplotlib sheet, not a tone map
 
 
 def test_06_list_names_every_scene_and_set(capsys):
