@@ -137,10 +137,6 @@ def test_page_in_chromium(server, tmp_path):
     serves (mean over the box within 6 levels of 255). Mutations caught: the page plotting
     another channel (values[c + 1]) or a stale lobe; the render image not drawn (the box
     shows the page's background)."""
-    from io import BytesIO
-
-    from PIL import Image
-
     if not os.path.exists(CHROMIUM):
         pytest.fail("Debian's chromium is required (apt-get install chromium; dev.sh installs it)")
     lobe_requests = []
@@ -190,6 +186,16 @@ def test_page_in_chromium(server, tmp_path):
         page.screenshot(path=str(shot), full_page=True)
         browser.close()
     assert not errors, errors
+    _assert_screenshot_shows(shot, box, src)
+
+
+def _assert_screenshot_shows(shot, box, src):
+    """The screenshot's pixels inside the image box have the mean colour of the PNG the
+    API serves at src (within 6 levels of 255: the browser scales it)."""
+    from io import BytesIO
+
+    from PIL import Image
+
     served = np.asarray(Image.open(BytesIO(httpx.get(src, timeout=60).content)).convert("RGB"), float)
     seen = np.asarray(Image.open(shot).convert("RGB"), float)
     x0, y0 = int(box["x"]) + 2, int(box["y"]) + 2      # inside the box: no border or antialiased edge
