@@ -14,7 +14,7 @@ import pytest
 
 from bsdflab.render.image_io import read_exr
 from bsdflab.tables import write_table
-from support.cli import BSDFLAB, cli, one_line_error
+from support.cli import BSDFLAB, cli, one_line_error, wait_for_cpu
 from support.tables import valid_table
 
 
@@ -73,13 +73,6 @@ def test_damaged_exr_attribute_names_the_file(tmp_path):
         read_exr(path)
 
 
-def _cpu_seconds(pid: int) -> float:
-    """User + system CPU time of a process so far (/proc/PID/stat fields 14 and 15)."""
-    with open(f"/proc/{pid}/stat") as f:
-        fields = f.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
 def test_sigint_is_one_line_and_exit_130(tmp_path):
     """Ctrl-C stops a render mid-tile, at any load: one line, exit 130, no files.
 
@@ -110,10 +103,7 @@ def test_sigint_is_one_line_and_exit_130(tmp_path):
     reader.start()
     while not seen.wait(0.05):
         assert proc.poll() is None, b"".join(chunks)
-    started = _cpu_seconds(proc.pid)
-    while _cpu_seconds(proc.pid) < started + 1.0:
-        assert proc.poll() is None, b"".join(chunks)
-        threading.Event().wait(0.05)  # polling the condition above, not a synchronisation
+    wait_for_cpu(proc, 1.0, b"".join(chunks))
     proc.send_signal(signal.SIGINT)
     rc = proc.wait(300)
     reader.join(10)
