@@ -11,7 +11,7 @@ def register(sub) -> None:
     p = sub.add_parser(
         "export", help="export a material to OpenPBR/MaterialX, glTF, USD or Blender (fitted, with a report)",
         description="Fit the target standard's thin-film parameters to bsdflab's exact film (CIEDE2000 over "
-                    "incidence angle and the +-15 %% film-thickness spread), write the target's file and "
+                    "incidence angle and the ±15 % film-thickness spread), write the target's file and "
                     "<out>.report.json / <out>.report.png (the Delta E00 map, what was dropped). See docs/export.md.")
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--preset", metavar="NAME", help="a named preset (e.g. xenopeltis)")

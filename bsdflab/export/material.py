@@ -92,9 +92,9 @@ def _top(d: dict, dropped: list[str], substitute: bool = False):
     if len(film) > 1:
         if not substitute:
             raise ValueError(f"a film stack of {len(film)} layers is beyond the targets, which take one "
-                             "thin film (export one film, or ask for the best single-film substitute)")
-        stack = tuple((_scalar_ior(f["material"], "film material", dropped), float(f["thickness_nm"]))
-                      for f in film)
+                             "thin film: export one film, or ask for the single film that looks most like the stack "
+                             "(substitute=True; on the command line, bsdflab export --substitute)")
+        stack = tuple((_scalar_ior(f["material"], "film material", dropped), float(f["thickness_nm"])) for f in film)
         dropped.append(f"the {len(film)}-layer film stack: replaced by the single film that looks most like "
                        "it (fitted against the stack's exact reflectance)")
         # the fit's start: the densest layer's index at the stack's optical thickness

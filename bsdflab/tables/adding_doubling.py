@@ -17,7 +17,8 @@ import time
 
 import numpy as np
 
-from bsdflab import __version__, _core
+from bsdflab import _core
+from bsdflab._version import __version__
 from bsdflab.bsdfs.base import from_dict
 from bsdflab.layered import Layered
 from bsdflab.solvers import solve

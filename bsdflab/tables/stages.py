@@ -40,7 +40,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bsdflab import __version__, _core
+from bsdflab import _core
+from bsdflab._version import __version__
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.lobes import Lobe
 from bsdflab.tables.channels import table_channels
