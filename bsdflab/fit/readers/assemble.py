@@ -57,8 +57,8 @@ def _label(spectrum: Spectrum) -> str:
     return spectrum.name or stem(spectrum.file)
 
 
-def place(spectra: list[Spectrum], spec: ImportSpec) -> list[Placed]:
-    """Geometry, angles, series and units of every curve (the order of the module docstring)."""
+def _kept(spectra: list[Spectrum], spec: ImportSpec) -> list[tuple[Curve, Spectrum]]:
+    """Each spectrum with its sidecar entry, less the ignored; every entry must name a curve."""
     used: set = set()
     entries = [(_curve_entry(s, spec, used), s) for s in spectra]
     for table, names in (("columns", spec.columns), ("files", spec.files)):
@@ -71,51 +71,80 @@ def place(spectra: list[Spectrum], spec: ImportSpec) -> list[Placed]:
     if spec.angles_deg is not None and len(spec.angles_deg) != len(kept):
         raise ValueError(f"{spec.source}: angles_deg gives {len(spec.angles_deg)} angles for {len(kept)} curves "
                          f"({', '.join(_label(s) for _, s in kept)})")
+    return kept
+
+
+def _angle(curve: Curve, spec: ImportSpec, k: int, groups: dict[str, str], s: Spectrum) -> float:
+    """The angle of incidence of the k-th kept curve, by the module docstring's order."""
+    angle = curve.angle_deg
+    if angle is None and spec.angles_deg is not None:
+        angle = spec.angles_deg[k]
+    if angle is None and "angle" in groups:
+        angle = _group_number(groups["angle"], s.where)
+    if angle is None:
+        angle = spec.angle_deg
+    if angle is None:
+        angle = angle_from_name(_label(s), s.where)
+    if angle is None and s.name:
+        angle = angle_from_name(stem(s.file), s.where)   # one file per angle, columns per sample
+    if angle is None:
+        raise ValueError(f"{s.where}: no angle of incidence: the name {_label(s)!r} holds none (e.g. R_15deg, "
+                         f"theta=15) and the sidecar gives none (angle_deg, angles_deg, [columns] or [files])")
+    if not 0.0 <= angle < 90.0:
+        raise ValueError(f"{s.where}: the angle of incidence must be in [0, 90), got {angle:g}")
+    return angle
+
+
+def _geometry(curve: Curve, spec: ImportSpec, s: Spectrum) -> str:
+    geometry = curve.geometry or spec.geometry
+    if geometry is None:
+        raise ValueError(f"{s.where}: no geometry: declare geometry = \"specular\" (or diffuse, total, brdf) "
+                         f"in the sidecar or with --geometry")
+    return geometry
+
+
+def _detector(curve: Curve, spec: ImportSpec, geometry: str, angle: float,
+              s: Spectrum) -> tuple[float | None, float | None]:
+    """The detector's angle and azimuth, None where the geometry has none."""
+    out_angle = curve.angle_out_deg if curve.angle_out_deg is not None else spec.angle_out_deg
+    phi = curve.phi_deg if curve.phi_deg is not None else spec.phi_deg
+    if geometry in ("diffuse", "brdf") and out_angle is None:
+        raise ValueError(f"{s.where}: a {geometry} curve needs angle_out_deg (the detector's angle)")
+    if geometry == "brdf" and phi is None:
+        raise ValueError(f"{s.where}: a brdf curve needs phi_deg (the detector's azimuth)")
+    if geometry in ("specular", "total"):
+        return None, None
+    if geometry == "diffuse":
+        if abs(out_angle - angle) < SPECULAR_TOLERANCE_DEG:
+            raise ValueError(f"{s.where}: a diffuse curve at the mirror direction (angle_out_deg = angle); "
+                             f"use geometry specular")
+        return out_angle, None
+    if not 0.0 <= out_angle < 90.0:
+        raise ValueError(f"{s.where}: angle_out_deg of a brdf curve must be in [0, 90), got {out_angle:g}")
+    return out_angle, phi
+
+
+def _units(spec: ImportSpec, s: Spectrum) -> str | None:
+    """The declared units, else the file's; the two must agree where both are given."""
+    units = spec.units
+    if units is not None and s.units is not None and s.units != units:
+        raise ValueError(f"{s.where}: the file states its values are in {s.units}, the sidecar/options say "
+                         f"{units}")
+    return units or s.units
+
+
+def place(spectra: list[Spectrum], spec: ImportSpec) -> list[Placed]:
+    """Geometry, angles, series and units of every curve (the order of the module docstring)."""
     out = []
-    for k, (curve, s) in enumerate(kept):
+    for k, (curve, s) in enumerate(_kept(spectra, spec)):
         groups = _pattern(spec.name_pattern, s) if spec.name_pattern else {}
-        angle = curve.angle_deg
-        if angle is None and spec.angles_deg is not None:
-            angle = spec.angles_deg[k]
-        if angle is None and "angle" in groups:
-            angle = _group_number(groups["angle"], s.where)
-        if angle is None:
-            angle = spec.angle_deg
-        if angle is None:
-            angle = angle_from_name(_label(s), s.where)
-        if angle is None and s.name:
-            angle = angle_from_name(stem(s.file), s.where)   # one file per angle, columns per sample
-        if angle is None:
-            raise ValueError(f"{s.where}: no angle of incidence: the name {_label(s)!r} holds none (e.g. R_15deg, "
-                             f"theta=15) and the sidecar gives none (angle_deg, angles_deg, [columns] or [files])")
-        if not 0.0 <= angle < 90.0:
-            raise ValueError(f"{s.where}: the angle of incidence must be in [0, 90), got {angle:g}")
-        geometry = curve.geometry or spec.geometry
-        if geometry is None:
-            raise ValueError(f"{s.where}: no geometry: declare geometry = \"specular\" (or diffuse, total, brdf) "
-                             f"in the sidecar or with --geometry")
-        out_angle = curve.angle_out_deg if curve.angle_out_deg is not None else spec.angle_out_deg
-        phi = curve.phi_deg if curve.phi_deg is not None else spec.phi_deg
-        if geometry in ("diffuse", "brdf") and out_angle is None:
-            raise ValueError(f"{s.where}: a {geometry} curve needs angle_out_deg (the detector's angle)")
-        if geometry == "brdf" and phi is None:
-            raise ValueError(f"{s.where}: a brdf curve needs phi_deg (the detector's azimuth)")
-        if geometry in ("specular", "total"):
-            out_angle = phi = None
-        elif geometry == "diffuse":
-            phi = None
-            if abs(out_angle - angle) < SPECULAR_TOLERANCE_DEG:
-                raise ValueError(f"{s.where}: a diffuse curve at the mirror direction (angle_out_deg = angle); "
-                                 f"use geometry specular")
-        elif not 0.0 <= out_angle < 90.0:
-            raise ValueError(f"{s.where}: angle_out_deg of a brdf curve must be in [0, 90), got {out_angle:g}")
+        angle = _angle(curve, spec, k, groups, s)
+        geometry = _geometry(curve, spec, s)
+        out_angle, phi = _detector(curve, spec, geometry, angle, s)
         series = curve.series if curve.series is not None else groups.get("series", spec.series or "")
-        units = spec.units
-        if units is not None and s.units is not None and s.units != units:
-            raise ValueError(f"{s.where}: the file states its values are in {s.units}, the sidecar/options say "
-                             f"{units}")
+        units = _units(spec, s)
         out.append(Placed(s, geometry, float(angle), np.nan if out_angle is None else float(out_angle),
-                          np.nan if phi is None else float(phi), series, units or s.units))
+                          np.nan if phi is None else float(phi), series, units))
     return out
 
 

@@ -179,10 +179,9 @@ def _curve(where: str, table) -> Curve:
         ignore=ignore)
 
 
-def parse_spec(table: dict, source: str) -> ImportSpec:
-    """An ImportSpec from a sidecar's parsed TOML (``source`` names it in messages)."""
-    t = _keys(source, table, TOP_KEYS)
-    kw: dict = {"source": source}
+def _text_keys(t: dict, source: str) -> dict:
+    """The top-level strings: format, wavelength_column, delimiter, series and decimal."""
+    kw: dict = {}
     for key in ("format", "wavelength_column", "delimiter", "series"):
         if key in t:
             kw[key] = _text(source, key, t[key])
@@ -190,10 +189,12 @@ def parse_spec(table: dict, source: str) -> ImportSpec:
         kw["decimal"] = _text(source, "decimal", t["decimal"])
         if kw["decimal"] not in (".", ","):
             raise ValueError(f"{source}: decimal must be \".\" or \",\", got {t['decimal']!r}")
-    if "geometry" in t:
-        kw["geometry"] = geometry(source, t["geometry"])
-    if "units" in t:
-        kw["units"] = check_units(t["units"], f"{source}: units")
+    return kw
+
+
+def _angle_keys(t: dict, source: str) -> dict:
+    """The top-level angles: angle_deg, angles_deg, angle_out_deg and phi_deg."""
+    kw: dict = {}
     if "angle_deg" in t:
         kw["angle_deg"] = _real(source, "angle_deg", t["angle_deg"], 0.0, 90.0)
     if "angles_deg" in t:
@@ -204,43 +205,73 @@ def parse_spec(table: dict, source: str) -> ImportSpec:
         kw["angle_out_deg"] = _real(source, "angle_out_deg", t["angle_out_deg"], -90.0, 90.0)
     if "phi_deg" in t:
         kw["phi_deg"] = _real(source, "phi_deg", t["phi_deg"], -180.0, 180.0)
+    return kw
+
+
+def _sigma(source: str, table) -> dict:
+    """The [sigma] table as ImportSpec's sigma_* keys."""
+    where = f"{source}: [sigma]"
+    s = _keys(where, table, SIGMA_KEYS)
+    kw: dict = {}
+    if "absolute" in s:
+        kw["sigma_absolute"] = _real(where, "absolute", s["absolute"], 0.0)
+    if "relative" in s:
+        kw["sigma_relative"] = _real(where, "relative", s["relative"], 0.0)
+    if "replicates" in s:
+        if not isinstance(s["replicates"], bool):
+            raise ValueError(f"{source}: [sigma] replicates must be true or false, got {s['replicates']!r}")
+        kw["sigma_replicates"] = s["replicates"]
+    return kw
+
+
+def _reference(source: str, table) -> Reference:
+    """The [reference] table; a spectrum file's path is relative to the sidecar's folder."""
+    where = f"{source}: [reference]"
+    r = _keys(where, table, REFERENCE_KEYS)
+    if ("reflectance" in r) == ("file" in r):
+        raise ValueError(f"{where}: give either reflectance (the standard's nominal value) or file "
+                         f"(its reflectance spectrum)")
+    ref = Reference(
+        reflectance=_real(where, "reflectance", r["reflectance"], 0.0, 100.0) if "reflectance" in r else None,
+        file=_text(where, "file", r["file"]) if "file" in r else None,
+        units=check_units(r["units"], f"{where}: units") if "units" in r else None,
+        format=_text(where, "format", r["format"]) if "format" in r else None)
+    if ref.reflectance is not None and ref.reflectance > 1.5 and ref.units != "percent":
+        raise ValueError(f"{where}: reflectance {r['reflectance']!r} looks like percent; "
+                         f"write it as a fraction or add units = \"percent\"")
+    if ref.file is not None:
+        base = os.path.dirname(source) if os.path.isfile(source) else ""
+        ref = replace(ref, file=os.path.join(base, ref.file))
+    return ref
+
+
+def _curves(source: str, key: str, table) -> dict[str, Curve]:
+    """The [columns] or [files] table: one Curve per name."""
+    if not isinstance(table, dict):
+        raise ValueError(f"{source}: [{key}] must be a table of tables")
+    return {name: _curve(f"{source}: [{key}.\"{name}\"]", v) for name, v in table.items()}
+
+
+def parse_spec(table: dict, source: str) -> ImportSpec:
+    """An ImportSpec from a sidecar's parsed TOML (``source`` names it in messages)."""
+    t = _keys(source, table, TOP_KEYS)
+    kw: dict = {"source": source, **_text_keys(t, source)}
+    if "geometry" in t:
+        kw["geometry"] = geometry(source, t["geometry"])
+    if "units" in t:
+        kw["units"] = check_units(t["units"], f"{source}: units")
+    kw.update(_angle_keys(t, source))
     if "name_pattern" in t:
         kw["name_pattern"] = name_pattern(source, t["name_pattern"])
     if "wavelengths" in t:
         kw["wavelengths"] = grid(f"{source}: [wavelengths]", t["wavelengths"])
     if "sigma" in t:
-        s = _keys(f"{source}: [sigma]", t["sigma"], SIGMA_KEYS)
-        if "absolute" in s:
-            kw["sigma_absolute"] = _real(f"{source}: [sigma]", "absolute", s["absolute"], 0.0)
-        if "relative" in s:
-            kw["sigma_relative"] = _real(f"{source}: [sigma]", "relative", s["relative"], 0.0)
-        if "replicates" in s:
-            if not isinstance(s["replicates"], bool):
-                raise ValueError(f"{source}: [sigma] replicates must be true or false, got {s['replicates']!r}")
-            kw["sigma_replicates"] = s["replicates"]
+        kw.update(_sigma(source, t["sigma"]))
     if "reference" in t:
-        r = _keys(f"{source}: [reference]", t["reference"], REFERENCE_KEYS)
-        where = f"{source}: [reference]"
-        if ("reflectance" in r) == ("file" in r):
-            raise ValueError(f"{where}: give either reflectance (the standard's nominal value) or file "
-                             f"(its reflectance spectrum)")
-        kw["reference"] = Reference(
-            reflectance=_real(where, "reflectance", r["reflectance"], 0.0, 100.0) if "reflectance" in r else None,
-            file=_text(where, "file", r["file"]) if "file" in r else None,
-            units=check_units(r["units"], f"{where}: units") if "units" in r else None,
-            format=_text(where, "format", r["format"]) if "format" in r else None)
-        if kw["reference"].reflectance is not None and kw["reference"].reflectance > 1.5 \
-                and kw["reference"].units != "percent":
-            raise ValueError(f"{where}: reflectance {r['reflectance']!r} looks like percent; "
-                             f"write it as a fraction or add units = \"percent\"")
-        if kw["reference"].file is not None:
-            base = os.path.dirname(source) if os.path.isfile(source) else ""
-            kw["reference"] = replace(kw["reference"], file=os.path.join(base, kw["reference"].file))
+        kw["reference"] = _reference(source, t["reference"])
     for key in ("columns", "files"):
         if key in t:
-            if not isinstance(t[key], dict):
-                raise ValueError(f"{source}: [{key}] must be a table of tables")
-            kw[key] = {name: _curve(f"{source}: [{key}.\"{name}\"]", v) for name, v in t[key].items()}
+            kw[key] = _curves(source, key, t[key])
     return ImportSpec(**kw)
 
 
