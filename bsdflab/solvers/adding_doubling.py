@@ -139,12 +139,19 @@ class Solution:
         """Half-period azimuth samples of the cosine transforms used."""
         return int(self._core.azimuth_samples)
 
+    @property
+    def two_sided(self) -> bool:
+        """Whether every pair is solved: transmission both ways and reflection from below
+        (a transmissive stack with a smooth top and a smooth dielectric base)."""
+        return bool(self._core.two_sided)
+
     def _pairs(self, wi, wo) -> tuple[np.ndarray, np.ndarray]:
         a, b = check.direction_pair(wi, wo)
-        if self._transmits and np.any((a[:, 2] < 0) | (b[:, 2] < 0)):
-            raise ValueError("adding-doubling solves reflection from above only: this stack transmits, and "
-                             "transmission through it and reflection from below are not solved (use the "
-                             "model's own eval, PFMC, for pairs with wi.z < 0 or wo.z < 0)")
+        if self._transmits and not self.two_sided and np.any((a[:, 2] < 0) | (b[:, 2] < 0)):
+            raise ValueError(f"adding-doubling solves transmission and reflection from below only for a "
+                             f"smooth top and a smooth dielectric base; this stack transmits through "
+                             f"{one_sided_reason(self.model)}, so for pairs with wi.z < 0 or wo.z < 0 "
+                             f"use the model's own eval (PFMC)")
         return a, b
 
     def eval(self, wi, wo, scattered_only: bool = False) -> np.ndarray:
@@ -250,6 +257,14 @@ def solve(model: Layered, wavelengths=None, nodes: int = DEFAULT_NODES, orders: 
     fine_step = check.real_scalar("fine_step", fine_step, 0.05, 2.0)
     return Solution(model, wavelengths, Settings(nodes, orders, thin_depth, order_tolerance, bool(film_lookup),
                                                  azimuth_samples, spectral_stride, fine_step))
+
+
+def one_sided_reason(model: Layered) -> str:
+    """Why a transmissive stack is solved for reflection from above only (its rough top or
+    base would need product integration at the exit, which is not implemented)."""
+    parts = [name for name, part in (("a rough top", model.interfaces[0]), ("a rough base", model.base))
+             if getattr(part, "alpha", None) is not None]
+    return " and ".join(parts) or "its boundaries"
 
 
 def media_indices(model: Layered) -> list[float]:
