@@ -13,11 +13,13 @@ a single-scattering layer with a Richardson-corrected start; the adding equation
 everything from the base up, one independent task per (wavelength, Fourier order) on all
 cores with the GIL released.
 
-What it computes: reflection from above, f |cos theta_o| exactly as ``Layered.eval``
-(without the top's delta lobe). A rough top's own reflection is evaluated directly; the
-light that entered the stack is solved. Transmission through the stack and reflection
-from below are not solved: pairs asking for them raise ValueError on a transmissive
-stack (an opaque one's are zero, its value).
+What it computes: f |cos theta_o| exactly as ``Layered.eval`` (without delta lobes):
+reflection from above for every stack, a rough top's own reflection evaluated directly
+and the light that entered the stack solved; for a transmissive stack with a smooth top
+and a smooth dielectric base (``Solution.two_sided``) also transmission both ways and
+reflection from below (the stack's four operators by the adding equations). A rough top
+or rough base of a transmissive stack: pairs with wi.z < 0 or wo.z < 0 raise ValueError
+naming it (an opaque stack's are zero, its value).
 
 Validated range (tests/solvers, docs/solvers.md): alpha in [1e-3, 1] for rough
 interfaces and bases (ValueError outside); Henyey-Greenstein |g| <= 0.95 (ValueError
@@ -155,9 +157,11 @@ class Solution:
         return a, b
 
     def eval(self, wi, wo, scattered_only: bool = False) -> np.ndarray:
-        """f(wi, wo) |cos theta_o| of reflection from above, (N, C); 0 for the other pairs
-        of an opaque stack (its value). A transmissive stack raises ValueError for pairs
-        with wi.z < 0 or wo.z < 0 (transmission and reflection from below are not solved).
+        """f(wi, wo) |cos theta_o|, (N, C), light arriving from wo and leaving toward wi:
+        reflection from above; for a ``two_sided`` stack every pair (transmission both
+        ways, reflection from below); 0 for the other pairs of an opaque stack (its
+        value). A transmissive stack with a rough top or base raises ValueError for pairs
+        with wi.z < 0 or wo.z < 0.
         ``scattered_only`` leaves out a rough top's own reflection (what a table stores;
         ``Layered.exact_part`` re-adds it)."""
         a, b = self._pairs(wi, wo)
@@ -237,6 +241,13 @@ def solve(model: Layered, wavelengths=None, nodes: int = DEFAULT_NODES, orders: 
         if alpha is not None and not ALPHA_RANGE[0] <= alpha <= ALPHA_RANGE[1]:
             raise ValueError(f"{name}.alpha must be in [{ALPHA_RANGE[0]}, {ALPHA_RANGE[1]}] for the "
                              f"adding-doubling solver (its validated range), got {alpha}")
+    for i, part in enumerate(model.interfaces[1:], start=1):
+        ext, inside = (getattr(part, k, None) for k in ("ext_ior", "int_ior"))
+        if (getattr(part, "alpha", None) is None and isinstance(ext, (int, float))
+                and isinstance(inside, (int, float)) and abs(ext - inside) > 1e-9 * max(ext, inside)):
+            raise ValueError(f"interfaces[{i}] is a smooth interior interface between different indices "
+                             f"({ext} above, {inside} below): the adding-doubling solver needs smooth "
+                             f"interior interfaces index-matched (rough or film-coated matched ones are solved)")
     for i, s in enumerate(model.slabs):
         if s.phase.type not in PHASES:
             raise ValueError(f"slabs[{i}].phase must be one of {', '.join(PHASES)} for the "
