@@ -1,6 +1,7 @@
 """Adding-doubling for transmissive stacks (smooth top, smooth dielectric base): transmission
-both ways and reflection from both sides, against PFMC (bsdflab.Layered), energy
-conservation of a lossless stack from both sides, and reciprocity with the index ratio.
+both ways and reflection from both sides, against PFMC (bsdflab.Layered) and the numpy
+oracle, energy conservation of a lossless stack from both sides, reciprocity with the
+index ratio, and the refusals of what is not solved.
 
 Statistics (test_01). Each PFMC value v has a standard error s (independent walks per
 pair), the solver's value r its a-posteriori bound e; a comparison passes when
@@ -23,6 +24,7 @@ from scipy import stats
 
 import bsdflab as bl
 from bsdflab.optics.fresnel import fresnel_reflectance
+from bsdflab.oracles import AddingDoublingOracle
 from bsdflab.solvers import solve
 from bsdflab.testing import random_unit_vectors, sidak_significance, spherical_directions
 
@@ -207,3 +209,19 @@ def test_06_unmatched_smooth_interior_interface_raises():
     with pytest.raises(ValueError, match=r"interfaces\[1\] is a smooth interior interface between different "
                                          r"indices \(1.5 above, 1.3 below\)"):
         solve(model, [550.0])
+
+
+@pytest.mark.parametrize("below_ior", [1.5, 1.33, 1.0])
+def test_07_matches_numpy_oracle_both_sides(below_ior):
+    """Against the independent numpy oracle (bsdflab.oracles.AddingDoublingOracle: its own
+    Fresnel, phase function and linear algebra; smooth top, smooth base to n_below):
+    all four kinds of pairs with grazing ones, the slab ending in a matched medium, in
+    water and in air. Tolerance 2e-5 relative, as the reflection-only oracle test
+    (test_solver_vs_oracle.py): both sides are converged far below it."""
+    model = bl.Layered([bl.Dielectric(1.5, 1.0)], [HG], bl.Dielectric(below_ior, 1.5))
+    wi, wo = pairs(11)
+    ours = solve(model, WL).eval(wi, wo)
+    ref = AddingDoublingOracle.from_layered(model).eval(wi, wo, wavelengths=WL)
+    rel = np.max(np.abs(ours - ref) / ref)
+    print(f"base to {below_ior}: max relative difference to the oracle {rel:.1e}")
+    assert rel <= 2e-5
