@@ -52,6 +52,7 @@ def run(width: int, height: int, spp: int, method: str) -> dict:
         if done.returncode != 0:
             raise SystemExit(done.stderr)
         summary = json.loads(done.stdout[done.stdout.index("{"):done.stdout.rindex("}") + 1])
+        print(f"{method}: wall {wall:.1f} s, render_seconds {summary['render_seconds']}", flush=True)
         from bsdflab.tables import read_table
 
         tables = [read_table(p) for p in sorted(cache.glob("*.exr"))]

@@ -135,8 +135,9 @@ class _Forgetful(dict):
 
 
 def test_07_settings_are_bound_by_keyword_only():
-    """The core's TabulationSettings and Tabulator take keywords (old: 14 positional
-    arguments, min and max samples in swapped order at the call site)."""
+    """The core's TabulationSettings, Tabulator, LayeredOptions and LayeredBSDF take their
+    settings by keyword (old: 14 and 13 positional arguments; min and max samples in
+    swapped order at the tabulator's call site)."""
     with pytest.raises(TypeError):
         _core.TabulationSettings(0.01, 0.05, 16, 64, 0, True)
     s = _core.TabulationSettings(rel_error=0.01, floor=0.05, min_samples=16, max_samples=64, seed=0)
@@ -145,6 +146,16 @@ def test_07_settings_are_bound_by_keyword_only():
         _core.TabulationSettings(rel_error=0.01, floor=0.05, min_samples=64, max_samples=16, seed=0)
     with pytest.raises(TypeError):
         _core.Tabulator(bl.Diffuse(0.5)._core(np.array(WL)), 1, 2, 2, 2, [], [1.0] * 6, 2, s)
+    with pytest.raises(TypeError):
+        _core.LayeredOptions(16, 0, 64)
+    o = _core.LayeredOptions(samples=16, seed=3, max_depth=64)
+    assert (o.samples, o.seed, o.max_depth, o.nee, o.pdf_samples, o.estimator) == (16, 3, 64, True, 1, 1)
+    with pytest.raises(ValueError, match="pdf_samples"):
+        _core.LayeredOptions(samples=16, seed=3, max_depth=64, pdf_samples=-1)
+    wl = np.array(WL)
+    parts = [bl.Dielectric(1.5, 1.0)._core(wl), bl.Diffuse(0.5)._core(wl)]
+    with pytest.raises(TypeError):
+        _core.LayeredBSDF(list(wl), parts, [1.0], [[0.0] * 3], [0.0], [0], [0.0], 16, 0, 64, True)
 
 
 def test_08_cli_says_which_method_and_why(tmp_path):
