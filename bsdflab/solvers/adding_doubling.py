@@ -229,13 +229,36 @@ def solve(model: Layered, wavelengths=None, nodes: int = DEFAULT_NODES, orders: 
         Rough top: fine sub-panels of ``fine_step`` x alpha radians (clamped to [0.004,
         0.05]) for the product integration of its lobes.
     """
-    if not isinstance(model, Layered):
-        raise ValueError(f"model must be a Layered stack, got {type(model).__name__}")
+    check_model(model)
     nodes = check.integer("nodes", nodes, 4, 256)
     if orders is not None:
         orders = check.integer("orders", orders, 1, 4096)
     thin_depth = check.real_scalar("thin_depth", thin_depth, 0.0, 1.0, lo_open=True)
     order_tolerance = check.real_scalar("order_tolerance", order_tolerance, 0.0, 0.1, lo_open=True)
+    for i, s in enumerate(model.slabs):
+        g = s.phase.g if s.phase.type == "hg" else 0.0
+        if s.sigma_s > 0 and nodes < nodes_for_g(g):
+            warnings.warn(f"adding-doubling: nodes raised from {nodes} to {nodes_for_g(g)} to "
+                          f"resolve slabs[{i}]'s Henyey-Greenstein g = {g}", stacklevel=2)
+            nodes = nodes_for_g(g)
+    if not isinstance(film_lookup, (bool, np.bool_)):
+        raise ValueError(f"film_lookup must be True or False, got {film_lookup!r}")
+    if azimuth_samples is not None:
+        azimuth_samples = check.integer("azimuth_samples", azimuth_samples, 8, 16384)
+    spectral_stride = check.integer("spectral_stride", spectral_stride, 1, 64)
+    fine_step = check.real_scalar("fine_step", fine_step, 0.05, 2.0)
+    return Solution(model, wavelengths, Settings(nodes, orders, thin_depth, order_tolerance, bool(film_lookup),
+                                                 azimuth_samples, spectral_stride, fine_step))
+
+
+def check_model(model) -> None:
+    """ValueError naming why ``model`` is outside what this solver solves (its validated
+    range): not a ``Layered`` stack, a roughness outside ALPHA_RANGE, a phase function
+    other than isotropic or Henyey-Greenstein with |g| <= MAX_G, or a smooth interior
+    interface between unequal indices. (Transmissive stacks are solved for reflection
+    from above only: ``Solution.eval`` refuses their other pairs.)"""
+    if not isinstance(model, Layered):
+        raise ValueError(f"model must be a Layered stack, got {type(model).__name__}")
     for name, part in [(f"interfaces[{i}]", m) for i, m in enumerate(model.interfaces)] + [("base", model.base)]:
         alpha = getattr(part, "alpha", None)
         if alpha is not None and not ALPHA_RANGE[0] <= alpha <= ALPHA_RANGE[1]:
@@ -256,18 +279,11 @@ def solve(model: Layered, wavelengths=None, nodes: int = DEFAULT_NODES, orders: 
         if abs(g) > MAX_G:
             raise ValueError(f"slabs[{i}].phase.g must be in [-{MAX_G}, {MAX_G}] for the "
                              f"adding-doubling solver (its validated range), got {g}")
-        if s.sigma_s > 0 and nodes < nodes_for_g(g):
-            warnings.warn(f"adding-doubling: nodes raised from {nodes} to {nodes_for_g(g)} to "
-                          f"resolve slabs[{i}]'s Henyey-Greenstein g = {g}", stacklevel=2)
-            nodes = nodes_for_g(g)
-    if not isinstance(film_lookup, (bool, np.bool_)):
-        raise ValueError(f"film_lookup must be True or False, got {film_lookup!r}")
-    if azimuth_samples is not None:
-        azimuth_samples = check.integer("azimuth_samples", azimuth_samples, 8, 16384)
-    spectral_stride = check.integer("spectral_stride", spectral_stride, 1, 64)
-    fine_step = check.real_scalar("fine_step", fine_step, 0.05, 2.0)
-    return Solution(model, wavelengths, Settings(nodes, orders, thin_depth, order_tolerance, bool(film_lookup),
-                                                 azimuth_samples, spectral_stride, fine_step))
+    media = media_indices(model)
+    for j, part in enumerate(model.interfaces[1:], start=1):  # the core's rule (adding_doubling.cpp)
+        if not part.lobes & Lobe.SMOOTH and abs(media[j] - media[j + 1]) > 1e-9 * media[j]:
+            raise ValueError(f"interfaces[{j}] is smooth between unequal indices ({media[j]} and "
+                             f"{media[j + 1]}): the adding-doubling solver needs it index-matched")
 
 
 def one_sided_reason(model: Layered) -> str:
