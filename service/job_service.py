@@ -6,7 +6,8 @@ the artefact folder (already computed), joined to the active job with the same h
 and outcomes from the executor's handles into the store. On start, jobs a previous
 server left queued or running are re-queued (their artefacts are written atomically, so
 nothing half-written is ever found). Stopping leaves unfinished jobs in the store for the
-next start, exactly as a crash would.
+next start without counting a start against them; a job found *running* at start (its
+server died under it) counts one, and the third such start fails it.
 """
 from __future__ import annotations
 
@@ -115,8 +116,12 @@ class JobService:
             self._handles[row["id"]] = handle
 
     def _recover(self) -> None:
+        """Start what the last server left. Only a job the store shows running counts a
+        start (that server died while it ran: it may be what killed it); a graceful stop
+        released its running jobs to queued (``close``), and a queued job never ran."""
         for row in self.store.active():
-            if row["attempts"] + 1 >= MAX_ATTEMPTS:
+            crashed = row["state"] == "running"
+            if crashed and row["attempts"] + 1 >= MAX_ATTEMPTS:
                 self.store.finish(row["id"], "failed", row["elapsed"],
                                   error=f"gave up after {MAX_ATTEMPTS} starts: the server stopped during "
                                         "each of them", error_type="Interrupted")
@@ -125,7 +130,7 @@ class JobService:
                 continue
             log.info("job %s (%s) re-queued after restart (the previous server left it %s)",
                      row["id"], row["kind"], row["state"])
-            self.store.requeue(row["id"])
+            self.store.requeue(row["id"], count=crashed)
             self._start(row)
 
     # -- reading and cancelling ------------------------------------------------------------
@@ -192,8 +197,12 @@ class JobService:
 
     def close(self) -> None:
         """Stop monitoring first (a shutdown's interruptions are not outcomes), then the
-        executor; unfinished jobs stay queued or running in the store for the next start."""
+        executor; unfinished jobs go back to queued in the store for the next start, no
+        start counted against them (a graceful stop is not the job's fault)."""
         self._stop.set()
         self._monitor.join()
         self.executor.shutdown()
+        released = self.store.release_running()
+        if released:
+            log.info("%d running jobs re-queued for the next start (graceful stop)", released)
         self.store.close()

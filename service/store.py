@@ -214,10 +214,18 @@ class JobStore:
             return self._db.execute("SELECT * FROM jobs WHERE kind = ? AND hash = ? ORDER BY created DESC "
                                     "LIMIT 1", (kind, content_hash)).fetchone()
 
-    def requeue(self, job_id: str) -> None:
+    def requeue(self, job_id: str, count: bool) -> None:
+        """Queued again from the start; ``count``: the interrupted run counts as a start."""
         with self._lock:
             self._db.execute("UPDATE jobs SET state = 'queued', progress = 0, elapsed = 0, eta = NULL, "
-                             "started = NULL, attempts = attempts + 1 WHERE id = ?", (job_id,))
+                             "started = NULL, attempts = attempts + ? WHERE id = ?", (int(count), job_id))
+
+    def release_running(self) -> int:
+        """A graceful stop: every running job back to queued, no start counted (it was not
+        the job's fault); the number released."""
+        with self._lock:
+            return self._db.execute("UPDATE jobs SET state = 'queued', progress = 0, elapsed = 0, eta = NULL, "
+                                    "started = NULL WHERE state = 'running'").rowcount
 
     def started(self, job_id: str) -> bool:
         """Mark a queued job running; True when it was queued until now."""
