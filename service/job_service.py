@@ -110,6 +110,12 @@ class JobService:
             return row
         return None
 
+    def job_hint(self, kind: str, content_hash: str, client: Client) -> str:
+        """"; job <id> is <state>" for a 404 when ``client`` may see the latest job of this
+        hash, else "" (another tenant's job is never named)."""
+        job = self.visible(self.store.latest_for(kind, content_hash), client)
+        return "" if job is None else f"; job {job['id']} is {job['state']}"
+
     def _start(self, row: dict[str, Any]) -> None:
         handle = self.executor.submit(row["kind"], row["request"], self.artefact_dir)
         with self._lock:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict, model_validator
 from pydantic.json_schema import SkipJsonSchema
 
 
@@ -53,6 +53,15 @@ class ModelSpec(Request):
         None, description="a preset name (GET /v1/presets)", examples=["xenopeltis"])
     overrides: dict[str, Any] | None = Field(None, description="the preset's keyword parameters",
                                              examples=[{"film_thickness_nm": 450}])
+
+    @model_validator(mode="after")
+    def _no_explicit_null(self):
+        # the schema says a dict / a name: "model": null beside a preset is not "left out"
+        for name in ("model", "preset"):
+            if name in self.model_fields_set and getattr(self, name) is None:
+                wanted = "a BSDF dict" if name == "model" else "a preset name"
+                raise ValueError(f"{name} is null: leave it out, or give {wanted}")
+        return self
 
     def spec(self) -> dict[str, Any]:
         return {"model": self.model, "preset": self.preset, "overrides": self.overrides}

@@ -62,23 +62,21 @@ def get_render(key: Hash, jobs: JobsDep) -> RenderInfo:
     return render_info(jobs, key, job["request"], None)
 
 
-def _file(jobs: JobService, key: str, which: str) -> FileResponse:
+def _file(jobs: JobService, key: str, which: str, client) -> FileResponse:
     result = jobs.cached(KIND, key)
     if result is None:
-        job = jobs.store.latest_for(KIND, key)
-        hint = f"; job {job['id']} is {job['state']}" if job is not None else ""
-        raise HTTPException(404, f"no finished render {key}{hint}")
+        raise HTTPException(404, f"no finished render {key}{jobs.job_hint(KIND, key, client)}")
     media = "image/png" if which == "png" else "image/x-exr"
     return FileResponse(jobs.artefact_dir / result["files"][which], media_type=media, filename=f"{key}.{which}")
 
 
 @router.get("/{key}/image.png", response_class=FileResponse, summary="The image, tone-mapped sRGB PNG",
             responses={**NOT_FOUND, 200: {"content": {"image/png": {}}, "description": "the image"}})
-def get_png(key: Hash, jobs: JobsDep) -> FileResponse:
-    return _file(jobs, key, "png")
+def get_png(key: Hash, jobs: JobsDep, client: ClientDep) -> FileResponse:
+    return _file(jobs, key, "png", client)
 
 
 @router.get("/{key}/image.exr", response_class=FileResponse, summary="The image, linear OpenEXR",
             responses={**NOT_FOUND, 200: {"content": {"image/x-exr": {}}, "description": "the image"}})
-def get_exr(key: Hash, jobs: JobsDep) -> FileResponse:
-    return _file(jobs, key, "exr")
+def get_exr(key: Hash, jobs: JobsDep, client: ClientDep) -> FileResponse:
+    return _file(jobs, key, "exr", client)

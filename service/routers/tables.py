@@ -54,25 +54,23 @@ def list_tables(jobs: JobsDep, client: ClientDep, limit: Annotated[int, Query(ge
     return TableList(tables=[table_info(r["result"]) for r in rows])
 
 
-def _found(jobs: JobService, key: str) -> dict[str, Any]:
+def _found(jobs: JobService, key: str, client) -> dict[str, Any]:
     result = jobs.table(key)
     if result is None:
-        job = jobs.store.latest_for(KIND, key)
-        hint = f"; job {job['id']} is {job['state']}" if job is not None else ""
-        raise HTTPException(404, f"no table {key}{hint}")
+        raise HTTPException(404, f"no table {key}{jobs.job_hint(KIND, key, client)}")
     return result
 
 
 @router.get("/{key}", response_model=TableInfo, responses=NOT_FOUND, summary="A table's metadata")
-def get_table(key: Hash, jobs: JobsDep) -> TableInfo:
+def get_table(key: Hash, jobs: JobsDep, client: ClientDep) -> TableInfo:
     """Model, grid, lobes, channels, effort (walks per cell) and the achieved relative
     error of the luminance (rms, 95th percentile, max over significant cells)."""
-    return table_info(_found(jobs, key))
+    return table_info(_found(jobs, key, client))
 
 
 @router.get("/{key}/file", response_class=FileResponse, summary="The table file (OpenEXR)",
             responses={**NOT_FOUND, 200: {"content": {"image/x-exr": {}}, "description": "the table file"}})
-def get_table_file(key: Hash, jobs: JobsDep) -> FileResponse:
-    result = _found(jobs, key)
+def get_table_file(key: Hash, jobs: JobsDep, client: ClientDep) -> FileResponse:
+    result = _found(jobs, key, client)
     return FileResponse(jobs.artefact_dir / result["files"]["exr"], media_type="image/x-exr",
                         filename=f"{key}.exr")
