@@ -49,6 +49,8 @@ class Settings(LibrarySettings):
     limit_body_bytes: int = Field(4 << 20, ge=1024, description="request body size")
     limit_measured_bytes: int = Field(64 << 20, ge=1024, description="one measured-file upload, POST /v1/measured "
                                                                      "(its own body cap; a MERL file is 35 MB)")
+    limit_json_containers: int = Field(1 << 18, ge=16, description="JSON arrays and objects in one request body "
+                                       "(counted before parsing: they are what parsing costs)")
     limit_directions: int = Field(100_000, ge=1, description="direction pairs per eval request")
     limit_samples: int = Field(65_536, ge=1, description="walks per direction pair (stochastic models)")
     limit_walks: int = Field(1 << 18, ge=1, description="direction pairs x walks per request "

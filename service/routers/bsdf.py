@@ -21,6 +21,7 @@ from bsdflab import slices as lobe_views
 from bsdflab.plots.lobe import lobe_figure
 from bsdflab.requests import ModelCache
 from bsdflab.service import artefact_refs
+from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import HeavyDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, over_limit
 from bsdflab.service.heavy import check_cancelled, evaluate_in_chunks
@@ -28,7 +29,7 @@ from bsdflab.service.schemas import EvalRequest, EvalResponse, HemisphereView, L
 from bsdflab.service.settings import Settings, limit_variable
 
 MODELS = ModelCache(32)   # recently asked-for models, their core objects built
-router = APIRouter(prefix="/v1/bsdf", tags=["bsdf"], responses=ERRORS)
+router = APIRouter(prefix="/v1/bsdf", tags=["bsdf"], responses=ERRORS, route_class=ThreadedBody)
 
 
 def _rows(a: np.ndarray | None) -> list | None:

@@ -7,6 +7,7 @@ from fastapi import APIRouter, HTTPException, Path
 from fastapi.responses import FileResponse, JSONResponse
 
 from bsdflab.service import artefact_refs, render_checks
+from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
 from bsdflab.service.job_service import JobService
@@ -14,7 +15,7 @@ from bsdflab.service.routers.tables import QUEUED
 from bsdflab.service.schemas import HASH_PATTERN, RenderInfo, RenderRequest
 from bsdflab.service.views import job_info
 
-router = APIRouter(prefix="/v1/renders", tags=["renders"])
+router = APIRouter(prefix="/v1/renders", tags=["renders"], route_class=ThreadedBody)
 Hash = Annotated[str, Path(pattern=HASH_PATTERN, description="the render's content hash (64 hex digits)")]
 KIND = "render"
 

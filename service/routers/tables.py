@@ -8,13 +8,14 @@ from fastapi.responses import FileResponse, JSONResponse
 
 from bsdflab.jobs import tabulate as tabulate_kind
 from bsdflab.service import artefact_refs
+from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
 from bsdflab.service.job_service import JobService
 from bsdflab.service.schemas import HASH_PATTERN, JobInfo, TableInfo, TableList, TableRequest
 from bsdflab.service.views import job_info
 
-router = APIRouter(prefix="/v1/tables", tags=["tables"])
+router = APIRouter(prefix="/v1/tables", tags=["tables"], route_class=ThreadedBody)
 Hash = Annotated[str, Path(pattern=HASH_PATTERN, description="the table's key (64 hex digits)")]
 KIND = "tabulate"
 QUEUED = {202: {"model": JobInfo, "description": "tabulation queued (or already running): follow the job"},

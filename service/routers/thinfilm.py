@@ -8,13 +8,14 @@ from fastapi.responses import Response
 
 from bsdflab.optics import film_reflectance, film_transmittance
 from bsdflab.plots.film_colour import display_exposure, display_srgb, spectral_rgb
+from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import HeavyDep, SettingsDep
 from bsdflab.service.errors import ERRORS, over_limit
 from bsdflab.service.schemas import ThinFilmRequest, ThinFilmResponse
 from bsdflab.service.settings import Settings
 from bsdflab.util import args as check
 
-router = APIRouter(prefix="/v1/thinfilm", tags=["thin film"], responses=ERRORS)
+router = APIRouter(prefix="/v1/thinfilm", tags=["thin film"], responses=ERRORS, route_class=ThreadedBody)
 DEFAULT_ANGLES = np.arange(0.0, 86.0, 5.0)
 # Physical ranges: indices of optical materials (1e-3..1e3), films up to 1 cm, wavelengths
 # from 1 nm to 1 mm; beyond them the film arithmetic loses all precision.
