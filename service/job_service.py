@@ -18,6 +18,7 @@ from typing import Any
 
 from bsdflab.jobs import JobHandle, get_kind, make_executor
 from bsdflab.jobs import tabulate as tabulate_kind
+from bsdflab.measured import store as measured_store
 from bsdflab.service import uploads
 from bsdflab.service.auth import ANONYMOUS, Client
 from bsdflab.service.settings import Settings
@@ -34,6 +35,7 @@ class JobService:
         self.artefact_dir: Path = settings.artefact_dir
         self.artefact_dir.mkdir(parents=True, exist_ok=True)
         self.store = JobStore(settings.db_path)
+        measured_store.add_folder(self.artefact_dir)   # uploads by hash, here and in the workers started next
         self.executor = make_executor(settings.executor, settings.workers)
         self._handles: dict[str, JobHandle] = {}
         self._lock = threading.Lock()

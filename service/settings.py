@@ -51,6 +51,8 @@ class Settings(LibrarySettings):
                                                                      "(its own body cap; a MERL file is 35 MB)")
     limit_json_containers: int = Field(1 << 18, ge=16, description="JSON arrays and objects in one request body "
                                        "(counted before parsing: they are what parsing costs)")
+    limit_store_refs: int = Field(16, ge=1, description="stored tables and measured files named by hash in one "
+                                                        "request")
     limit_directions: int = Field(100_000, ge=1, description="direction pairs per eval request")
     limit_samples: int = Field(65_536, ge=1, description="walks per direction pair (stochastic models)")
     limit_walks: int = Field(1 << 18, ge=1, description="direction pairs x walks per request "

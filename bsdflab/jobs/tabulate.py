@@ -62,10 +62,25 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
         raise ValueError(f"method must be one of {', '.join(METHODS)}, got {check.brief(method)}")
     if method == "adding-doubling":
         check_adding_doubling(model)   # refused at submission, not when the job runs
+    _check_spectral(model, wavelengths)
     return {"model": model.to_dict(), "grid": grid.to_dict(), "method": method,
             "rel_error": check.real_scalar("rel_error", request.get("rel_error", 0.01), 0.0, 1.0, lo_open=True),
             "wavelengths": wavelengths, "min_samples": min_samples, "max_samples": max_samples,
             "seed": check.seed(request.get("seed", 0))}
+
+
+def _check_spectral(model, wavelengths) -> None:
+    """A table asks its model at spectral wavelengths (``table_channels``); a model that
+    answers in RGB only (a MERL file, an RGB RGL file) is refused here, at submission,
+    rather than failing in the worker."""
+    model_wl = table_channels(wavelengths)[1]
+    try:
+        answered = len(model._channels(np.asarray(model_wl, dtype=float))[0])
+    except ValueError:
+        answered = -1
+    if answered != len(model_wl):
+        raise ValueError(f"a {model.type_name} model of this file answers in RGB only, and tables are made "
+                         "from spectra: tabulate a spectral file (an RGL file with wavelengths)")
 
 
 def cells(request: dict[str, Any]) -> int:

@@ -123,11 +123,10 @@ async def evaluate(body: EvalRequest, request: Request, settings: SettingsDep, j
     at the given wavelengths, with standard errors for stochastic (layered) models. The
     same request always gives the same answer (walks are seeded from seed, wi, wo).
     ``Accept: application/x-npy`` answers a compact NumPy array instead of JSON."""
-    spec = model_spec(body.spec(), jobs)
     binary = wants_npy(request)
 
-    def compute():
-        bsdf = MODELS.get(spec)
+    def compute():   # on the heavy pool, after its admission: the store lookups too
+        bsdf = MODELS.get(model_spec(body.spec(), jobs))
         wi, wo = _directions(body, settings)
         if body.wavelengths is not None:
             over_limit(settings, "limit_wavelengths", len(body.wavelengths), "wavelengths")
@@ -156,10 +155,8 @@ async def evaluate(body: EvalRequest, request: Request, settings: SettingsDep, j
 async def lobe(body: LobeRequest, request: Request, settings: SettingsDep, jobs: JobsDep, heavy: HeavyDep):
     """The plane of incidence (signed outgoing angle, mirror direction at +theta_i) and the
     upper hemisphere seen from above (orthographic x, y), in linear sRGB, for one incidence."""
-    spec = model_spec(body.spec(), jobs)
-
-    def compute():
-        bsdf = MODELS.get(spec)
+    def compute():   # on the heavy pool, after its admission: the store lookups too
+        bsdf = MODELS.get(model_spec(body.spec(), jobs))
         over_limit(settings, "limit_lobe_resolution", body.points, "points")
         over_limit(settings, "limit_lobe_resolution", body.resolution, "resolution")
         wi = lobe_views.incident(body.theta_i)
@@ -225,8 +222,8 @@ def _figure_checks(settings: Settings, bsdf, theta_i: float, samples: int) -> No
         over_limit(settings, "limit_walks", 48 * 48 * 64, "figure walks")
 
 
-def _checked_figure(settings: Settings, spec: dict, theta_i: float, samples: int, seed: int) -> Response:
-    bsdf = MODELS.get(spec)
+def _checked_figure(settings: Settings, jobs, spec: dict, theta_i: float, samples: int, seed: int) -> Response:
+    bsdf = MODELS.get(model_spec(spec, jobs))   # on the heavy pool, after its admission
     _figure_checks(settings, bsdf, theta_i, samples)
     return _figure(bsdf, theta_i, samples, seed)
 
@@ -237,9 +234,9 @@ async def lobe_png(body: LobeRequest, request: Request, settings: SettingsDep, j
     """The figure of ``bsdflab lobe``: lobe in the plane of incidence, the hemisphere, and
     albedo vs incidence angle with its colour. ``samples`` sets the albedo estimates'
     sample count (default 20000); ``points``, ``resolution`` and ``view`` do not apply."""
-    spec = model_spec(body.spec(), jobs)
     samples = body.samples or FIGURE_SAMPLES
-    return await heavy.run(request, _checked_figure, settings, spec, body.theta_i, samples, body.seed or 0)
+    return await heavy.run(request, _checked_figure, settings, jobs, body.spec(), body.theta_i, samples,
+                           body.seed or 0)
 
 
 @router.get("/lobe.png", response_class=Response, responses=PNG, summary="The lobe figure (PNG), by query")
@@ -253,9 +250,8 @@ async def lobe_png_query(request: Request, settings: SettingsDep, jobs: JobsDep,
                    seed: Annotated[int, Query(ge=0, lt=1 << 64)] = 0) -> Response:
     """As POST, with the model in the query: ``?preset=xenopeltis&theta_i=45`` or
     ``?model={"type":"diffuse","reflectance":0.5}`` (URL-encoded)."""
-    spec = model_spec({"preset": preset, "overrides": _json("overrides", overrides),
-                       "model": _json("model", model)}, jobs)
-    return await heavy.run(request, _checked_figure, settings, spec, theta_i, samples, seed)
+    spec = {"preset": preset, "overrides": _json("overrides", overrides), "model": _json("model", model)}
+    return await heavy.run(request, _checked_figure, settings, jobs, spec, theta_i, samples, seed)
 
 
 def _json(name: str, text: str | None):
