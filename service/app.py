@@ -14,6 +14,7 @@ from bsdflab.service.heavy import HeavyPool
 from bsdflab.service.job_service import JobService
 from bsdflab.service.routers import bsdf, catalog, jobs, measured, meta, page, renders, tables, thinfilm
 from bsdflab.service.settings import Settings
+from bsdflab.service.upload_gate import UploadGate
 from bsdflab.util import native_output
 
 DESCRIPTION = """BSDF queries, thin-film spectra, tables and renders from bsdflab's Python API.
@@ -50,6 +51,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     errors.install(app)
     app.add_middleware(errors.BodyLimit, limit=settings.limit_body_bytes,
                        routes={"/v1/measured": ("limit_measured_bytes", settings.limit_measured_bytes)})
+    app.add_middleware(UploadGate, settings=settings,                       # after the key, before the body
+                       stored_bytes=lambda client: app.state.jobs.store.upload_bytes(client))
     app.add_middleware(errors.HeadAsGet)
     app.add_middleware(auth.KeyCheck, clients=clients, reply=errors.reply)   # before any body is read
     app.add_middleware(metrics.Timing, metrics=app.state.metrics)

@@ -53,6 +53,12 @@ class Settings(LibrarySettings):
                                        "(counted before parsing: they are what parsing costs)")
     limit_store_refs: int = Field(16, ge=1, description="stored tables and measured files named by hash in one "
                                                         "request")
+    limit_uploads_per_key: int = Field(2, ge=1, description="measured-file uploads of one client key at once")
+    limit_upload_bytes_in_flight: int = Field(256 << 20, ge=1024, description="bytes of upload bodies being "
+                                              "received, all clients (a body without Content-Length counts "
+                                              "as BSDFLAB_LIMIT_MEASURED_BYTES)")
+    limit_upload_storage_per_key: int = Field(1 << 30, ge=1024, description="bytes of stored uploads of one "
+                                              "client key (the same bytes uploaded again cost nothing)")
     limit_directions: int = Field(100_000, ge=1, description="direction pairs per eval request")
     limit_samples: int = Field(65_536, ge=1, description="walks per direction pair (stochastic models)")
     limit_walks: int = Field(1 << 18, ge=1, description="direction pairs x walks per request "

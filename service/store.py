@@ -278,6 +278,19 @@ class JobStore:
             return self._db.execute(f"SELECT * FROM artefacts WHERE kind = ? {mine}ORDER BY created DESC LIMIT ?",
                                     (kind, *(() if client is None else (client,)), limit)).fetchall()
 
+    def uploaded(self, content_hash: str, client: str) -> bool:
+        with self._lock:
+            return self._db.execute("SELECT 1 AS yes FROM uploads WHERE hash = ? AND client = ?",
+                                    (content_hash, client)).fetchone() is not None
+
+    def upload_bytes(self, client: str) -> int:
+        """Bytes of the uploaded files ``client`` uploaded (each file counted once)."""
+        with self._lock:
+            row = self._db.execute(
+                "SELECT coalesce(sum(json_extract(result, '$.summary.bytes')), 0) AS n FROM artefacts "
+                "WHERE hash IN (SELECT hash FROM uploads WHERE client = ?)", (client,)).fetchone()
+        return int(row["n"])
+
     def artefact(self, content_hash: str, kind: str | None = None) -> dict[str, Any] | None:
         with self._lock:
             row = self._db.execute("SELECT * FROM artefacts WHERE hash = ?", (content_hash,)).fetchone()

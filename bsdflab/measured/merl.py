@@ -27,6 +27,9 @@ DIMS = (90, 90, 180)
 SCALES = np.array([1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0])
 
 
+MAX_F = 1e6   # 1/sr: far above any measured peak, far below float32's range
+
+
 def read_merl(path) -> np.ndarray:
     """The (3, 90, 90, 180) array of f values (1/sr, scales applied, negatives as 0)."""
     path = os.fspath(path)
@@ -47,7 +50,11 @@ def read_merl(path) -> np.ndarray:
     values = np.frombuffer(raw[12:], dtype="<f8").reshape(3, *DIMS)
     if not np.all(np.isfinite(values)):
         raise ValueError(f"{path}: MERL values hold NaN or infinity")
-    return np.maximum(values, 0.0) * SCALES[:, None, None, None]
+    f = np.maximum(values, 0.0) * SCALES[:, None, None, None]
+    if f.max() > MAX_F:
+        raise ValueError(f"{path}: MERL values reach f = {f.max():.3g}/sr, beyond any reflectance (at most "
+                         f"{MAX_F:g}/sr; the core evaluates in float32)")
+    return f
 
 
 def merl_bytes(values: np.ndarray) -> bytes:
