@@ -99,11 +99,17 @@ class JobService:
         """(job row, created). Joins an active job with the same hash; QueueFull when the
         queue, or the client's share of it, is full."""
         row, created = self.store.submit(kind, content_hash, request, self.settings.limit_queue,
-                                         owner=client.name, owner_limit=client.max_jobs)
+                                         owner=client.name, owner_limit=client.max_jobs,
+                                         reserve=self._reserve(client))
         if created:
             log.info("job %s (%s) queued for client %s", row["id"], kind, client.name)
             self._start(row)
         return row, created
+
+    def _reserve(self, client: Client) -> int:
+        """Slots a tenant key with jobs leaves free for other keys; an admin key (and the
+        open service's anonymous client) is the operator and may use them."""
+        return 0 if client.admin else min(self.settings.limit_queue_reserve, self.settings.limit_queue - 1)
 
     def visible(self, row: dict[str, Any] | None, client: Client) -> dict[str, Any] | None:
         """The row when ``client`` may see it (an admin, or a client that created or joined

@@ -71,6 +71,8 @@ class Settings(LibrarySettings):
     limit_render_pixels: int = Field(1 << 22, ge=1, description="width x height of one render")
     limit_render_samples: int = Field(1 << 28, ge=1, description="width x height x spp of one render")
     limit_queue: int = Field(64, ge=1, description="queued + running jobs")
+    limit_queue_reserve: int = Field(8, ge=0, description="queue slots a (non-admin) key that already has "
+                                                          "jobs may not take: room for another key")
     limit_queue_per_key: int = Field(16, ge=1, description="queued + running jobs of one client key "
                                                            "unless its entry says (max_jobs)")
 

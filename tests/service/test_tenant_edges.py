@@ -87,3 +87,21 @@ def test_a_huge_method_name_is_cut_short_in_the_log(client, caplog):
         client.request("M" * 8192, "/healthz")
     lines = [r.getMessage() for r in caplog.records if r.name == "bsdflab.service.requests"]
     assert lines and all(len(line) < 400 for line in lines), [len(line) for line in lines]
+
+
+def test_the_queue_always_leaves_room_for_another_key(tmp_path):
+    """Before: keys at their default share could fill the whole queue and a fifth tenant
+    got only 429. A key that holds jobs may not take the last ``limit_queue_reserve``
+    slots; a key that holds none may. Mutation caught: no reserve (alice takes all four
+    slots and bob gets 429)."""
+    settings = Settings(data_dir=tmp_path, executor="threads", workers=1, api_keys=KEYS, limit_queue=4,
+                        limit_queue_reserve=1, progress_interval_s=0.05)
+    with TestClient(create_app(settings)) as c:
+        alice = [c.post("/v1/tables", json={**LONG, "rel_error": 0.1 + 0.01 * i}, headers={"X-API-Key": ALICE})
+                 for i in range(4)]
+        assert [r.status_code for r in alice] == [202, 202, 202, 429], [r.text for r in alice]
+        assert "BSDFLAB_LIMIT_QUEUE_RESERVE" in alice[-1].text
+        bob = c.post("/v1/tables", json={**LONG, "rel_error": 0.5}, headers={"X-API-Key": BOB})
+        assert bob.status_code == 202, bob.text
+        for r in (*alice[:3], bob):
+            c.delete(f"/v1/jobs/{r.json()['id']}", headers={"X-API-Key": ROOT})
