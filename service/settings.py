@@ -81,8 +81,13 @@ class Settings(LibrarySettings):
     log_format: Literal["text", "json"] = Field("text", description="text lines, or one JSON object a line")
     server_timeout_keep_alive_s: float = Field(5.0, gt=0, le=600, description="idle keep-alive connections close "
                                                                               "after this (uvicorn)")
-    server_limit_concurrency: int = Field(512, ge=1, description="open connections and tasks at once; 503 beyond "
-                                                                 "(uvicorn)")
+    server_limit_concurrency: int = Field(512, ge=1, description="open connections and requests at once; 503 "
+                                                                 "beyond, except /healthz")
+    server_header_timeout_s: float = Field(10.0, gt=0, le=600, description="a connection that has not sent a "
+                                           "whole request line and headers this long after it opened (or its "
+                                           "last answer) is closed")
+    server_read_timeout_s: float = Field(30.0, gt=0, le=3600, description="a request whose body stalls this "
+                                         "long is closed")
     server_max_header_bytes: int = Field(16 << 10, ge=1024, le=1 << 20, description="request line and headers "
                                                                                    "(h11; larger: 431/400)")
     server_backlog: int = Field(2048, ge=1, description="connections waiting to be accepted")
