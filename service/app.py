@@ -45,6 +45,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     app = FastAPI(title="bsdflab", version=bsdflab.__version__, description=DESCRIPTION, lifespan=lifespan)
     app.state.settings = settings
+    bsdf.MODELS.max_bytes = settings.model_cache_bytes
     app.state.heavy = HeavyPool(settings.heavy_concurrency, settings.compute_deadline_s)
     app.state.metrics = metrics.Metrics()
     app.state.metrics.bind(app)

@@ -92,6 +92,8 @@ class Settings(LibrarySettings):
                                                                                    "(h11; larger: 431/400)")
     server_backlog: int = Field(2048, ge=1, description="connections waiting to be accepted")
 
+    model_cache_bytes: int = Field(256 << 20, ge=0, description="memory of the models kept built between "
+                                                               "requests (a measured file's: about twice the file)")
     progress_interval_s: float = Field(0.25, gt=0, le=10, description="how often job progress is stored and streamed")
 
     @model_validator(mode="after")

@@ -28,7 +28,7 @@ from bsdflab.service.heavy import check_cancelled, evaluate_in_chunks
 from bsdflab.service.schemas import EvalRequest, EvalResponse, HemisphereView, LobeRequest, LobeResponse, PlaneView
 from bsdflab.service.settings import Settings, limit_variable
 
-MODELS = ModelCache(32)   # recently asked-for models, their core objects built
+MODELS = ModelCache(32, 256 << 20)   # recently asked-for models, their core objects built (create_app sets the bound)
 router = APIRouter(prefix="/v1/bsdf", tags=["bsdf"], responses=ERRORS, route_class=ThreadedBody)
 
 

@@ -121,3 +121,28 @@ def test_references_per_request_are_capped(client, hashes):
     layered = {"type": "layered", "interfaces": [ref] * 17, "slabs": [{}] * 17, "base": ref}
     r = client.post("/v1/bsdf/eval", json={"model": layered, **ANGLES})
     assert r.status_code == 422 and "BSDFLAB_LIMIT_STORE_REFS" in r.text, r.text
+
+
+def test_the_model_cache_is_bounded_by_bytes(tmp_path):
+    """Finding M9: measured models (about 51 MB each for MERL) were kept 32 at a time
+    whatever their size. With a bound of 2.5 files' worth, three different uploads leave
+    at most two models kept. Mutation caught: evicting by count only (all three kept)."""
+    from bsdflab.requests import ModelCache, model_bytes
+    from bsdflab.service.routers.bsdf import MODELS
+
+    folder = tmp_path / "files"
+    folder.mkdir()
+    specs = []
+    for i, alpha in enumerate((0.2, 0.3, 0.4)):
+        export_model(RoughConductor(alpha=alpha, material="Cu"), folder / f"{i}.bsdf", n_theta_i=4, resolution=8,
+                     error_points=100)
+        specs.append({"model": {"type": "measured", "path": str(folder / f"{i}.bsdf")}})
+    one = model_bytes(ModelCache().get(specs[0]))
+    cache = ModelCache(32, max_bytes=int(2.5 * one))
+    for spec in specs:
+        cache.get(spec)
+    assert len(cache) == 2 and cache.bytes <= 2.5 * one
+    assert one > 2 * (folder / "0.bsdf").stat().st_size   # the file counted twice, and the model's overhead
+    settings = Settings(data_dir=tmp_path / "d", executor="threads", workers=1, model_cache_bytes=12345)
+    with TestClient(create_app(settings)):
+        assert MODELS.max_bytes == 12345
