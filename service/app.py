@@ -12,7 +12,7 @@ from bsdflab.service.deps import KEY
 from bsdflab.service.errors import KEY_ERRORS
 from bsdflab.service.heavy import HeavyPool
 from bsdflab.service.job_service import JobService
-from bsdflab.service.routers import bsdf, catalog, jobs, measured, meta, page, renders, tables, thinfilm
+from bsdflab.service.routers import bsdf, catalog, docs, jobs, measured, meta, page, renders, tables, thinfilm
 from bsdflab.service.settings import Settings
 from bsdflab.service.upload_gate import UploadGate
 from bsdflab.util import native_output
@@ -43,7 +43,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             app.state.heavy.close()
             native_output.capture_descriptors(capturing)
 
-    app = FastAPI(title="bsdflab", version=bsdflab.__version__, description=DESCRIPTION, lifespan=lifespan)
+    app = FastAPI(title="bsdflab", version=bsdflab.__version__, description=DESCRIPTION, lifespan=lifespan,
+                  docs_url=None, redoc_url=None)   # served by routers.docs, without a CDN
     app.state.settings = settings
     bsdf.MODELS.max_bytes = settings.model_cache_bytes
     app.state.heavy = HeavyPool(settings.heavy_concurrency, settings.compute_deadline_s)
@@ -61,6 +62,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(meta.router)
     app.include_router(metrics.router)
     app.include_router(page.router)
+    app.include_router(docs.router)
     for module in (catalog, bsdf, thinfilm, tables, measured, renders, jobs):
         app.include_router(module.router, dependencies=[KEY], responses=KEY_ERRORS)
     app.mount("/static", StaticFiles(directory=page.STATIC_DIR), name="static")

@@ -23,7 +23,7 @@ from pathlib import Path
 
 PUBLIC_PATHS = frozenset({"/healthz", "/", "/vendor/plotly.min.js", "/docs", "/docs/oauth2-redirect",
                           "/redoc", "/openapi.json"})
-PUBLIC_PREFIXES = ("/static/",)
+PUBLIC_PREFIXES = ("/static/", "/vendor/")
 UNAUTHORISED = "a valid API key is required (X-API-Key header or Bearer token)"
 
 
