@@ -7,12 +7,25 @@ from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
 
 import bsdflab
+from bsdflab.jobs import register_kind
 from bsdflab.service import auth, errors, logs, metrics
 from bsdflab.service.deps import KEY
 from bsdflab.service.errors import KEY_ERRORS
 from bsdflab.service.heavy import HeavyPool
 from bsdflab.service.job_service import JobService
-from bsdflab.service.routers import bsdf, catalog, docs, jobs, measured, meta, page, renders, tables, thinfilm
+from bsdflab.service.routers import (
+    bsdf,
+    catalog,
+    docs,
+    jobs,
+    measured,
+    meta,
+    page,
+    renders,
+    tables,
+    thinfilm,
+    validations,
+)
 from bsdflab.service.settings import Settings
 from bsdflab.service.upload_gate import UploadGate
 from bsdflab.util import native_output
@@ -63,7 +76,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(metrics.router)
     app.include_router(page.router)
     app.include_router(docs.router)
-    for module in (catalog, bsdf, thinfilm, tables, measured, renders, jobs):
+    register_kind("validate", "bsdflab.validation.job")   # a layer above bsdflab.jobs: registered by name
+    for module in (catalog, bsdf, thinfilm, tables, measured, renders, validations, jobs):
         app.include_router(module.router, dependencies=[KEY], responses=KEY_ERRORS)
     app.mount("/static", StaticFiles(directory=page.STATIC_DIR), name="static")
     if not clients:

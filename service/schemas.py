@@ -279,6 +279,24 @@ class RenderInfo(BaseModel):
     links: dict[str, str]
 
 
+class ValidationRequest(Request):
+    model_config = whole({"level": "quick", "only": "tables/diffuse-exact"}, exclusive=False)
+    level: Literal["quick", "standard", "full"] = Field("quick", description="effort, as bsdflab validate --level")
+    only: Annotated[str, Field(min_length=1, max_length=200)] | None = Field(
+        None, description="only checks whose name matches this glob or contains it", examples=["tables/"])
+    benchmarks: bool = Field(False, description="also run the benchmarks (minutes)")
+
+
+class ValidationInfo(BaseModel):
+    hash: str
+    state: Literal["queued", "running", "done", "failed", "cancelled"]
+    request: dict[str, Any]
+    job: JobInfo | None
+    summary: dict[str, int] | None = Field(description="checks by status: pass, fail, error, skipped, study, total")
+    exit_status: int | None = Field(description="1 when a check failed or errored (as bsdflab validate)")
+    links: dict[str, str]
+
+
 class Health(BaseModel):
     status: Literal["ok"]
 
