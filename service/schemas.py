@@ -120,6 +120,8 @@ class EvalRequest(ModelSpec):
     wavelengths: Floats | None = Field(None, description="nm; omit for linear sRGB (D65)")
     samples: Count | None = Field(None, description="walks per pair for stochastic models (default: the model's)")
     seed: Seed | None = Field(None, description="seed of the walks (default: the model's)")
+    thickness_nm: Floats | None = Field(None, description="the thin film's total thickness in nm per pair (or one), "
+                                                          "replacing the model's for this query")
 
 
 class EvalResponse(BaseModel):

@@ -71,6 +71,15 @@ def _directions(body: EvalRequest, settings: Settings) -> tuple[np.ndarray, np.n
     return lobe_views.directions_from_angles(body.theta_i, body.theta_o, body.phi if body.phi is not None else [180.0])
 
 
+def _thickness(values: list[float] | None, pairs: int) -> np.ndarray | None:
+    """A per-query film thickness: one per pair, or one for all."""
+    if values is None:
+        return None
+    if len(values) not in (1, pairs):
+        raise ValueError(f"thickness_nm must have one value or one per pair ({pairs}); got {len(values)}")
+    return np.asarray(values, dtype=float)
+
+
 def _check_answer(settings: Settings, pairs: int, channels: int, stochastic: bool, binary: bool,
                   extra_values: int = 0) -> None:
     """Refuse, before computing, an answer whose estimated size is over the limit: pairs x
@@ -136,7 +145,8 @@ async def evaluate(body: EvalRequest, request: Request, settings: SettingsDep, j
         channels = ["R", "G", "B"] if body.wavelengths is None else [f"{w:g}" for w in body.wavelengths]
         _check_walks(settings, bsdf, pairs, body.samples)
         _check_answer(settings, pairs, len(channels), lobe_views.is_stochastic(bsdf), binary)
-        result = evaluate_in_chunks(bsdf, wi, wo, body.wavelengths, body.samples, body.seed)
+        thickness = _thickness(body.thickness_nm, pairs)
+        result = evaluate_in_chunks(bsdf, wi, wo, body.wavelengths, body.samples, body.seed, thickness)
         if result.stderr is not None:
             request.app.state.metrics.walks.inc(pairs * (body.samples or bsdf.samples))
         if binary:
