@@ -176,6 +176,14 @@ class ThinFilmRequest(Request):
     substrate_ior: float = Field(1.5515, description="substrate index (default keratin at 550 nm)")
     angles: Floats | None = Field(None, description="incidence angles in degrees (default 0, 5, ... 85)")
     wavelengths: Floats | None = Field(None, description="nm (default 380, 385, ... 780)")
+    layers: Annotated[list[FilmLayer], Field(min_length=1, max_length=64)] | None = Field(
+        None, description="a film stack, top first, instead of film_ior and thickness_nm",
+        examples=[[{"ior": 2.3, "thickness_nm": 60}, {"ior": 1.38, "thickness_nm": 100}]])
+
+
+class FilmLayer(Request):
+    ior: float = Field(description="the layer's (real) refractive index")
+    thickness_nm: float = Field(description="its thickness in nm")
 
 
 class ThinFilmResponse(BaseModel):
