@@ -49,8 +49,9 @@ class Settings(LibrarySettings):
     limit_body_bytes: int = Field(4 << 20, ge=1024, description="request body size")
     limit_measured_bytes: int = Field(64 << 20, ge=1024, description="one measured-file upload, POST /v1/measured "
                                                                      "(its own body cap; a MERL file is 35 MB)")
-    limit_json_containers: int = Field(1 << 18, ge=16, description="JSON arrays and objects in one request body "
-                                       "(counted before parsing: they are what parsing costs)")
+    limit_json_containers: int = Field(1 << 15, ge=16, description="JSON arrays and objects in one request body "
+                                       "(counted before parsing, which holds the GIL: about 2 us each; "
+                                       "send many directions as angle lists, which are flat)")
     limit_store_refs: int = Field(16, ge=1, description="stored tables and measured files named by hash in one "
                                                         "request")
     limit_uploads_per_key: int = Field(2, ge=1, description="measured-file uploads of one client key at once")
