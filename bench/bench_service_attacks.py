@@ -14,7 +14,7 @@ while a prober GETs /healthz every 20 ms on its own connection. Printed: request
 the status counts (5xx other than the 503s of the connection cap, which every path but
 /healthz answers while the 40 idle sockets are open, must be 0), /healthz p50 / p99 / max
 and how many answered 200, and the server's peak resident memory (VmHWM). Run ``--python`` with another interpreter to
-measure another checkout the same way.
+measure another checkout the same way; ``--attackers`` picks a subset.
 
     python bench/bench_service_attacks.py --seconds 20
 """
@@ -54,15 +54,17 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=20.0, help="length of the attack")
     parser.add_argument("--python", default=sys.executable, help="interpreter whose bsdflab serves")
-    parser.add_argument("--quiet-baseline", action="store_true",
-                        help="no attackers: the prober alone (the same machine's idle /healthz figures)")
+    parser.add_argument("--attackers", default=None,
+                        help="comma-separated subset of bodies,methods,refs,idle,uploads,renders,heavy "
+                             "(default all; 'none': the prober alone, the same machine's idle figures)")
     args = parser.parse_args()
     port, data = free_port(), tempfile.mkdtemp(prefix="bsdflab-attacks-")
     url = f"http://127.0.0.1:{port}"
     env = {**os.environ, "BSDFLAB_SERVER_LIMIT_CONCURRENCY": "40", "BSDFLAB_LIMIT_QUEUE": "4",
            "BSDFLAB_HEAVY_CONCURRENCY": "2", "BSDFLAB_LOG_LEVEL": "warning"}
     server = subprocess.Popen([args.python, "-m", "bsdflab.cli.main", "serve", "--port", str(port), "--data-dir",
-                               data, "--workers", "1"], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                               data, "--workers", "1"], env=env, cwd=data, stdout=subprocess.DEVNULL,
+                              stderr=open(Path(data) / "server.log", "w"))
     try:
         end = time.monotonic() + 120
         while time.monotonic() < end:
@@ -71,13 +73,14 @@ def main() -> int:
                     break
             except httpx.HTTPError:
                 time.sleep(0.2)
-        return attack(url, server.pid, args.seconds, not args.quiet_baseline)
+        chosen = None if args.attackers is None else [a for a in args.attackers.split(",") if a != "none"]
+        return attack(url, server.pid, args.seconds, chosen)
     finally:
         server.terminate()
         server.wait(60)
 
 
-def attack(url: str, pid: int, seconds: float, hostile: bool = True) -> int:
+def attack(url: str, pid: int, seconds: float, chosen: list[str] | None = None) -> int:
     statuses: collections.Counter[int | str] = collections.Counter()
     lock, stop = threading.Lock(), threading.Event()
     health: list[float] = []
@@ -111,17 +114,19 @@ def attack(url: str, pid: int, seconds: float, hostile: bool = True) -> int:
         for _ in range(16):
             yield junk
 
-    attackers = [
-        *[lambda c: c.post("/v1/bsdf/eval", content=empty, headers={"content-type": "application/json"})] * 4,
-        *[lambda c: c.post("/v1/tables", content=table, headers={"content-type": "application/json"})] * 4,
-        *[lambda c: c.request("".join(random.choices(string.ascii_uppercase, k=8)), "/v1/jobs")] * 2,
-        *[lambda c: c.post("/v1/bsdf/eval", json=refs)] * 2,
-        *[lambda c: c.post("/v1/measured", params={"format": "merl"}, content=chunks())] * 8,
-        *[lambda c: c.post("/v1/renders", json={**render, "seed": random.randrange(1 << 30)})] * 2,
-        *[lambda c: c.post("/v1/bsdf/eval", json=heavy)] * 8,
-    ]
+    attackers = {
+        "bodies": [lambda c: c.post("/v1/bsdf/eval", content=empty, headers={"content-type": "application/json"}),
+                   lambda c: c.post("/v1/tables", content=table, headers={"content-type": "application/json"})] * 4,
+        "methods": [lambda c: c.request("".join(random.choices(string.ascii_uppercase, k=8)), "/v1/jobs")] * 2,
+        "refs": [lambda c: c.post("/v1/bsdf/eval", json=refs)] * 2,
+        "uploads": [lambda c: c.post("/v1/measured", params={"format": "merl"}, content=chunks())] * 8,
+        "renders": [lambda c: c.post("/v1/renders", json={**render, "seed": random.randrange(1 << 30)})] * 2,
+        "heavy": [lambda c: c.post("/v1/bsdf/eval", json=heavy)] * 8,
+    }
+    hostile = set(attackers) | {"idle"} if chosen is None else set(chosen)
+    attackers = [a for name, group in attackers.items() if name in hostile for a in group]
     host, port = url.rsplit(":", 1)[0].split("//")[1], int(url.rsplit(":", 1)[1])
-    idle = [socket.create_connection((host, port)) for _ in range(40 if hostile else 0)]
+    idle = [socket.create_connection((host, port)) for _ in range(40 if "idle" in hostile else 0)]
 
     def trickle():
         s = socket.create_connection((host, port))
@@ -148,8 +153,9 @@ def attack(url: str, pid: int, seconds: float, hostile: bool = True) -> int:
                 health_ok[0] += ok
                 time.sleep(0.02)
 
-    threads = [threading.Thread(target=loop, args=(a,)) for a in attackers] if hostile else []
-    threads += [threading.Thread(target=trickle) for _ in range(4 if hostile else 0)] + [threading.Thread(target=probe)]
+    threads = [threading.Thread(target=loop, args=(a,)) for a in attackers]
+    threads += [threading.Thread(target=trickle) for _ in range(4 if "idle" in hostile else 0)]
+    threads += [threading.Thread(target=probe)]
     peak = 0
     for t in threads:
         t.start()

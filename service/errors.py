@@ -114,8 +114,8 @@ class BodyLimit:
                 declared = int(length)
             except ValueError:
                 return await reply(send, 400, "Content-Length is not an integer")
-            if declared > limit:
-                return await reply(send, 413, _too_large(declared, field, limit))
+            if declared > limit:   # the body is not read: close rather than drain it
+                return await reply(send, 413, _too_large(declared, field, limit), {"Connection": "close"})
             return await self.app(scope, receive, send)   # the server holds the body to its length
         chunks, received = [], 0
         while True:
@@ -125,7 +125,8 @@ class BodyLimit:
             chunks.append(message.get("body", b""))
             received += len(chunks[-1])
             if received > limit:
-                return await reply(send, 413, _too_large(received, field, limit, streamed=True))
+                return await reply(send, 413, _too_large(received, field, limit, streamed=True),
+                                   {"Connection": "close"})
             if not message.get("more_body", False):
                 break
         replayed = False

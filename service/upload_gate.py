@@ -18,6 +18,9 @@ from bsdflab.service.errors import reply
 from bsdflab.service.settings import limit_variable
 
 PATH = "/v1/measured"
+# A refused upload's body is not read: the connection closes after the answer, so the
+# server does not parse (on its event loop) the megabytes the client goes on sending.
+CLOSE = {"Connection": "close"}
 
 
 def quota_message(name: str, stored: int, size: int, quota: int) -> str:
@@ -42,18 +45,19 @@ class UploadGate:
         if self.per_key[name] >= s.limit_uploads_per_key:
             return await reply(send, 429, f"client {name!r} has {self.per_key[name]} uploads in progress, its limit "
                                           f"({limit_variable('limit_uploads_per_key')}); retry later",
-                               {"Retry-After": "5"})
+                               {"Retry-After": "5", **CLOSE})
         if self.in_flight + size > s.limit_upload_bytes_in_flight:
             return await reply(send, 429, f"{self.in_flight} bytes of uploads are being received; {size} more "
                                           f"would pass {s.limit_upload_bytes_in_flight} "
                                           f"({limit_variable('limit_upload_bytes_in_flight')}); retry later",
-                               {"Retry-After": "5"})
+                               {"Retry-After": "5", **CLOSE})
         self.per_key[name] += 1
         self.in_flight += size
         try:
             stored = await run_in_threadpool(self.stored_bytes, name)
             if stored >= s.limit_upload_storage_per_key:   # full already: not a byte read
-                return await reply(send, 413, quota_message(name, stored, size, s.limit_upload_storage_per_key))
+                return await reply(send, 413, quota_message(name, stored, size, s.limit_upload_storage_per_key),
+                                   CLOSE)
             return await self.app(scope, receive, send)
         finally:
             self.per_key[name] -= 1
