@@ -91,6 +91,9 @@ class Settings(LibrarySettings):
                                            "last answer) is closed")
     server_read_timeout_s: float = Field(30.0, gt=0, le=3600, description="a request whose body stalls this "
                                          "long is closed")
+    server_body_timeout_s: float = Field(600.0, gt=0, le=86400, description="a request whose body is not "
+                                         "complete this long after its headers is closed (a body trickled a "
+                                         "byte at a time never stalls)")
     server_max_header_bytes: int = Field(16 << 10, ge=1024, le=1 << 20, description="request line and headers "
                                                                                    "(h11; larger: 431/400)")
     server_backlog: int = Field(2048, ge=1, description="connections waiting to be accepted")

@@ -16,7 +16,8 @@ CAP = 4
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     env = {"BSDFLAB_SERVER_LIMIT_CONCURRENCY": str(CAP), "BSDFLAB_SERVER_HEADER_TIMEOUT_S": "1",
-           "BSDFLAB_SERVER_READ_TIMEOUT_S": "1", "BSDFLAB_EXECUTOR": "threads"}
+           "BSDFLAB_SERVER_READ_TIMEOUT_S": "1", "BSDFLAB_SERVER_BODY_TIMEOUT_S": "2",
+           "BSDFLAB_EXECUTOR": "threads"}
     process = ServiceProcess(tmp_path_factory.mktemp("connections"), env=env)
     yield process
     process.stop()
@@ -59,3 +60,29 @@ def test_healthz_answers_at_the_connection_cap_and_idle_sockets_close(server):
     finally:
         for s in [*idle, slow_headers, slow_body]:
             s.close()
+
+
+def test_a_trickled_body_is_closed_at_the_body_deadline(server):
+    """A body sent a byte every 0.2 s never stalls for the 1 s read timeout; before, such an
+    upload held its declared size of the upload bytes in flight for ever (every other
+    tenant's upload: 429). The server closes it at the 2 s body deadline; the loop is
+    bounded at 60 s. Mutation caught: no body deadline (the trickle runs the whole 60 s)."""
+    s = _open(server, b"POST /v1/measured?format=merl HTTP/1.1\r\nHost: x\r\nContent-Type: "
+                      b"application/octet-stream\r\nContent-Length: 100000\r\n\r\n")
+    s.settimeout(0.2)
+    closed = False
+    try:
+        for _ in range(300):
+            try:
+                s.sendall(b"x")
+                if s.recv(4096) == b"":
+                    closed = True
+                    break
+            except TimeoutError:
+                continue
+            except OSError:
+                closed = True
+                break
+    finally:
+        s.close()
+    assert closed
