@@ -53,6 +53,13 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+def benchmark_level(request: dict[str, Any]) -> str | None:
+    """The level whose benchmarks the request runs (quick has none: standard's), or None."""
+    if not request.get("benchmarks"):
+        return None
+    return request["level"] if request["level"] != "quick" else "standard"
+
+
 def key(request: dict[str, Any]) -> str:
     text = json.dumps({"kind": "validate", "bsdflab_version": __version__, "request": request}, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()
@@ -93,7 +100,7 @@ def run(request: dict[str, Any], out_dir: Path, progress, cancelled, runner=None
             raise JobCancelled(f"cancelled after {i} of {len(checks)} checks")
         results.append(run_check(check, level))
         progress((i + 1) / (len(checks) + (1 if request["benchmarks"] else 0)))
-    performance = run_benchmarks(level if level != "quick" else "standard", False) if request["benchmarks"] else []
+    performance = run_benchmarks(benchmark_level(request), False) if request["benchmarks"] else []
     doc = results_document(results, level, request["only"], provenance(level, ["bsdflab", "validate", "(job)"]),
                            performance, time.perf_counter() - start)
     k, out_dir = key(request), Path(out_dir)

@@ -16,6 +16,7 @@ from bsdflab.service.routers.tables import QUEUED
 from bsdflab.service.schemas import HASH_PATTERN, ValidationInfo, ValidationRequest
 from bsdflab.service.settings import limit_variable
 from bsdflab.service.views import job_info
+from bsdflab.validation.job import benchmark_level
 from bsdflab.validation.registry import LEVELS
 
 router = APIRouter(prefix="/v1/validations", tags=["validations"], route_class=ThreadedBody)
@@ -47,6 +48,11 @@ def create_validation(body: ValidationRequest, jobs: JobsDep, settings: Settings
     as a job: 202 with the job, or 200 with the report when this request ran before."""
     if LEVELS.index(body.level) > LEVELS.index(settings.limit_validation_level):
         raise HTTPException(422, f"level {body.level!r} is above this server's limit of "
+                                 f"{settings.limit_validation_level!r} ({limit_variable('limit_validation_level')})")
+    benchmarks = benchmark_level(body.model_dump())
+    if benchmarks is not None and LEVELS.index(benchmarks) > LEVELS.index(settings.limit_validation_level):
+        # a quick report's benchmarks are standard's (minutes): not below a quick cap
+        raise HTTPException(422, f"benchmarks run at level {benchmarks!r}, above this server's limit of "
                                  f"{settings.limit_validation_level!r} ({limit_variable('limit_validation_level')})")
     request, key = jobs.prepare(KIND, body.model_dump())
     found = jobs.cached(KIND, key) or jobs.adopt(KIND, key, request)

@@ -53,3 +53,12 @@ def test_a_validation_is_cancelled_between_checks(client):
 def test_bad_validation_requests_are_422(client, body, words):
     r = client.post("/v1/validations", json=body)
     assert r.status_code == 422 and words in r.text, r.text
+
+
+def test_benchmarks_are_under_the_level_cap(tmp_path):
+    """A quick report's benchmarks run at level standard (bench_thin_film and bench_layered,
+    minutes of CPU, up to 900 s each and not cancellable); a server capped at quick
+    accepted them with 202. Mutation caught: checking only ``level`` against the cap."""
+    with make_client(tmp_path, limit_validation_level="quick") as capped:
+        r = capped.post("/v1/validations", json={**ONE, "benchmarks": True})
+        assert r.status_code == 422 and "benchmarks" in r.text and "BSDFLAB_LIMIT_VALIDATION_LEVEL" in r.text, r.text
