@@ -41,7 +41,8 @@ class UploadGate:
         s = self.settings
         name = scope.get("state", {}).get("client", ANONYMOUS).name
         length = dict(scope.get("headers") or []).get(b"content-length", b"")
-        size = int(length) if length.isdigit() else s.limit_measured_bytes
+        # at most the upload cap: a body declared over it is BodyLimit's 413, not a "retry later"
+        size = min(int(length), s.limit_measured_bytes) if length.isdigit() else s.limit_measured_bytes
         if self.per_key[name] >= s.limit_uploads_per_key:
             return await reply(send, 429, f"client {name!r} has {self.per_key[name]} uploads in progress, its limit "
                                           f"({limit_variable('limit_uploads_per_key')}); retry later",

@@ -116,3 +116,12 @@ def test_a_merl_file_of_absurd_values_is_refused(tmp_path):
         raw = np.array(DIMS, dtype="<i4").tobytes() + np.full((3, *DIMS), 1e308, dtype="<f8").tobytes()
         r = _upload(client, raw, "merl")
         assert r.status_code == 422 and "MERL" in r.text, r.text
+
+
+def test_an_upload_declared_over_the_cap_is_413_not_retry_later(tmp_path):
+    """A body declared larger than ``BSDFLAB_LIMIT_MEASURED_BYTES`` and than the bytes in
+    flight was a 429 with Retry-After (a client retries for ever what can never pass).
+    Mutation caught: the gate counting the declared size uncapped (429)."""
+    with make_client(tmp_path, limit_measured_bytes=1 << 20, limit_upload_bytes_in_flight=2 << 20) as client:
+        r = client.post("/v1/measured", params={"format": "merl"}, content=b"x" * (3 << 20))
+        assert r.status_code == 413 and "BSDFLAB_LIMIT_MEASURED_BYTES" in r.text, r.text
