@@ -24,8 +24,9 @@ def _links(h: str) -> dict[str, str]:
     return {"self": f"/v1/renders/{h}", "png": f"/v1/renders/{h}/image.png", "exr": f"/v1/renders/{h}/image.exr"}
 
 
-def render_info(jobs: JobService, h: str, request: dict[str, Any], result: dict[str, Any] | None) -> RenderInfo:
-    job = jobs.store.latest_for(KIND, h)
+def render_info(jobs: JobService, h: str, request: dict[str, Any], result: dict[str, Any] | None,
+                client) -> RenderInfo:
+    job = jobs.visible(jobs.store.latest_for(KIND, h), client)   # never another tenant's job
     live = jobs.job(job["id"]) if job is not None else None
     if result is None and live is None:   # a record whose files are gone, and no job
         raise HTTPException(404, f"no render {h}")
@@ -45,7 +46,7 @@ def create_render(body: RenderRequest, jobs: JobsDep, settings: SettingsDep, cli
     over_limit(settings, "limit_render_samples", pixels * request["spp"], "width x height x spp")
     found = jobs.cached(KIND, key) or jobs.adopt(KIND, key, request)
     if found is not None:
-        return render_info(jobs, key, request, found)
+        return render_info(jobs, key, request, found, client)
     render_checks.check(request)   # what the worker would refuse, refused now (422)
     row, _ = jobs.submit(KIND, request, key, client)
     info = job_info(jobs.job(row["id"]))
@@ -53,14 +54,14 @@ def create_render(body: RenderRequest, jobs: JobsDep, settings: SettingsDep, cli
 
 
 @router.get("/{key}", response_model=RenderInfo, responses=NOT_FOUND, summary="A render's state and summary")
-def get_render(key: Hash, jobs: JobsDep) -> RenderInfo:
+def get_render(key: Hash, jobs: JobsDep, client: ClientDep) -> RenderInfo:
     row = jobs.store.artefact(key, KIND)
     if row is not None:
-        return render_info(jobs, key, row["request"], jobs.cached(KIND, key))
-    job = jobs.store.latest_for(KIND, key)
+        return render_info(jobs, key, row["request"], jobs.cached(KIND, key), client)
+    job = jobs.visible(jobs.store.latest_for(KIND, key), client)
     if job is None:
         raise HTTPException(404, f"no render {key}")
-    return render_info(jobs, key, job["request"], None)
+    return render_info(jobs, key, job["request"], None, client)
 
 
 def _file(jobs: JobService, key: str, which: str, client) -> FileResponse:

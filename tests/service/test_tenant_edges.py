@@ -59,6 +59,24 @@ def test_a_404_never_names_another_tenants_job(client):
         client.delete(f"/v1/jobs/{job['id']}", headers={"X-API-Key": ALICE})
 
 
+def test_a_render_never_shows_another_tenants_job(tmp_path):
+    """Renders are shared by content hash, their jobs are not: before, bob's GET
+    /v1/renders/{hash} of alice's running render answered her job (id, state, progress).
+    Mutation caught: ``render_info`` without ``jobs.visible`` (bob sees the job id)."""
+    keys = {"alice": {"key": ALICE}, "bob": {"key": BOB}}
+    settings = Settings(data_dir=tmp_path, executor="threads", workers=1, api_keys=keys, progress_interval_s=0.05)
+    with TestClient(create_app(settings)) as c:
+        job = c.post("/v1/renders", json={"scene": "sphere", "width": 64, "height": 64, "spp": 256},
+                     headers={"X-API-Key": ALICE}).json()
+        try:
+            mine = c.get(f"/v1/renders/{job['hash']}", headers={"X-API-Key": ALICE})
+            bob = c.get(f"/v1/renders/{job['hash']}", headers={"X-API-Key": BOB})
+            assert mine.status_code == 200 and job["id"] in mine.text
+            assert job["id"] not in bob.text and (bob.status_code == 404 or bob.json()["state"] == "done"), bob.text
+        finally:
+            c.delete(f"/v1/jobs/{job['id']}", headers={"X-API-Key": ALICE})
+
+
 def test_healthz_is_outside_the_key_rate(client):
     """Before: bob (1 request/s) got 429 on /healthz once over his rate. Mutation caught:
     the bucket taken before the public-path check."""
