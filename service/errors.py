@@ -1,7 +1,8 @@
 """Client errors as 4xx: the Python API's ValueError (and its TypeError / OverflowError on
-values pydantic let through) become 422 with the message; a full queue is 429; a body over
-the size limit is 413 (uvicorn has no limit of its own, so an ASGI middleware counts); a 405
-names every method of the path in ``Allow``, and HEAD answers wherever GET does."""
+values pydantic let through) become 422 with the message (at most MAX_MESSAGE_CHARS of it);
+a full queue is 429; a body over the size limit is 413 (uvicorn has no limit of its own, so
+an ASGI middleware counts); a 405 names every method of the path in ``Allow``, and HEAD
+answers wherever GET does."""
 from __future__ import annotations
 
 import json
@@ -21,6 +22,7 @@ from bsdflab.service.store import QueueFull
 CLIENT_ERRORS = (ValueError, TypeError, OverflowError)
 MAX_ERRORS = 20          # validation errors in one 422; the rest are counted, not listed
 MAX_INPUT_CHARS = 200    # of an invalid input echoed in one
+MAX_MESSAGE_CHARS = 1000  # of a Python API error's message (it may quote the input: an unknown name of 1 MB)
 METHODS = ("GET", "POST", "PUT", "PATCH", "DELETE")
 # Documented on every route that takes a body or parameters (FastAPI adds 422's schema).
 ERRORS = {400: {"description": "malformed request"},
@@ -40,7 +42,7 @@ def over_limit(settings, field: str, value: int, what: str) -> None:
 
 def install(app: FastAPI) -> None:
     async def client_error(request: Request, exc: Exception) -> JSONResponse:
-        return JSONResponse({"detail": str(exc) or type(exc).__name__}, status_code=422)
+        return JSONResponse({"detail": cut_message(str(exc) or type(exc).__name__)}, status_code=422)
 
     async def queue_full(request: Request, exc: QueueFull) -> JSONResponse:
         return JSONResponse({"detail": f"{exc} ({limit_variable(exc.setting)}); retry later"},
@@ -60,6 +62,11 @@ def install(app: FastAPI) -> None:
     app.add_exception_handler(RequestValidationError, invalid)
     app.add_exception_handler(QueueFull, queue_full)
     app.add_exception_handler(StarletteHTTPException, http_error)
+
+
+def cut_message(text: str) -> str:
+    """A message as answered: its start when longer than MAX_MESSAGE_CHARS."""
+    return text if len(text) <= MAX_MESSAGE_CHARS else text[:MAX_MESSAGE_CHARS] + "..."
 
 
 def _short(value):

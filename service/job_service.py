@@ -21,6 +21,7 @@ from bsdflab.jobs import tabulate as tabulate_kind
 from bsdflab.measured import store as measured_store
 from bsdflab.service import uploads
 from bsdflab.service.auth import ANONYMOUS, Client
+from bsdflab.service.errors import cut_message
 from bsdflab.service.settings import Settings
 from bsdflab.service.store import JobStore
 
@@ -205,7 +206,9 @@ class JobService:
             log.info("job %s (%s) done in %.1f s", job_id, handle.kind, elapsed)
             return
         error = handle.error()
-        self.store.finish(job_id, handle.state, elapsed, error=str(error),
+        # as every client error: cut short, and no server folder (a worker's OSError names its file)
+        public_error = cut_message(str(error).replace(str(self.settings.data_dir), "<data folder>"))
+        self.store.finish(job_id, handle.state, elapsed, error=public_error,
                           error_type=getattr(error, "error_type", type(error).__name__))
         log.info("job %s (%s) %s after %.1f s: %s", job_id, handle.kind, handle.state, elapsed, error)
 

@@ -76,3 +76,15 @@ def test_a_body_of_too_many_arrays_is_refused_before_parsing(tmp_path):
         assert r.status_code == 422 and "BSDFLAB_LIMIT_JSON_CONTAINERS" in r.text
         assert _post(client, "/v1/bsdf/eval", {"model": DIFFUSE, "wi": [[0, 0, 1]] * 400,
                                                "wo": [[0, 0, 1]]}).status_code == 200
+
+
+@pytest.mark.parametrize("route, body", [
+    ("/v1/bsdf/eval", {"model": {"type": "roughconductor", "material": "m" * 100_000}, "theta_i": [0], "theta_o": [0]}),
+    ("/v1/renders", {"scene": "s" * 100_000}),
+    ("/v1/tables", {"model": DIFFUSE, "grid": {"g" * 100_000: 1}}),
+])
+def test_a_python_api_message_quoting_the_input_is_cut(client, route, body):
+    """The Python API's ValueError quotes a bad name whole ("unknown metal '<100 KB>'"):
+    the 422 echoed the body's size back. Mutation caught: ``str(exc)`` uncut (100 KB)."""
+    r = _post(client, route, body)
+    assert r.status_code == 422 and len(r.content) < 2000, (r.status_code, len(r.content))
