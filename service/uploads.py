@@ -11,6 +11,8 @@ The same bytes give the same hash and one file; each client that uploaded them o
 from __future__ import annotations
 
 import hashlib
+import threading
+from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +27,10 @@ KIND = "measured"
 FORMATS = {"rgl": ("measured", Measured, ".bsdf"), "merl": ("merl", Merl, ".binary")}
 MODEL_FORMAT = {model_type: fmt for fmt, (model_type, _, _) in FORMATS.items()}
 DESCRIPTION_PREVIEW = 200   # characters of an RGL header's description kept (a 60 MiB one was echoed whole)
+# One client's uploads checked against its quota and stored one at a time: two at once
+# both passed the check before either was stored (the quota overshot by an upload).
+_CLIENT_LOCKS: defaultdict[str, threading.Lock] = defaultdict(threading.Lock)
+_LOCKS_LOCK = threading.Lock()
 
 
 def summary(model) -> dict[str, Any]:
@@ -46,6 +52,13 @@ def upload(jobs, data: bytes, fmt: str, client: str, quota: int | None = None) -
     """Check and store ``data`` as a ``fmt`` file; its record ``{"hash", "format", "summary"}``.
     ValueError with the reader's message (the file called "the upload") when it does not read;
     413 when a file new to ``client`` would take its stored bytes past ``quota``."""
+    with _LOCKS_LOCK:
+        lock = _CLIENT_LOCKS[client]   # one per configured key (and the anonymous client)
+    with lock:
+        return _upload(jobs, data, fmt, client, quota)
+
+
+def _upload(jobs, data: bytes, fmt: str, client: str, quota: int | None) -> dict[str, Any]:
     model_type, reader, suffix = FORMATS[fmt]
     h = hashlib.sha256(data).hexdigest()
     if quota is not None and not jobs.store.uploaded(h, client):

@@ -125,3 +125,34 @@ def test_an_upload_declared_over_the_cap_is_413_not_retry_later(tmp_path):
     with make_client(tmp_path, limit_measured_bytes=1 << 20, limit_upload_bytes_in_flight=2 << 20) as client:
         r = client.post("/v1/measured", params={"format": "merl"}, content=b"x" * (3 << 20))
         assert r.status_code == 413 and "BSDFLAB_LIMIT_MEASURED_BYTES" in r.text, r.text
+
+
+def test_concurrent_uploads_of_one_key_do_not_overshoot_its_quota(tmp_path, rgl_files, monkeypatch):
+    """Two uploads of one key at once (its default concurrency) each passed the quota
+    check before either was stored: both 200, the quota passed by a file. The reader is
+    made to wait (up to 3 s) for the other upload's reader, so without the per-client lock
+    the two always overlap. Mutation caught: no lock around check and store (two 200s)."""
+    import threading
+
+    from bsdflab.service import uploads
+    model_type, reader, suffix = uploads.FORMATS["rgl"]
+    both = threading.Barrier(2, timeout=3)
+
+    def waiting_reader(path):
+        try:
+            both.wait()
+        except threading.BrokenBarrierError:   # the other upload waits for this one: no overlap
+            pass
+        return reader(path)
+
+    monkeypatch.setitem(uploads.FORMATS, "rgl", (model_type, waiting_reader, suffix))
+    size = max(p.stat().st_size for p in rgl_files)
+    with make_client(tmp_path, limit_measured_bytes=1 << 20, limit_upload_storage_per_key=size + 10) as client:
+        codes = []
+        threads = [threading.Thread(target=lambda p=p: codes.append(_upload(client, p.read_bytes()).status_code))
+                   for p in rgl_files[:2]]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(60)
+        assert sorted(codes) == [200, 413], codes
