@@ -215,9 +215,15 @@ class JobService:
     def close(self) -> None:
         """Stop monitoring first (a shutdown's interruptions are not outcomes), then the
         executor; unfinished jobs go back to queued in the store for the next start, no
-        start counted against them (a graceful stop is not the job's fault)."""
+        start counted against them (a graceful stop is not the job's fault), except those a
+        client asked to cancel, recorded cancelled (else re-run at every start, for ever)."""
         self._stop.set()
         self._monitor.join()
+        with self._lock:   # before the executor's shutdown, which asks every job to stop
+            asked = [(job_id, h.progress()[1]) for job_id, h in self._handles.items() if h.cancel_requested()]
+        for job_id, elapsed in asked:   # a client's cancel outlives the stop: never re-queued
+            self.store.finish(job_id, "cancelled", elapsed, error="cancelled (the server stopped before the job "
+                              "reached a point where it stops)", error_type="JobCancelled")
         self.executor.shutdown()
         released = self.store.release_running()
         if released:

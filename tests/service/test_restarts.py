@@ -64,3 +64,20 @@ def test_a_job_running_when_its_server_died_counts_a_start(tmp_path):
     found = service.store.job(row["id"])
     service.close()
     assert found["state"] == "failed" and found["error_type"] == "Interrupted"
+
+
+def test_a_job_cancelled_before_a_graceful_stop_is_not_run_again(tmp_path):
+    """A cancel is noticed at the job's next stopping point (a validation check, a
+    benchmark: minutes); a graceful stop before it re-queued the job, and every start ran
+    it again. Here the job sleeps 3 s between its points and the service stops at once
+    after the cancel. Mutation caught: ``close`` without recording the asked cancels (the
+    job is queued and starts again)."""
+    service = _service(tmp_path)
+    row, _ = service.submit("test-steps", {"steps": 2, "step_s": 3.0, "n": 4}, "d" * 64, ANONYMOUS)
+    _wait_running(service, row["id"])
+    assert service.cancel(row["id"])
+    service.close()
+    service = _service(tmp_path)
+    found = service.store.job(row["id"])
+    service.close()
+    assert found["state"] == "cancelled", found
