@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import contextlib
+from collections import Counter
 
 from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
@@ -61,6 +62,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.settings = settings
     bsdf.MODELS.max_bytes = settings.model_cache_bytes
     app.state.heavy = HeavyPool(settings.heavy_concurrency, settings.compute_deadline_s)
+    app.state.event_streams = Counter()   # open progress streams by client (routers.jobs)
     app.state.metrics = metrics.Metrics()
     app.state.metrics.bind(app)
     errors.install(app)

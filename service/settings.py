@@ -73,6 +73,8 @@ class Settings(LibrarySettings):
     limit_render_samples: int = Field(1 << 28, ge=1, description="width x height x spp of one render")
     limit_validation_level: Literal["quick", "standard", "full"] = Field(
         "standard", description="the highest validation level a request may ask for (full: hours)")
+    limit_event_streams_per_key: int = Field(8, ge=1, description="open progress streams (GET /v1/jobs/{id}/events) "
+                                             "of one client key")
     limit_queue: int = Field(64, ge=1, description="queued + running jobs")
     limit_queue_reserve: int = Field(8, ge=0, description="queue slots a (non-admin) key that already has "
                                                           "jobs may not take: room for another key")
