@@ -8,6 +8,7 @@ from __future__ import annotations
 import collections
 import inspect
 import json
+import os
 import threading
 from typing import Any
 
@@ -35,12 +36,22 @@ def model_from_spec(spec: dict[str, Any]) -> BSDF:
 class ModelCache:
     """The last ``size`` models built by `model_from_spec`, by their spec: building a
     spectral model's core objects costs far more than a small query (a server keeps one).
-    BSDF objects are safe to share between threads (the core is thread-safe)."""
+    At most ``max_bytes`` of models by `model_bytes` (a measured file's model is tens of MB;
+    one larger than the bound is built and not kept). BSDF objects are safe to share
+    between threads (the core is thread-safe)."""
 
-    def __init__(self, size: int = 32):
-        self.size = size
-        self._models: collections.OrderedDict[str, BSDF] = collections.OrderedDict()
+    def __init__(self, size: int = 32, max_bytes: int | None = None):
+        self.size, self.max_bytes = size, max_bytes
+        self._models: collections.OrderedDict[str, tuple[BSDF, int]] = collections.OrderedDict()
+        self._bytes = 0
         self._lock = threading.Lock()
+
+    @property
+    def bytes(self) -> int:
+        return self._bytes
+
+    def __len__(self) -> int:
+        return len(self._models)
 
     def get(self, spec: dict[str, Any]) -> BSDF:
         try:
@@ -50,13 +61,30 @@ class ModelCache:
         with self._lock:
             if key in self._models:
                 self._models.move_to_end(key)
-                return self._models[key]
+                return self._models[key][0]
         model = model_from_spec(spec)
+        size = model_bytes(model)
+        if self.max_bytes is not None and size > self.max_bytes:
+            return model
         with self._lock:
-            self._models[key] = model
-            while len(self._models) > self.size:
-                self._models.popitem(last=False)
+            if key not in self._models:
+                self._models[key] = (model, size)
+                self._bytes += size
+            while len(self._models) > self.size or (self.max_bytes is not None and self._bytes > self.max_bytes):
+                self._bytes -= self._models.popitem(last=False)[1][1]
         return model
+
+
+SMALL_MODEL_BYTES = 64 << 10   # a parametric model and its core objects
+
+
+def model_bytes(model: BSDF) -> int:
+    """About the memory a built model holds: twice its file for a model that reads one
+    (the values as read and the core's copy), else a small constant."""
+    path = getattr(model, "path", None) if getattr(model, "reads_path", False) else None
+    if isinstance(path, str) and os.path.isfile(path):
+        return 2 * os.path.getsize(path) + SMALL_MODEL_BYTES
+    return SMALL_MODEL_BYTES
 
 
 def keyword_defaults(function) -> dict[str, Any]:

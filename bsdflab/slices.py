@@ -31,13 +31,15 @@ def is_stochastic(bsdf: BSDF) -> bool:
 
 
 def evaluate(bsdf: BSDF, wi, wo, wavelengths=None, samples: int | None = None,
-             seed: int | None = None) -> Values:
+             seed: int | None = None, thickness=None) -> Values:
     """``bsdf.eval`` for every (wi, wo) pair, with standard errors for stochastic models.
-    ``samples`` and ``seed`` replace a stochastic model's own (ignored otherwise)."""
+    ``samples`` and ``seed`` replace a stochastic model's own (ignored otherwise);
+    ``thickness`` (nm, one or one per pair) replaces a thin-film coating's total thickness."""
     if is_stochastic(bsdf):
-        value, err = bsdf.eval_with_error(wi, wo, wavelengths=wavelengths, samples=samples, seed=seed)
+        value, err = bsdf.eval_with_error(wi, wo, wavelengths=wavelengths, samples=samples, seed=seed,
+                                          thickness=thickness)
         return Values(value, err)
-    return Values(bsdf.eval(wi, wo, wavelengths=wavelengths), None)
+    return Values(bsdf.eval(wi, wo, wavelengths=wavelengths, thickness=thickness), None)
 
 
 def directions_from_angles(theta_i_deg, theta_o_deg, phi_deg) -> tuple[np.ndarray, np.ndarray]:

@@ -2,18 +2,33 @@
 from __future__ import annotations
 
 import contextlib
+from collections import Counter
 
 from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
 
 import bsdflab
+from bsdflab.jobs import register_kind
 from bsdflab.service import auth, errors, logs, metrics
 from bsdflab.service.deps import KEY
 from bsdflab.service.errors import KEY_ERRORS
 from bsdflab.service.heavy import HeavyPool
 from bsdflab.service.job_service import JobService
-from bsdflab.service.routers import bsdf, catalog, jobs, measured, meta, page, renders, tables, thinfilm
+from bsdflab.service.routers import (
+    bsdf,
+    catalog,
+    docs,
+    jobs,
+    measured,
+    meta,
+    page,
+    renders,
+    tables,
+    thinfilm,
+    validations,
+)
 from bsdflab.service.settings import Settings
+from bsdflab.service.upload_gate import UploadGate
 from bsdflab.util import native_output
 
 DESCRIPTION = """BSDF queries, thin-film spectra, tables and renders from bsdflab's Python API.
@@ -42,14 +57,19 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             app.state.heavy.close()
             native_output.capture_descriptors(capturing)
 
-    app = FastAPI(title="bsdflab", version=bsdflab.__version__, description=DESCRIPTION, lifespan=lifespan)
+    app = FastAPI(title="bsdflab", version=bsdflab.__version__, description=DESCRIPTION, lifespan=lifespan,
+                  docs_url=None, redoc_url=None)   # served by routers.docs, without a CDN
     app.state.settings = settings
+    bsdf.MODELS.max_bytes = settings.model_cache_bytes
     app.state.heavy = HeavyPool(settings.heavy_concurrency, settings.compute_deadline_s)
+    app.state.event_streams = Counter()   # open progress streams by client (routers.jobs)
     app.state.metrics = metrics.Metrics()
     app.state.metrics.bind(app)
     errors.install(app)
     app.add_middleware(errors.BodyLimit, limit=settings.limit_body_bytes,
                        routes={"/v1/measured": ("limit_measured_bytes", settings.limit_measured_bytes)})
+    app.add_middleware(UploadGate, settings=settings,                       # after the key, before the body
+                       stored_bytes=lambda client: app.state.jobs.store.upload_bytes(client))
     app.add_middleware(errors.HeadAsGet)
     app.add_middleware(auth.KeyCheck, clients=clients, reply=errors.reply)   # before any body is read
     app.add_middleware(metrics.Timing, metrics=app.state.metrics)
@@ -57,7 +77,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(meta.router)
     app.include_router(metrics.router)
     app.include_router(page.router)
-    for module in (catalog, bsdf, thinfilm, tables, measured, renders, jobs):
+    app.include_router(docs.router)
+    register_kind("validate", "bsdflab.validation.job")   # a layer above bsdflab.jobs: registered by name
+    for module in (catalog, bsdf, thinfilm, tables, measured, renders, validations, jobs):
         app.include_router(module.router, dependencies=[KEY], responses=KEY_ERRORS)
     app.mount("/static", StaticFiles(directory=page.STATIC_DIR), name="static")
     if not clients:

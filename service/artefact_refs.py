@@ -4,8 +4,10 @@ resolved inside the artefact store.
 The Python API and the CLI accept ``{"type": "table", "path": ...}`` (and ``measured``,
 ``merl``); over HTTP a request names one as ``{"type": "table", "hash": "<64 hex digits>"}``
 (``GET /v1/tables``), ``{"type": "measured", "hash": ...}`` or ``{"type": "merl", "hash": ...}``
-(uploaded with ``POST /v1/measured``, listed by ``GET /v1/measured``), and this module turns
-that into the store's own file before any model is built. Every other
+(uploaded with ``POST /v1/measured``, listed by ``GET /v1/measured``), accepted only where a
+model goes (a request's ``model``, a layered model's ``base`` and ``interfaces``) and
+checked against the store before any model is built: a table becomes the store's file, a
+measured file keeps its hash (bsdflab.measured.store finds it). Every other
 path-bearing field (a table's ``path`` or ``table``, a scene file, a mesh, an environment
 map, a texture) is refused with one message, the same whatever the path names, and before
 anything touches the file system: a client learns nothing about the server's files.
@@ -34,46 +36,88 @@ STORED = {"table": (frozenset({"type", "hash", "film_lookup"}), "GET /v1/tables"
 _HASH = re.compile(r"[0-9a-f]{64}")
 
 
+MISPLACED = ('a stored file named by hash ({"type": "table", "measured" or "merl", "hash": ...}) is accepted '
+             'only where a model goes: a request\'s "model", or a layered model\'s "base" or "interfaces"')
+MODEL_KEYS = ("model",)                                # a request's keys that hold a model
+NESTED_MODELS = {"layered": ("base", "interfaces")}    # a model's keys that hold models
+
+
 def refuse() -> None:
     raise HTTPException(422, REFUSED)
 
 
-def resolve(value: Any, stored_file) -> Any:
-    """``value`` (a request's JSON) with every ``{"type": t, "hash": h}`` of a type in
-    ``STORED`` replaced by the store's file ``stored_file(t, h)`` (a Path, or None when the
-    store has no such file); any other path-bearing field is refused (422, one message)."""
+def resolve(value: Any, stored_file, max_refs: int | None = None) -> Any:
+    """``value`` (a request's JSON) with every ``{"type": t, "hash": h}`` where a model goes
+    checked against the store (``stored_file(t, h)``: a Path, or None when the store has no
+    such file): a table becomes the store's file, a measured file keeps its hash (its model
+    finds it in the store folder, bsdflab.measured.store, so no path enters the request, an
+    error or a table file). A reference anywhere else is refused without being looked up,
+    as is any path-bearing field (422, one message each) and more than ``max_refs``
+    references."""
     check.nesting("the request", value)   # without recursion: the walk below recurses
-    return _resolve(value, stored_file)
-
-
-def _resolve(value: Any, stored_file) -> Any:
-    if isinstance(value, list):
-        return [_resolve(v, stored_file) for v in value]
+    walk = _Walk(stored_file, max_refs)
     if not isinstance(value, dict):
-        return value
-    if isinstance(value.get("type"), str) and value["type"] in STORED:
-        return _stored(value, stored_file)
-    out = {}
-    for k, v in value.items():
-        if k in PATH_FIELDS and v is not None and not isinstance(v, (bool, int, float)):
+        return walk.plain(value)
+    return {k: walk.model(v) if k in MODEL_KEYS else walk.plain(v) for k, v in value.items()}
+
+
+class _Walk:
+    def __init__(self, stored_file, max_refs: int | None):
+        self.stored_file, self.max_refs, self.refs = stored_file, max_refs, 0
+
+    def plain(self, value: Any) -> Any:
+        """Where no model goes: no references, no paths."""
+        if isinstance(value, list):
+            return [self.plain(v) for v in value]
+        if not isinstance(value, dict):
+            return value
+        if isinstance(value.get("type"), str) and value["type"] in STORED:
+            if set(value) - STORED[value["type"]][0]:
+                refuse()   # a path is refused as a path, wherever it is
+            raise HTTPException(422, MISPLACED)
+        return {k: self.plain(_no_path(k, v)) for k, v in value.items()}
+
+    def model(self, value: Any) -> Any:
+        if not isinstance(value, dict):
+            return self.plain(value)
+        kind = value.get("type")
+        if isinstance(kind, str) and kind in STORED:
+            return self.stored(value)
+        nested = NESTED_MODELS.get(kind, ()) if isinstance(kind, str) else ()
+        out = {}
+        for k, v in value.items():
+            _no_path(k, v)
+            if k in nested:
+                out[k] = [self.model(x) for x in v] if isinstance(v, list) else self.model(v)
+            else:
+                out[k] = self.plain(v)
+        return out
+
+    def stored(self, value: dict[str, Any]) -> dict[str, Any]:
+        kind = value["type"]
+        fields, listing = STORED[kind]
+        if set(value) - fields:
             refuse()
-        out[k] = _resolve(v, stored_file)
-    return out
+        self.refs += 1
+        if self.max_refs is not None and self.refs > self.max_refs:
+            raise HTTPException(422, f"more than {self.max_refs} stored files named in one request "
+                                     "(BSDFLAB_LIMIT_STORE_REFS)")
+        h = value.get("hash")
+        if not isinstance(h, str) or _HASH.fullmatch(h) is None:
+            raise HTTPException(422, f'a {kind} is named by its content hash: {{"type": "{kind}", "hash": '
+                                     '"<64 lower-case hex digits>"}')
+        path = self.stored_file(kind, h)
+        if path is None:
+            raise HTTPException(422, f"no {kind} {h} in this server's store ({listing})")
+        if kind != "table":
+            return dict(value)   # found by its hash in the store folder when the model is built
+        return {**{k: v for k, v in value.items() if k != "hash"}, "path": str(path)}
 
 
-def _stored(value: dict[str, Any], stored_file) -> dict[str, Any]:
-    kind = value["type"]
-    fields, listing = STORED[kind]
-    if set(value) - fields:
+def _no_path(key: str, value: Any) -> Any:
+    if key in PATH_FIELDS and value is not None and not isinstance(value, (bool, int, float)):
         refuse()
-    h = value.get("hash")
-    if not isinstance(h, str) or _HASH.fullmatch(h) is None:
-        raise HTTPException(422, f'a {kind} is named by its content hash: {{"type": "{kind}", "hash": '
-                                 '"<64 lower-case hex digits>"}')
-    path = stored_file(kind, h)
-    if path is None:
-        raise HTTPException(422, f"no {kind} {h} in this server's store ({listing})")
-    return {**{k: v for k, v in value.items() if k != "hash"}, "path": str(path)}
+    return value
 
 
 def public(value: Any, artefact_dir: Path | None = None) -> Any:

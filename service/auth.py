@@ -6,7 +6,8 @@ Keys come from the settings: ``api_key`` (one admin key, named "admin") and ``ap
 anonymous admin. With keys, `KeyCheck` (an ASGI middleware, so it runs before any body is
 received) answers 401 to a request without a valid key, except on the public paths: health,
 the page and its static files, and the API's documentation (the schema holds no data). A
-known client over its request rate gets 429 with ``Retry-After``. The client is left in
+known client over its request rate gets 429 with ``Retry-After`` (the public paths take
+nothing from the rate: a busy client's health checks still answer). The client is left in
 ``scope["state"]["client"]`` for the routes: jobs belong to the client that created them
 (an admin sees all), and each client has its own share of the job queue.
 """
@@ -22,7 +23,7 @@ from pathlib import Path
 
 PUBLIC_PATHS = frozenset({"/healthz", "/", "/vendor/plotly.min.js", "/docs", "/docs/oauth2-redirect",
                           "/redoc", "/openapi.json"})
-PUBLIC_PREFIXES = ("/static/",)
+PUBLIC_PREFIXES = ("/static/", "/vendor/")
 UNAUTHORISED = "a valid API key is required (X-API-Key header or Bearer token)"
 
 
@@ -129,9 +130,11 @@ class KeyCheck:
             state["client"] = ANONYMOUS
             return await self.app(scope, receive, send)
         client = self.identify(given_key(scope.get("headers") or []))
+        if is_public(scope["path"]):   # health, the page, the docs: no key needed, no rate taken
+            if client is not None:
+                state["client"] = client
+            return await self.app(scope, receive, send)
         if client is None:
-            if is_public(scope["path"]):
-                return await self.app(scope, receive, send)
             return await self.reply(send, 401, UNAUTHORISED, {"WWW-Authenticate": "Bearer"})
         wait = self.buckets.take(client)
         if wait > 0:

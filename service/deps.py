@@ -47,6 +47,6 @@ ClientDep = Annotated[Client, Depends(require_key)]
 
 
 def model_spec(spec: dict[str, Any], jobs: JobService) -> dict[str, Any]:
-    """A request's model spec with tables and measured files named by hash resolved in the
+    """A request's model spec with tables and measured files named by hash checked in the
     store; any server path refused (bsdflab.service.artefact_refs)."""
-    return artefact_refs.resolve(spec, jobs.stored_file)
+    return artefact_refs.resolve(spec, jobs.stored_file, jobs.settings.limit_store_refs)

@@ -1,13 +1,16 @@
 """Client errors as 4xx: the Python API's ValueError (and its TypeError / OverflowError on
-values pydantic let through) become 422 with the message; a full queue is 429; a body over
-the size limit is 413 (uvicorn has no limit of its own, so an ASGI middleware counts); a 405
-names every method of the path in ``Allow``, and HEAD answers wherever GET does."""
+values pydantic let through) become 422 with the message (at most MAX_MESSAGE_CHARS of it);
+a full queue is 429; a body over the size limit is 413 (uvicorn has no limit of its own, so
+an ASGI middleware counts); a 405 names every method of the path in ``Allow``, and HEAD
+answers wherever GET does."""
 from __future__ import annotations
 
 import json
 
 from fastapi import FastAPI, HTTPException, Request
+from fastapi.encoders import jsonable_encoder
 from fastapi.exception_handlers import http_exception_handler
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse, Response
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.routing import Match
@@ -17,6 +20,9 @@ from bsdflab.service.settings import limit_variable
 from bsdflab.service.store import QueueFull
 
 CLIENT_ERRORS = (ValueError, TypeError, OverflowError)
+MAX_ERRORS = 20          # validation errors in one 422; the rest are counted, not listed
+MAX_INPUT_CHARS = 200    # of an invalid input echoed in one
+MAX_MESSAGE_CHARS = 1000  # of a Python API error's message (it may quote the input: an unknown name of 1 MB)
 METHODS = ("GET", "POST", "PUT", "PATCH", "DELETE")
 # Documented on every route that takes a body or parameters (FastAPI adds 422's schema).
 ERRORS = {400: {"description": "malformed request"},
@@ -36,7 +42,7 @@ def over_limit(settings, field: str, value: int, what: str) -> None:
 
 def install(app: FastAPI) -> None:
     async def client_error(request: Request, exc: Exception) -> JSONResponse:
-        return JSONResponse({"detail": str(exc) or type(exc).__name__}, status_code=422)
+        return JSONResponse({"detail": cut_message(str(exc) or type(exc).__name__)}, status_code=422)
 
     async def queue_full(request: Request, exc: QueueFull) -> JSONResponse:
         return JSONResponse({"detail": f"{exc} ({limit_variable(exc.setting)}); retry later"},
@@ -48,10 +54,52 @@ def install(app: FastAPI) -> None:
                                 headers={"Allow": ", ".join(allowed_methods(request.app, request.scope))})
         return await http_exception_handler(request, exc)
 
+    async def invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
+        return JSONResponse({"detail": bounded_errors(exc.errors())}, status_code=422)
+
     for cls in CLIENT_ERRORS:
         app.add_exception_handler(cls, client_error)
+    app.add_exception_handler(RequestValidationError, invalid)
     app.add_exception_handler(QueueFull, queue_full)
     app.add_exception_handler(StarletteHTTPException, http_error)
+
+
+def cut_message(text: str) -> str:
+    """A message as answered: its start when longer than MAX_MESSAGE_CHARS."""
+    return text if len(text) <= MAX_MESSAGE_CHARS else text[:MAX_MESSAGE_CHARS] + "..."
+
+
+def _short(value):
+    """An invalid input as echoed in a 422: itself when short, else its start as text (a
+    large list is cut before it is encoded, not after)."""
+    if isinstance(value, (list, tuple, dict)) and len(value) > 16:
+        items = list(value.items() if isinstance(value, dict) else value)[:16]
+        value = dict(items) if isinstance(value, dict) else items
+        cut = True
+    else:
+        cut = False
+    text = json.dumps(jsonable_encoder(value), default=str)
+    if cut or len(text) > MAX_INPUT_CHARS:
+        return text[:MAX_INPUT_CHARS] + "..."
+    return value
+
+
+def bounded_errors(errors) -> list[dict]:
+    """At most MAX_ERRORS entries: the first validation errors, each echoed input cut to
+    MAX_INPUT_CHARS, and (when there are more) a last entry counting the rest, so a 422's
+    size does not grow with the body's."""
+    shown, kept = [], len(errors) if len(errors) <= MAX_ERRORS else MAX_ERRORS - 1
+    for error in list(errors[:kept]):
+        error = {k: v for k, v in error.items() if k != "url"}
+        if "input" in error:
+            error["input"] = _short(error["input"])
+        if "ctx" in error:
+            error["ctx"] = {k: str(v)[:MAX_INPUT_CHARS] for k, v in error["ctx"].items()}
+        shown.append(jsonable_encoder(error))
+    if len(errors) > kept:
+        shown.append({"type": "more_errors", "loc": [], "msg": f"and {len(errors) - kept} more errors "
+                                                               "(only the first are listed)"})
+    return shown
 
 
 class BodyLimit:
@@ -73,8 +121,8 @@ class BodyLimit:
                 declared = int(length)
             except ValueError:
                 return await reply(send, 400, "Content-Length is not an integer")
-            if declared > limit:
-                return await reply(send, 413, _too_large(declared, field, limit))
+            if declared > limit:   # the body is not read: close rather than drain it
+                return await reply(send, 413, _too_large(declared, field, limit), {"Connection": "close"})
             return await self.app(scope, receive, send)   # the server holds the body to its length
         chunks, received = [], 0
         while True:
@@ -84,7 +132,8 @@ class BodyLimit:
             chunks.append(message.get("body", b""))
             received += len(chunks[-1])
             if received > limit:
-                return await reply(send, 413, _too_large(received, field, limit, streamed=True))
+                return await reply(send, 413, _too_large(received, field, limit, streamed=True),
+                                   {"Connection": "close"})
             if not message.get("more_body", False):
                 break
         replayed = False

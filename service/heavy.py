@@ -99,12 +99,14 @@ def check_cancelled() -> None:
 
 
 def evaluate_in_chunks(bsdf, wi: np.ndarray, wo: np.ndarray, wavelengths, samples: int | None,
-                       seed: int | None) -> slices.Values:
+                       seed: int | None, thickness: np.ndarray | None = None) -> slices.Values:
     """``slices.evaluate`` over the pairs in pieces, looking for a cancellation between them.
     Walks are seeded per pair from (seed, wi, wo), so the pieces give the same numbers as
     one call."""
     pairs = max(len(wi), len(wo))
     wi, wo = np.broadcast_to(wi, (pairs, 3)), np.broadcast_to(wo, (pairs, 3))
+    if thickness is not None:
+        thickness = np.broadcast_to(np.asarray(thickness, dtype=float), (pairs,))
     if slices.is_stochastic(bsdf):
         step = max(1, CHUNK_WALKS // (samples if samples is not None else bsdf.samples))
     else:
@@ -112,7 +114,8 @@ def evaluate_in_chunks(bsdf, wi: np.ndarray, wo: np.ndarray, wavelengths, sample
     values, errors = [], []
     for start in range(0, pairs, step):
         check_cancelled()
-        part = slices.evaluate(bsdf, wi[start:start + step], wo[start:start + step], wavelengths, samples, seed)
+        part = slices.evaluate(bsdf, wi[start:start + step], wo[start:start + step], wavelengths, samples, seed,
+                               None if thickness is None else thickness[start:start + step])
         values.append(part.values)
         errors.append(part.stderr)
     stderr = None if errors[0] is None else np.concatenate(errors)

@@ -6,7 +6,8 @@ the artefact folder (already computed), joined to the active job with the same h
 and outcomes from the executor's handles into the store. On start, jobs a previous
 server left queued or running are re-queued (their artefacts are written atomically, so
 nothing half-written is ever found). Stopping leaves unfinished jobs in the store for the
-next start, exactly as a crash would.
+next start without counting a start against them; a job found *running* at start (its
+server died under it) counts one, and the third such start fails it.
 """
 from __future__ import annotations
 
@@ -17,8 +18,10 @@ from typing import Any
 
 from bsdflab.jobs import JobHandle, get_kind, make_executor
 from bsdflab.jobs import tabulate as tabulate_kind
+from bsdflab.measured import store as measured_store
 from bsdflab.service import uploads
 from bsdflab.service.auth import ANONYMOUS, Client
+from bsdflab.service.errors import cut_message
 from bsdflab.service.settings import Settings
 from bsdflab.service.store import JobStore
 
@@ -33,6 +36,7 @@ class JobService:
         self.artefact_dir: Path = settings.artefact_dir
         self.artefact_dir.mkdir(parents=True, exist_ok=True)
         self.store = JobStore(settings.db_path)
+        measured_store.add_folder(self.artefact_dir)   # uploads by hash, here and in the workers started next
         self.executor = make_executor(settings.executor, settings.workers)
         self._handles: dict[str, JobHandle] = {}
         self._lock = threading.Lock()
@@ -96,11 +100,17 @@ class JobService:
         """(job row, created). Joins an active job with the same hash; QueueFull when the
         queue, or the client's share of it, is full."""
         row, created = self.store.submit(kind, content_hash, request, self.settings.limit_queue,
-                                         owner=client.name, owner_limit=client.max_jobs)
+                                         owner=client.name, owner_limit=client.max_jobs,
+                                         reserve=self._reserve(client))
         if created:
             log.info("job %s (%s) queued for client %s", row["id"], kind, client.name)
             self._start(row)
         return row, created
+
+    def _reserve(self, client: Client) -> int:
+        """Slots a tenant key with jobs leaves free for other keys; an admin key (and the
+        open service's anonymous client) is the operator and may use them."""
+        return 0 if client.admin else min(self.settings.limit_queue_reserve, self.settings.limit_queue - 1)
 
     def visible(self, row: dict[str, Any] | None, client: Client) -> dict[str, Any] | None:
         """The row when ``client`` may see it (an admin, or a client that created or joined
@@ -109,14 +119,24 @@ class JobService:
             return row
         return None
 
+    def job_hint(self, kind: str, content_hash: str, client: Client) -> str:
+        """"; job <id> is <state>" for a 404 when ``client`` may see the latest job of this
+        hash, else "" (another tenant's job is never named)."""
+        job = self.visible(self.store.latest_for(kind, content_hash), client)
+        return "" if job is None else f"; job {job['id']} is {job['state']}"
+
     def _start(self, row: dict[str, Any]) -> None:
         handle = self.executor.submit(row["kind"], row["request"], self.artefact_dir)
         with self._lock:
             self._handles[row["id"]] = handle
 
     def _recover(self) -> None:
+        """Start what the last server left. Only a job the store shows running counts a
+        start (that server died while it ran: it may be what killed it); a graceful stop
+        released its running jobs to queued (``close``), and a queued job never ran."""
         for row in self.store.active():
-            if row["attempts"] + 1 >= MAX_ATTEMPTS:
+            crashed = row["state"] == "running"
+            if crashed and row["attempts"] + 1 >= MAX_ATTEMPTS:
                 self.store.finish(row["id"], "failed", row["elapsed"],
                                   error=f"gave up after {MAX_ATTEMPTS} starts: the server stopped during "
                                         "each of them", error_type="Interrupted")
@@ -125,7 +145,7 @@ class JobService:
                 continue
             log.info("job %s (%s) re-queued after restart (the previous server left it %s)",
                      row["id"], row["kind"], row["state"])
-            self.store.requeue(row["id"])
+            self.store.requeue(row["id"], count=crashed)
             self._start(row)
 
     # -- reading and cancelling ------------------------------------------------------------
@@ -186,14 +206,26 @@ class JobService:
             log.info("job %s (%s) done in %.1f s", job_id, handle.kind, elapsed)
             return
         error = handle.error()
-        self.store.finish(job_id, handle.state, elapsed, error=str(error),
+        # as every client error: cut short, and no server folder (a worker's OSError names its file)
+        public_error = cut_message(str(error).replace(str(self.settings.data_dir), "<data folder>"))
+        self.store.finish(job_id, handle.state, elapsed, error=public_error,
                           error_type=getattr(error, "error_type", type(error).__name__))
         log.info("job %s (%s) %s after %.1f s: %s", job_id, handle.kind, handle.state, elapsed, error)
 
     def close(self) -> None:
         """Stop monitoring first (a shutdown's interruptions are not outcomes), then the
-        executor; unfinished jobs stay queued or running in the store for the next start."""
+        executor; unfinished jobs go back to queued in the store for the next start, no
+        start counted against them (a graceful stop is not the job's fault), except those a
+        client asked to cancel, recorded cancelled (else re-run at every start, for ever)."""
         self._stop.set()
         self._monitor.join()
+        with self._lock:   # before the executor's shutdown, which asks every job to stop
+            asked = [(job_id, h.progress()[1]) for job_id, h in self._handles.items() if h.cancel_requested()]
+        for job_id, elapsed in asked:   # a client's cancel outlives the stop: never re-queued
+            self.store.finish(job_id, "cancelled", elapsed, error="cancelled (the server stopped before the job "
+                              "reached a point where it stops)", error_type="JobCancelled")
         self.executor.shutdown()
+        released = self.store.release_running()
+        if released:
+            log.info("%d running jobs re-queued for the next start (graceful stop)", released)
         self.store.close()

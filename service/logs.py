@@ -17,6 +17,7 @@ import uuid
 
 REQUEST_ID: contextvars.ContextVar[str] = contextvars.ContextVar("bsdflab_request_id", default="-")
 TEXT_FORMAT = "%(asctime)s %(levelname)s %(name)s [%(request_id)s] %(message)s"
+METHOD_CHARS = 16   # a method name is a client's string too: an 8 KB one is not logged whole
 _TOKEN = re.compile(r"[A-Za-z0-9._-]{1,64}")
 log = logging.getLogger("bsdflab.service.requests")
 
@@ -76,6 +77,7 @@ class RequestLog:
             await self.app(scope, receive, tagged)
         finally:
             # the path as a JSON string: a client's %0A cannot forge a log line
-            log.info("%s %s %d %.1f ms", scope["method"], json.dumps(scope["path"][:256]), status,
+            # a method is a token (the HTTP parser refuses spaces and controls); cut to 16 characters
+            log.info("%s %s %d %.1f ms", scope["method"][:METHOD_CHARS], json.dumps(scope["path"][:256]), status,
                      1000 * (time.perf_counter() - start))
             REQUEST_ID.reset(token)

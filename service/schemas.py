@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict, model_validator
 from pydantic.json_schema import SkipJsonSchema
 
 
@@ -13,13 +13,38 @@ def _integral(value):
     return int(value) if isinstance(value, float) and value.is_integer() else value
 
 
+def _brief(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _numbers(value: Any) -> Any:
+    """A list of numbers checked in one pass, stopping at the first bad item: pydantic would
+    build one error per bad item (100 000 of them: an 18 MB answer, seconds of work)."""
+    if isinstance(value, list):
+        for i, item in enumerate(value):
+            if type(item) not in (int, float):   # strict: a bool is not a number
+                raise ValueError(f"item {i} is {_brief(item)}, not a number")
+    return value
+
+
+def _vectors(value: Any) -> Any:
+    """A list of 3-vectors checked in one pass (as ``_numbers``)."""
+    if isinstance(value, list):
+        for i, item in enumerate(value):
+            if type(item) is not list or len(item) != 3 or any(type(x) not in (int, float) for x in item):
+                raise ValueError(f"item {i} is {_brief(item)}, not a vector of 3 numbers")
+    return value
+
+
 # Integers are strict (true/false and "3" are refused: a seed of false was 0), except that
 # an integral number such as 3.0 is one, as JSON Schema says.
 Int = Annotated[int, BeforeValidator(_integral), Strict()]
 Seed = Annotated[Int, Field(ge=0, lt=1 << 64, description="random seed (uint64)")]
 Count = Annotated[Int, Field(ge=1, le=1 << 24)]
 Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
-Floats = Annotated[list[float], Field(min_length=1)]
+Floats = Annotated[list[float], BeforeValidator(_numbers), Field(min_length=1)]
+Vectors = Annotated[list[Vector3], BeforeValidator(_vectors), Field(min_length=1)]
 HASH_PATTERN = r"^[0-9a-f]{64}$"
 JOB_ID_PATTERN = r"^[0-9a-f]{32}$"
 
@@ -27,6 +52,17 @@ JOB_ID_PATTERN = r"^[0-9a-f]{32}$"
 class Request(BaseModel):
     # strict: a bool is neither a number nor an integer ([false] was the angle 0)
     model_config = ConfigDict(extra="forbid", strict=True)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _known_fields(cls, data: Any) -> Any:
+        """Unknown fields as one error (extra="forbid" makes one per field)."""
+        if isinstance(data, dict):
+            unknown = [k for k in data if k not in cls.model_fields]
+            if unknown:
+                names = ", ".join(_brief(k) for k in unknown[:5]) + (", ..." if len(unknown) > 5 else "")
+                raise ValueError(f"{len(unknown)} unknown fields: {names} (known: {', '.join(cls.model_fields)})")
+        return data
 
 
 ONE_OF = [{"required": ["model"], "not": {"required": ["preset"]}},
@@ -54,6 +90,15 @@ class ModelSpec(Request):
     overrides: dict[str, Any] | None = Field(None, description="the preset's keyword parameters",
                                              examples=[{"film_thickness_nm": 450}])
 
+    @model_validator(mode="after")
+    def _no_explicit_null(self):
+        # the schema says a dict / a name: "model": null beside a preset is not "left out"
+        for name in ("model", "preset"):
+            if name in self.model_fields_set and getattr(self, name) is None:
+                wanted = "a BSDF dict" if name == "model" else "a preset name"
+                raise ValueError(f"{name} is null: leave it out, or give {wanted}")
+        return self
+
     def spec(self) -> dict[str, Any]:
         return {"model": self.model, "preset": self.preset, "overrides": self.overrides}
 
@@ -65,9 +110,9 @@ class Error(BaseModel):
 # -- BSDF queries ----------------------------------------------------------------------------
 class EvalRequest(ModelSpec):
     model_config = whole({"preset": "xenopeltis", "theta_i": [30.0], "theta_o": [20.0, 45.0], "samples": 16})
-    wi: Annotated[list[Vector3], Field(min_length=1)] | None = Field(
+    wi: Vectors | None = Field(
         None, description="incident unit vectors (N, 3) or one")
-    wo: Annotated[list[Vector3], Field(min_length=1)] | None = Field(
+    wo: Vectors | None = Field(
         None, description="outgoing unit vectors (N, 3) or one")
     theta_i: Floats | None = Field(None, description="incidence angles in degrees [0, 90]")
     theta_o: Floats | None = Field(None, description="outgoing angles in degrees [0, 180] (> 90: below)")
@@ -75,6 +120,8 @@ class EvalRequest(ModelSpec):
     wavelengths: Floats | None = Field(None, description="nm; omit for linear sRGB (D65)")
     samples: Count | None = Field(None, description="walks per pair for stochastic models (default: the model's)")
     seed: Seed | None = Field(None, description="seed of the walks (default: the model's)")
+    thickness_nm: Floats | None = Field(None, description="the thin film's total thickness in nm per pair (or one), "
+                                                          "replacing the model's for this query")
 
 
 class EvalResponse(BaseModel):
@@ -129,6 +176,14 @@ class ThinFilmRequest(Request):
     substrate_ior: float = Field(1.5515, description="substrate index (default keratin at 550 nm)")
     angles: Floats | None = Field(None, description="incidence angles in degrees (default 0, 5, ... 85)")
     wavelengths: Floats | None = Field(None, description="nm (default 380, 385, ... 780)")
+    layers: Annotated[list[FilmLayer], Field(min_length=1, max_length=64)] | None = Field(
+        None, description="a film stack, top first, instead of film_ior and thickness_nm",
+        examples=[[{"ior": 2.3, "thickness_nm": 60}, {"ior": 1.38, "thickness_nm": 100}]])
+
+
+class FilmLayer(Request):
+    ior: float = Field(description="the layer's (real) refractive index")
+    thickness_nm: float = Field(description="its thickness in nm")
 
 
 class ThinFilmResponse(BaseModel):
@@ -235,6 +290,24 @@ class RenderInfo(BaseModel):
     request: dict[str, Any]
     job: JobInfo | None
     summary: dict[str, str] | None
+    links: dict[str, str]
+
+
+class ValidationRequest(Request):
+    model_config = whole({"level": "quick", "only": "tables/diffuse-exact"}, exclusive=False)
+    level: Literal["quick", "standard", "full"] = Field("quick", description="effort, as bsdflab validate --level")
+    only: Annotated[str, Field(min_length=1, max_length=200)] | None = Field(
+        None, description="only checks whose name matches this glob or contains it", examples=["tables/"])
+    benchmarks: bool = Field(False, description="also run the benchmarks (minutes)")
+
+
+class ValidationInfo(BaseModel):
+    hash: str
+    state: Literal["queued", "running", "done", "failed", "cancelled"]
+    request: dict[str, Any]
+    job: JobInfo | None
+    summary: dict[str, int] | None = Field(description="checks by status: pass, fail, error, skipped, study, total")
+    exit_status: int | None = Field(description="1 when a check failed or errored (as bsdflab validate)")
     links: dict[str, str]
 
 

@@ -49,6 +49,17 @@ class Settings(LibrarySettings):
     limit_body_bytes: int = Field(4 << 20, ge=1024, description="request body size")
     limit_measured_bytes: int = Field(64 << 20, ge=1024, description="one measured-file upload, POST /v1/measured "
                                                                      "(its own body cap; a MERL file is 35 MB)")
+    limit_json_containers: int = Field(1 << 15, ge=16, description="JSON arrays and objects in one request body "
+                                       "(counted before parsing, which holds the GIL: about 2 us each; "
+                                       "send many directions as angle lists, which are flat)")
+    limit_store_refs: int = Field(16, ge=1, description="stored tables and measured files named by hash in one "
+                                                        "request")
+    limit_uploads_per_key: int = Field(2, ge=1, description="measured-file uploads of one client key at once")
+    limit_upload_bytes_in_flight: int = Field(256 << 20, ge=1024, description="bytes of upload bodies being "
+                                              "received, all clients (a body without Content-Length counts "
+                                              "as BSDFLAB_LIMIT_MEASURED_BYTES)")
+    limit_upload_storage_per_key: int = Field(1 << 30, ge=1024, description="bytes of stored uploads of one "
+                                              "client key (the same bytes uploaded again cost nothing)")
     limit_directions: int = Field(100_000, ge=1, description="direction pairs per eval request")
     limit_samples: int = Field(65_536, ge=1, description="walks per direction pair (stochastic models)")
     limit_walks: int = Field(1 << 18, ge=1, description="direction pairs x walks per request "
@@ -60,7 +71,13 @@ class Settings(LibrarySettings):
     limit_table_cells: int = Field(1 << 18, ge=1, description="cells of one table (both lobes counted)")
     limit_render_pixels: int = Field(1 << 22, ge=1, description="width x height of one render")
     limit_render_samples: int = Field(1 << 28, ge=1, description="width x height x spp of one render")
+    limit_validation_level: Literal["quick", "standard", "full"] = Field(
+        "standard", description="the highest validation level a request may ask for (full: hours)")
+    limit_event_streams_per_key: int = Field(8, ge=1, description="open progress streams (GET /v1/jobs/{id}/events) "
+                                             "of one client key")
     limit_queue: int = Field(64, ge=1, description="queued + running jobs")
+    limit_queue_reserve: int = Field(8, ge=0, description="queue slots a (non-admin) key that already has "
+                                                          "jobs may not take: room for another key")
     limit_queue_per_key: int = Field(16, ge=1, description="queued + running jobs of one client key "
                                                            "unless its entry says (max_jobs)")
 
@@ -69,12 +86,22 @@ class Settings(LibrarySettings):
     log_format: Literal["text", "json"] = Field("text", description="text lines, or one JSON object a line")
     server_timeout_keep_alive_s: float = Field(5.0, gt=0, le=600, description="idle keep-alive connections close "
                                                                               "after this (uvicorn)")
-    server_limit_concurrency: int = Field(512, ge=1, description="open connections and tasks at once; 503 beyond "
-                                                                 "(uvicorn)")
+    server_limit_concurrency: int = Field(512, ge=1, description="open connections and requests at once; 503 "
+                                                                 "beyond, except /healthz")
+    server_header_timeout_s: float = Field(10.0, gt=0, le=600, description="a connection that has not sent a "
+                                           "whole request line and headers this long after it opened (or its "
+                                           "last answer) is closed")
+    server_read_timeout_s: float = Field(30.0, gt=0, le=3600, description="a request whose body stalls this "
+                                         "long is closed")
+    server_body_timeout_s: float = Field(600.0, gt=0, le=86400, description="a request whose body is not "
+                                         "complete this long after its headers is closed (a body trickled a "
+                                         "byte at a time never stalls)")
     server_max_header_bytes: int = Field(16 << 10, ge=1024, le=1 << 20, description="request line and headers "
                                                                                    "(h11; larger: 431/400)")
     server_backlog: int = Field(2048, ge=1, description="connections waiting to be accepted")
 
+    model_cache_bytes: int = Field(256 << 20, ge=0, description="memory of the models kept built between "
+                                                               "requests (a measured file's: about twice the file)")
     progress_interval_s: float = Field(0.25, gt=0, le=10, description="how often job progress is stored and streamed")
 
     @model_validator(mode="after")

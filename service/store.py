@@ -125,10 +125,13 @@ class JobStore:
 
     # -- jobs ------------------------------------------------------------------------------
     def submit(self, kind: str, content_hash: str, request: dict[str, Any], queue_limit: int,
-               owner: str | None = None, owner_limit: int | None = None) -> tuple[dict[str, Any], bool]:
+               owner: str | None = None, owner_limit: int | None = None, reserve: int = 0
+               ) -> tuple[dict[str, Any], bool]:
         """(job, created): the active job with this kind and hash (which ``owner`` then sees
         too), or a new queued one owned by ``owner``. Raises QueueFull when a new job would
-        exceed ``queue_limit`` active jobs, or ``owner_limit`` active jobs of its owner."""
+        exceed ``queue_limit`` active jobs, or ``owner_limit`` active jobs of its owner, or when
+        an owner that has active jobs would take one of the last ``reserve`` free slots (kept
+        for a key that has none, so a new tenant always finds room)."""
         with self._lock:
             self._db.execute("BEGIN IMMEDIATE")
             try:
@@ -144,12 +147,14 @@ class JobStore:
                     "SELECT count(*) AS n FROM jobs WHERE state IN ('queued', 'running')").fetchone()["n"]
                 if active >= queue_limit:
                     raise QueueFull(f"{active} jobs are queued or running, the limit", "limit_queue")
-                if owner_limit is not None:
-                    mine = self._db.execute("SELECT count(*) AS n FROM jobs WHERE owner IS ? AND state IN "
-                                            "('queued', 'running')", (owner,)).fetchone()["n"]
-                    if mine >= owner_limit:
-                        raise QueueFull(f"client {owner!r} has {mine} jobs queued or running, its share",
-                                        "limit_queue_per_key")
+                mine = self._db.execute("SELECT count(*) AS n FROM jobs WHERE owner IS ? AND state IN "
+                                        "('queued', 'running')", (owner,)).fetchone()["n"]
+                if owner_limit is not None and mine >= owner_limit:
+                    raise QueueFull(f"client {owner!r} has {mine} jobs queued or running, its share",
+                                    "limit_queue_per_key")
+                if mine and queue_limit - active - 1 < reserve:   # a key with no job may take the reserve
+                    raise QueueFull(f"client {owner!r} has {mine} jobs queued or running and the last {reserve} "
+                                    "slots are kept for other keys", "limit_queue_reserve")
                 job_id = uuid.uuid4().hex
                 self._db.execute(
                     "INSERT INTO jobs (id, kind, hash, state, request, created, owner) "
@@ -214,10 +219,18 @@ class JobStore:
             return self._db.execute("SELECT * FROM jobs WHERE kind = ? AND hash = ? ORDER BY created DESC "
                                     "LIMIT 1", (kind, content_hash)).fetchone()
 
-    def requeue(self, job_id: str) -> None:
+    def requeue(self, job_id: str, count: bool) -> None:
+        """Queued again from the start; ``count``: the interrupted run counts as a start."""
         with self._lock:
             self._db.execute("UPDATE jobs SET state = 'queued', progress = 0, elapsed = 0, eta = NULL, "
-                             "started = NULL, attempts = attempts + 1 WHERE id = ?", (job_id,))
+                             "started = NULL, attempts = attempts + ? WHERE id = ?", (int(count), job_id))
+
+    def release_running(self) -> int:
+        """A graceful stop: every running job back to queued, no start counted (it was not
+        the job's fault); the number released."""
+        with self._lock:
+            return self._db.execute("UPDATE jobs SET state = 'queued', progress = 0, elapsed = 0, eta = NULL, "
+                                    "started = NULL WHERE state = 'running'").rowcount
 
     def started(self, job_id: str) -> bool:
         """Mark a queued job running; True when it was queued until now."""
@@ -269,6 +282,19 @@ class JobStore:
         with self._lock:
             return self._db.execute(f"SELECT * FROM artefacts WHERE kind = ? {mine}ORDER BY created DESC LIMIT ?",
                                     (kind, *(() if client is None else (client,)), limit)).fetchall()
+
+    def uploaded(self, content_hash: str, client: str) -> bool:
+        with self._lock:
+            return self._db.execute("SELECT 1 AS yes FROM uploads WHERE hash = ? AND client = ?",
+                                    (content_hash, client)).fetchone() is not None
+
+    def upload_bytes(self, client: str) -> int:
+        """Bytes of the uploaded files ``client`` uploaded (each file counted once)."""
+        with self._lock:
+            row = self._db.execute(
+                "SELECT coalesce(sum(json_extract(result, '$.summary.bytes')), 0) AS n FROM artefacts "
+                "WHERE hash IN (SELECT hash FROM uploads WHERE client = ?)", (client,)).fetchone()
+        return int(row["n"])
 
     def artefact(self, content_hash: str, kind: str | None = None) -> dict[str, Any] | None:
         with self._lock:

@@ -11,16 +11,26 @@ The same bytes give the same hash and one file; each client that uploaded them o
 from __future__ import annotations
 
 import hashlib
+import threading
+from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
+from fastapi import HTTPException
+
 from bsdflab.measured import Measured, Merl
+from bsdflab.service.upload_gate import quota_message
 from bsdflab.util.files import write_atomically
 
 KIND = "measured"
 # format -> (model type, reader, file suffix)
 FORMATS = {"rgl": ("measured", Measured, ".bsdf"), "merl": ("merl", Merl, ".binary")}
 MODEL_FORMAT = {model_type: fmt for fmt, (model_type, _, _) in FORMATS.items()}
+DESCRIPTION_PREVIEW = 200   # characters of an RGL header's description kept (a 60 MiB one was echoed whole)
+# One client's uploads checked against its quota and stored one at a time: two at once
+# both passed the check before either was stored (the quota overshot by an upload).
+_CLIENT_LOCKS: defaultdict[str, threading.Lock] = defaultdict(threading.Lock)
+_LOCKS_LOCK = threading.Lock()
 
 
 def summary(model) -> dict[str, Any]:
@@ -30,14 +40,31 @@ def summary(model) -> dict[str, Any]:
     d = model.data
     return {"channels": (["R", "G", "B"] if not d.spectral else [f"{w:g} nm" for w in d.wavelengths.tolist()]),
             "spectral": d.spectral, "n_theta_i": int(d.theta_i.size), "n_phi_i": int(d.phi_i.size),
-            "resolution": int(d.values.shape[-1]), "description": d.description}
+            "resolution": int(d.values.shape[-1]), "description": _preview(d.description),
+            "description_chars": len(d.description)}
 
 
-def upload(jobs, data: bytes, fmt: str, client: str) -> dict[str, Any]:
+def _preview(text: str) -> str:
+    return text if len(text) <= DESCRIPTION_PREVIEW else text[:DESCRIPTION_PREVIEW] + "\u2026"
+
+
+def upload(jobs, data: bytes, fmt: str, client: str, quota: int | None = None) -> dict[str, Any]:
     """Check and store ``data`` as a ``fmt`` file; its record ``{"hash", "format", "summary"}``.
-    ValueError with the reader's message (the file called "the upload") when it does not read."""
+    ValueError with the reader's message (the file called "the upload") when it does not read;
+    413 when a file new to ``client`` would take its stored bytes past ``quota``."""
+    with _LOCKS_LOCK:
+        lock = _CLIENT_LOCKS[client]   # one per configured key (and the anonymous client)
+    with lock:
+        return _upload(jobs, data, fmt, client, quota)
+
+
+def _upload(jobs, data: bytes, fmt: str, client: str, quota: int | None) -> dict[str, Any]:
     model_type, reader, suffix = FORMATS[fmt]
     h = hashlib.sha256(data).hexdigest()
+    if quota is not None and not jobs.store.uploaded(h, client):
+        stored = jobs.store.upload_bytes(client)
+        if stored + len(data) > quota:
+            raise HTTPException(413, quota_message(client, stored, len(data), quota))
     found = jobs.store.artefact(h, KIND)
     target = jobs.artefact_dir / f"{h}{suffix}"
     if found is not None and found["result"]["format"] == fmt and target.is_file():

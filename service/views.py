@@ -5,7 +5,7 @@ from typing import Any
 
 from bsdflab.service.schemas import JobInfo
 
-KIND_PATHS = {"tabulate": "tables", "render": "renders"}
+KIND_PATHS = {"tabulate": "tables", "render": "renders", "validate": "validations"}
 
 
 def job_links(row: dict[str, Any]) -> dict[str, str]:

@@ -29,6 +29,7 @@ def run(args: argparse.Namespace) -> int:
 
     from bsdflab.service import Settings, create_app
     from bsdflab.service.logs import log_config
+    from bsdflab.service.server import bounded_protocol
 
     overrides = {k: v for k, v in (("host", args.host), ("port", args.port), ("data_dir", args.data_dir),
                                    ("workers", args.workers), ("log_level", args.log_level)) if v is not None}
@@ -36,13 +37,14 @@ def run(args: argparse.Namespace) -> int:
         settings = Settings(**overrides)
     except ValidationError as e:
         raise ValueError("; ".join(f"{'.'.join(map(str, err['loc']))}: {err['msg']}" for err in e.errors())) from None
-    # h11: its header-size limit holds (httptools accepted 1 MB of headers); slow clients
-    # beyond these are a reverse proxy's job (docs/service.md, "Behind a reverse proxy")
-    config = uvicorn.Config(create_app(settings), host=settings.host, port=settings.port, http="h11",
+    # h11 (its header-size limit holds; httptools accepted 1 MB of headers), with the header
+    # deadline, the read timeout and the connection cap of bsdflab.service.server
+    config = uvicorn.Config(create_app(settings), host=settings.host, port=settings.port,
+                            http=bounded_protocol(settings),
                             log_config=log_config(settings.log_level, settings.log_format == "json"),
                             log_level=settings.log_level, access_log=False, timeout_graceful_shutdown=5,
                             timeout_keep_alive=settings.server_timeout_keep_alive_s,
-                            limit_concurrency=settings.server_limit_concurrency,
+                            limit_concurrency=None,   # the protocol's cap: /healthz answers beyond it
                             h11_max_incomplete_event_size=settings.server_max_header_bytes,
                             backlog=settings.server_backlog)
     uvicorn.Server(config).run()

@@ -25,6 +25,7 @@ import numpy as np
 
 from bsdflab.requests import model_from_spec
 from bsdflab.tables import TableRequest, get, read_attributes, read_table
+from bsdflab.tables.channels import table_channels
 from bsdflab.tables.file_format import HASH_ATTRIBUTE
 from bsdflab.tables.summary import accuracy
 from bsdflab.tables.tabulate import make_table
@@ -39,7 +40,9 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
         raise ValueError(f"a tabulate request must be a dict, got {type(request).__name__}")
     rest = {k: v for k, v in request.items() if k not in SPEC}
     model = model_from_spec({k: v for k, v in request.items() if k in SPEC})
-    return _normalised(TableRequest.from_dict(rest, model=model))
+    table_request = TableRequest.from_dict(rest, model=model)
+    _check_spectral(model, table_request.wavelengths)
+    return _normalised(table_request)
 
 
 def _normalised(request: TableRequest) -> dict[str, Any]:
@@ -48,6 +51,20 @@ def _normalised(request: TableRequest) -> dict[str, Any]:
 
 def _request(normalised: dict[str, Any]) -> TableRequest:
     return TableRequest.from_dict({k: v for k, v in normalised.items() if k != "method_note"})
+
+
+def _check_spectral(model, wavelengths) -> None:
+    """A table asks its model at spectral wavelengths (``table_channels``); a model that
+    answers in RGB only (a MERL file, an RGB RGL file) is refused here, at submission,
+    rather than failing in the worker."""
+    model_wl = table_channels(wavelengths)[1]
+    try:
+        answered = len(model._channels(np.asarray(model_wl, dtype=float))[0])
+    except ValueError:
+        answered = -1
+    if answered != len(model_wl):
+        raise ValueError(f"a {model.type_name} model of this file answers in RGB only, and tables are made "
+                         "from spectra: tabulate a spectral file (an RGL file with wavelengths)")
 
 
 def cells(request: dict[str, Any]) -> int:

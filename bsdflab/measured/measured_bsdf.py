@@ -18,6 +18,7 @@ import numpy as np
 from bsdflab import _core
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.lobes import Lobe
+from bsdflab.measured import store
 from bsdflab.measured.rgl_file import RGLData, read_rgl
 from bsdflab.measured.rgl_reference import RGLReference
 
@@ -32,6 +33,10 @@ class Measured(BSDF):
     path : str or path
         The ``.bsdf`` file (RGB or spectral, isotropic). It is read and checked at once;
         a bad file is a ``ValueError`` naming the field.
+    hash : str
+        Instead of ``path``: the SHA-256 of a file kept in a store folder
+        (bsdflab.measured.store; the service's uploads); the model's dict then names it by
+        this hash, never by a path.
     """
 
     type_name = "measured"
@@ -39,8 +44,13 @@ class Measured(BSDF):
     # resolves measured files by artefact hash; see docs/measured.md).
     reads_path = True
 
-    def __init__(self, path):
+    def __init__(self, path=None, hash=None):   # noqa: A002 -- the dict's key
         super().__init__()
+        if (path is None) == (hash is None):
+            raise ValueError("give exactly one of path (a file) or hash (a stored upload's SHA-256)")
+        self.hash = hash
+        if hash is not None:
+            path = store.locate(hash, ".bsdf", "RGL .bsdf file")
         if not isinstance(path, (str, os.PathLike)):
             raise ValueError(f"path must be the path of an RGL .bsdf file, got {type(path).__name__}")
         self.path = os.fspath(path)
@@ -81,7 +91,7 @@ class Measured(BSDF):
         return super().render_core()
 
     def _params(self) -> dict[str, Any]:
-        return {"path": self.path}
+        return {"path": self.path} if self.hash is None else {"hash": self.hash}
 
 
 def core_of(d: RGLData, channel_ids) -> _core.MeasuredBSDF:

@@ -21,9 +21,13 @@ import numpy as np
 from bsdflab import _core
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.lobes import Lobe
+from bsdflab.measured import store
 
 DIMS = (90, 90, 180)
 SCALES = np.array([1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0])
+
+
+MAX_F = 1e12   # 1/sr: far above any measured peak (and an index-valued test file), far below float32's 3.4e38
 
 
 def read_merl(path) -> np.ndarray:
@@ -46,7 +50,11 @@ def read_merl(path) -> np.ndarray:
     values = np.frombuffer(raw[12:], dtype="<f8").reshape(3, *DIMS)
     if not np.all(np.isfinite(values)):
         raise ValueError(f"{path}: MERL values hold NaN or infinity")
-    return np.maximum(values, 0.0) * SCALES[:, None, None, None]
+    f = np.maximum(values, 0.0) * SCALES[:, None, None, None]
+    if f.max() > MAX_F:
+        raise ValueError(f"{path}: MERL values reach f = {f.max():.3g}/sr, beyond any reflectance (at most "
+                         f"{MAX_F:g}/sr; the core evaluates in float32)")
+    return f
 
 
 def merl_bytes(values: np.ndarray) -> bytes:
@@ -97,6 +105,10 @@ class Merl(BSDF):
     ----------
     path : str or path
         A ``.binary`` file of the MERL database; read and checked at once.
+    hash : str
+        Instead of ``path``: the SHA-256 of a file kept in a store folder
+        (bsdflab.measured.store; the service's uploads); the model's dict then names it by
+        this hash, never by a path.
     """
 
     type_name = "merl"
@@ -104,8 +116,13 @@ class Merl(BSDF):
     # resolves measured files by artefact hash; see docs/measured.md).
     reads_path = True
 
-    def __init__(self, path):
+    def __init__(self, path=None, hash=None):   # noqa: A002 -- the dict's key
         super().__init__()
+        if (path is None) == (hash is None):
+            raise ValueError("give exactly one of path (a file) or hash (a stored upload's SHA-256)")
+        self.hash = hash
+        if hash is not None:
+            path = store.locate(hash, ".binary", "MERL .binary file")
         if not isinstance(path, (str, os.PathLike)):
             raise ValueError(f"path must be the path of a MERL .binary file, got {type(path).__name__}")
         self.path = os.fspath(path)
@@ -128,4 +145,4 @@ class Merl(BSDF):
         return self._core(np.arange(3, dtype=float)), None
 
     def _params(self) -> dict[str, Any]:
-        return {"path": self.path}
+        return {"path": self.path} if self.hash is None else {"hash": self.hash}

@@ -31,14 +31,14 @@ from typing import Any
 import numpy as np
 
 from bsdflab.render.curves import SNAKE_DEFAULTS, snake_body, snake_head, snake_layout
-from bsdflab.render.mesh import MAX_SEGMENTS, Mesh, grid_indices, reserve
+from bsdflab.render.mesh import MAX_SEGMENTS, Mesh, Sized, grid_indices, reserve, sizing
 from bsdflab.render.mesh import Params as _Params
 from bsdflab.render.mesh import normalise as _normalise
 from bsdflab.render.mesh import plane_axes as _orthonormal
 from bsdflab.util import limits
 from bsdflab.util.args import brief
 
-__all__ = ["GEOMETRY_TYPES", "MAX_SEGMENTS", "Mesh", "build_mesh", "grid_indices", "mesh_area",
+__all__ = ["GEOMETRY_TYPES", "MAX_SEGMENTS", "Mesh", "build_mesh", "grid_indices", "mesh_area", "mesh_size",
            "transform_mesh", "triangle_normals", "validate_mesh"]
 
 # -- primitives --------------------------------------------------------------------------
@@ -233,6 +233,18 @@ def build_mesh(spec: dict, base_dir: str | None = None) -> Mesh:
     if spec.get("to_world") is not None:
         mesh = transform_mesh(mesh, _matrix(kind, spec["to_world"]))
     return mesh
+
+
+def mesh_size(spec: dict, base_dir: str | None = None) -> tuple[int, int]:
+    """(vertices, triangles) of ``build_mesh(spec)`` with its parameters validated and its
+    size checked against the caps, without building a large mesh (the builder stops at its
+    size check; the few fixed-size primitives are built, being tiny)."""
+    with sizing():
+        try:
+            mesh = build_mesh(spec, base_dir)
+        except Sized as e:
+            return e.vertices, e.triangles
+    return len(mesh.positions), len(mesh.indices)
 
 
 # -- checks ----------------------------------------------------------------------------------

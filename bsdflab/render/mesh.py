@@ -6,6 +6,8 @@ both build on it, and neither imports the other's internals through it.
 """
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -81,11 +83,35 @@ class Params:
         return value
 
 
+class Sized(Exception):
+    """Raised by `reserve` while sizing (``sizing()``): the builder stops at its size check."""
+
+    def __init__(self, vertices: int, triangles: int):
+        super().__init__(f"{vertices} vertices, {triangles} triangles")
+        self.vertices, self.triangles = int(vertices), int(triangles)
+
+
+_SIZING = contextvars.ContextVar("bsdflab_mesh_sizing", default=False)
+
+
+@contextlib.contextmanager
+def sizing():
+    """Within this block a mesh builder validates its parameters and checks its size, then
+    raises `Sized` instead of allocating (a server sizes a render before admitting it)."""
+    token = _SIZING.set(True)
+    try:
+        yield
+    finally:
+        _SIZING.reset(token)
+
+
 def reserve(kind: str, vertices: int, triangles: int) -> None:
     """Refuse a mesh whose size would exceed the caps, before building it (bsdflab.util.limits)."""
     limits.check_count(f"{kind}: triangles", int(triangles), "BSDFLAB_MAX_TRIANGLES")
     limits.check_bytes(f"{kind} mesh ({int(vertices)} vertices, {int(triangles)} triangles)",
                        limits.mesh_bytes(vertices, triangles))
+    if _SIZING.get():
+        raise Sized(vertices, triangles)
 
 
 # -- shared construction helpers -----------------------------------------------------------

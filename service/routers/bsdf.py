@@ -21,14 +21,15 @@ from bsdflab import slices as lobe_views
 from bsdflab.plots.lobe import lobe_figure
 from bsdflab.requests import ModelCache
 from bsdflab.service import artefact_refs
+from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import HeavyDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, over_limit
 from bsdflab.service.heavy import check_cancelled, evaluate_in_chunks
 from bsdflab.service.schemas import EvalRequest, EvalResponse, HemisphereView, LobeRequest, LobeResponse, PlaneView
 from bsdflab.service.settings import Settings, limit_variable
 
-MODELS = ModelCache(32)   # recently asked-for models, their core objects built
-router = APIRouter(prefix="/v1/bsdf", tags=["bsdf"], responses=ERRORS)
+MODELS = ModelCache(32, 256 << 20)   # recently asked-for models, their core objects built (create_app sets the bound)
+router = APIRouter(prefix="/v1/bsdf", tags=["bsdf"], responses=ERRORS, route_class=ThreadedBody)
 
 
 def _rows(a: np.ndarray | None) -> list | None:
@@ -68,6 +69,15 @@ def _directions(body: EvalRequest, settings: Settings) -> tuple[np.ndarray, np.n
     if len(lengths) > 1:
         raise ValueError(f"theta_i, theta_o and phi must have one length (or length 1); got {sorted(lengths)}")
     return lobe_views.directions_from_angles(body.theta_i, body.theta_o, body.phi if body.phi is not None else [180.0])
+
+
+def _thickness(values: list[float] | None, pairs: int) -> np.ndarray | None:
+    """A per-query film thickness: one per pair, or one for all."""
+    if values is None:
+        return None
+    if len(values) not in (1, pairs):
+        raise ValueError(f"thickness_nm must have one value or one per pair ({pairs}); got {len(values)}")
+    return np.asarray(values, dtype=float)
 
 
 def _check_answer(settings: Settings, pairs: int, channels: int, stochastic: bool, binary: bool,
@@ -122,11 +132,10 @@ async def evaluate(body: EvalRequest, request: Request, settings: SettingsDep, j
     at the given wavelengths, with standard errors for stochastic (layered) models. The
     same request always gives the same answer (walks are seeded from seed, wi, wo).
     ``Accept: application/x-npy`` answers a compact NumPy array instead of JSON."""
-    spec = model_spec(body.spec(), jobs)
     binary = wants_npy(request)
 
-    def compute():
-        bsdf = MODELS.get(spec)
+    def compute():   # on the heavy pool, after its admission: the store lookups too
+        bsdf = MODELS.get(model_spec(body.spec(), jobs))
         wi, wo = _directions(body, settings)
         if body.wavelengths is not None:
             over_limit(settings, "limit_wavelengths", len(body.wavelengths), "wavelengths")
@@ -136,7 +145,8 @@ async def evaluate(body: EvalRequest, request: Request, settings: SettingsDep, j
         channels = ["R", "G", "B"] if body.wavelengths is None else [f"{w:g}" for w in body.wavelengths]
         _check_walks(settings, bsdf, pairs, body.samples)
         _check_answer(settings, pairs, len(channels), lobe_views.is_stochastic(bsdf), binary)
-        result = evaluate_in_chunks(bsdf, wi, wo, body.wavelengths, body.samples, body.seed)
+        thickness = _thickness(body.thickness_nm, pairs)
+        result = evaluate_in_chunks(bsdf, wi, wo, body.wavelengths, body.samples, body.seed, thickness)
         if result.stderr is not None:
             request.app.state.metrics.walks.inc(pairs * (body.samples or bsdf.samples))
         if binary:
@@ -155,10 +165,8 @@ async def evaluate(body: EvalRequest, request: Request, settings: SettingsDep, j
 async def lobe(body: LobeRequest, request: Request, settings: SettingsDep, jobs: JobsDep, heavy: HeavyDep):
     """The plane of incidence (signed outgoing angle, mirror direction at +theta_i) and the
     upper hemisphere seen from above (orthographic x, y), in linear sRGB, for one incidence."""
-    spec = model_spec(body.spec(), jobs)
-
-    def compute():
-        bsdf = MODELS.get(spec)
+    def compute():   # on the heavy pool, after its admission: the store lookups too
+        bsdf = MODELS.get(model_spec(body.spec(), jobs))
         over_limit(settings, "limit_lobe_resolution", body.points, "points")
         over_limit(settings, "limit_lobe_resolution", body.resolution, "resolution")
         wi = lobe_views.incident(body.theta_i)
@@ -224,8 +232,8 @@ def _figure_checks(settings: Settings, bsdf, theta_i: float, samples: int) -> No
         over_limit(settings, "limit_walks", 48 * 48 * 64, "figure walks")
 
 
-def _checked_figure(settings: Settings, spec: dict, theta_i: float, samples: int, seed: int) -> Response:
-    bsdf = MODELS.get(spec)
+def _checked_figure(settings: Settings, jobs, spec: dict, theta_i: float, samples: int, seed: int) -> Response:
+    bsdf = MODELS.get(model_spec(spec, jobs))   # on the heavy pool, after its admission
     _figure_checks(settings, bsdf, theta_i, samples)
     return _figure(bsdf, theta_i, samples, seed)
 
@@ -236,9 +244,9 @@ async def lobe_png(body: LobeRequest, request: Request, settings: SettingsDep, j
     """The figure of ``bsdflab lobe``: lobe in the plane of incidence, the hemisphere, and
     albedo vs incidence angle with its colour. ``samples`` sets the albedo estimates'
     sample count (default 20000); ``points``, ``resolution`` and ``view`` do not apply."""
-    spec = model_spec(body.spec(), jobs)
     samples = body.samples or FIGURE_SAMPLES
-    return await heavy.run(request, _checked_figure, settings, spec, body.theta_i, samples, body.seed or 0)
+    return await heavy.run(request, _checked_figure, settings, jobs, body.spec(), body.theta_i, samples,
+                           body.seed or 0)
 
 
 @router.get("/lobe.png", response_class=Response, responses=PNG, summary="The lobe figure (PNG), by query")
@@ -252,9 +260,8 @@ async def lobe_png_query(request: Request, settings: SettingsDep, jobs: JobsDep,
                    seed: Annotated[int, Query(ge=0, lt=1 << 64)] = 0) -> Response:
     """As POST, with the model in the query: ``?preset=xenopeltis&theta_i=45`` or
     ``?model={"type":"diffuse","reflectance":0.5}`` (URL-encoded)."""
-    spec = model_spec({"preset": preset, "overrides": _json("overrides", overrides),
-                       "model": _json("model", model)}, jobs)
-    return await heavy.run(request, _checked_figure, settings, spec, theta_i, samples, seed)
+    spec = {"preset": preset, "overrides": _json("overrides", overrides), "model": _json("model", model)}
+    return await heavy.run(request, _checked_figure, settings, jobs, spec, theta_i, samples, seed)
 
 
 def _json(name: str, text: str | None):

@@ -6,7 +6,7 @@ import asyncio
 from collections.abc import AsyncIterable
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Depends, HTTPException, Path, Query
+from fastapi import APIRouter, Depends, HTTPException, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.sse import EventSourceResponse, ServerSentEvent
 
@@ -14,6 +14,7 @@ from bsdflab.jobs import FINISHED
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep
 from bsdflab.service.errors import NOT_FOUND
 from bsdflab.service.schemas import JOB_ID_PATTERN, JobInfo, JobList
+from bsdflab.service.settings import limit_variable
 from bsdflab.service.views import job_info
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], responses=NOT_FOUND)
@@ -62,8 +63,27 @@ def cancel_job(row: JobRow, jobs: JobsDep, client: ClientDep) -> JobInfo:
     return job_info(jobs.job(row["id"]))
 
 
+async def stream_slot(request: Request, client: ClientDep, settings: SettingsDep):
+    """One of the client's ``BSDFLAB_LIMIT_EVENT_STREAMS_PER_KEY`` progress streams, held
+    until the stream ends (a stream outlives every connection timeout: 300 of them on one
+    job held /v1/jobs up for seconds, and the connection cap is reached at 512)."""
+    streams = request.app.state.event_streams   # touched from the event loop only
+    if streams[client.name] >= settings.limit_event_streams_per_key:
+        raise HTTPException(429, f"client {client.name!r} has {streams[client.name]} progress streams open, its "
+                                 f"limit ({limit_variable('limit_event_streams_per_key')}); close one or poll "
+                                 "GET /v1/jobs/{id}", headers={"Retry-After": "5"})
+    streams[client.name] += 1
+    try:
+        yield
+    finally:   # after the stream's last event, or its client's leaving
+        streams[client.name] -= 1
+        if not streams[client.name]:
+            del streams[client.name]
+
+
 @router.get("/{job_id}/events", response_class=EventSourceResponse, summary="Progress as server-sent events")
-async def job_events(row: JobRow, jobs: JobsDep, settings: SettingsDep) -> AsyncIterable[ServerSentEvent]:
+async def job_events(row: JobRow, jobs: JobsDep, settings: SettingsDep,
+                     _: Annotated[None, Depends(stream_slot)]) -> AsyncIterable[ServerSentEvent]:
     """A ``progress`` event (the job, as GET /v1/jobs/{id} returns it) whenever its state or
     progress changes, then one ``done``, ``failed`` or ``cancelled`` event, and the stream
     ends."""

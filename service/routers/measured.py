@@ -10,7 +10,7 @@ from fastapi import APIRouter, Query, Request
 from starlette.concurrency import run_in_threadpool
 
 from bsdflab.service import uploads
-from bsdflab.service.deps import ClientDep, JobsDep
+from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep
 from bsdflab.service.errors import ERRORS
 from bsdflab.service.schemas import MeasuredInfo, MeasuredList
 
@@ -25,14 +25,17 @@ def info(result: dict) -> MeasuredInfo:
 
 @router.post("", response_model=MeasuredInfo, responses=ERRORS, openapi_extra=BODY,
              summary="Upload a measured BSDF file (RGL .bsdf or MERL .binary)")
-async def upload_measured(request: Request, jobs: JobsDep, client: ClientDep,
+async def upload_measured(request: Request, jobs: JobsDep, client: ClientDep, settings: SettingsDep,
                           format: Annotated[Literal["rgl", "merl"], Query(description="the file's format")]
                           ) -> MeasuredInfo:
     """The raw file as the body (``application/octet-stream``, at most
     ``BSDFLAB_LIMIT_MEASURED_BYTES``), checked by bsdflab's reader (422 with its message,
-    naming the field) and stored under its SHA-256; the same bytes answer the same hash."""
+    naming the field) and stored under its SHA-256; the same bytes answer the same hash.
+    Per key: ``BSDFLAB_LIMIT_UPLOADS_PER_KEY`` at once and ``BSDFLAB_LIMIT_UPLOAD_STORAGE_PER_KEY``
+    bytes stored (413 beyond); 429 while ``BSDFLAB_LIMIT_UPLOAD_BYTES_IN_FLIGHT`` is taken."""
     data = await request.body()
-    result = await run_in_threadpool(uploads.upload, jobs, data, format, client.name)
+    result = await run_in_threadpool(uploads.upload, jobs, data, format, client.name,
+                                     settings.limit_upload_storage_per_key)
     return info(result)
 
 

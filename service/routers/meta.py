@@ -36,7 +36,7 @@ def version(settings: SettingsDep, jobs: JobsDep) -> VersionInfo:
     """The package, the C++ core build (module file, threads), Mitsuba's version, the job
     executor and the request limits in force."""
     limits = {name[len("limit_"):]: getattr(settings, name) for name in type(settings).model_fields
-              if name.startswith("limit_")}
+              if name.startswith("limit_") and isinstance(getattr(settings, name), int)}
     return VersionInfo(bsdflab=bsdflab.__version__,
                        core={"module": _core.__file__.rsplit("/", 1)[-1], "threads": _core.worker_count()},
                        mitsuba=_mitsuba_version(), python=platform.python_version(),

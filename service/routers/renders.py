@@ -7,6 +7,7 @@ from fastapi import APIRouter, HTTPException, Path
 from fastapi.responses import FileResponse, JSONResponse
 
 from bsdflab.service import artefact_refs, render_checks
+from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
 from bsdflab.service.job_service import JobService
@@ -14,7 +15,7 @@ from bsdflab.service.routers.tables import QUEUED
 from bsdflab.service.schemas import HASH_PATTERN, RenderInfo, RenderRequest
 from bsdflab.service.views import job_info
 
-router = APIRouter(prefix="/v1/renders", tags=["renders"])
+router = APIRouter(prefix="/v1/renders", tags=["renders"], route_class=ThreadedBody)
 Hash = Annotated[str, Path(pattern=HASH_PATTERN, description="the render's content hash (64 hex digits)")]
 KIND = "render"
 
@@ -23,8 +24,9 @@ def _links(h: str) -> dict[str, str]:
     return {"self": f"/v1/renders/{h}", "png": f"/v1/renders/{h}/image.png", "exr": f"/v1/renders/{h}/image.exr"}
 
 
-def render_info(jobs: JobService, h: str, request: dict[str, Any], result: dict[str, Any] | None) -> RenderInfo:
-    job = jobs.store.latest_for(KIND, h)
+def render_info(jobs: JobService, h: str, request: dict[str, Any], result: dict[str, Any] | None,
+                client) -> RenderInfo:
+    job = jobs.visible(jobs.store.latest_for(KIND, h), client)   # never another tenant's job
     live = jobs.job(job["id"]) if job is not None else None
     if result is None and live is None:   # a record whose files are gone, and no job
         raise HTTPException(404, f"no render {h}")
@@ -44,7 +46,7 @@ def create_render(body: RenderRequest, jobs: JobsDep, settings: SettingsDep, cli
     over_limit(settings, "limit_render_samples", pixels * request["spp"], "width x height x spp")
     found = jobs.cached(KIND, key) or jobs.adopt(KIND, key, request)
     if found is not None:
-        return render_info(jobs, key, request, found)
+        return render_info(jobs, key, request, found, client)
     render_checks.check(request)   # what the worker would refuse, refused now (422)
     row, _ = jobs.submit(KIND, request, key, client)
     info = job_info(jobs.job(row["id"]))
@@ -52,33 +54,31 @@ def create_render(body: RenderRequest, jobs: JobsDep, settings: SettingsDep, cli
 
 
 @router.get("/{key}", response_model=RenderInfo, responses=NOT_FOUND, summary="A render's state and summary")
-def get_render(key: Hash, jobs: JobsDep) -> RenderInfo:
+def get_render(key: Hash, jobs: JobsDep, client: ClientDep) -> RenderInfo:
     row = jobs.store.artefact(key, KIND)
     if row is not None:
-        return render_info(jobs, key, row["request"], jobs.cached(KIND, key))
-    job = jobs.store.latest_for(KIND, key)
+        return render_info(jobs, key, row["request"], jobs.cached(KIND, key), client)
+    job = jobs.visible(jobs.store.latest_for(KIND, key), client)
     if job is None:
         raise HTTPException(404, f"no render {key}")
-    return render_info(jobs, key, job["request"], None)
+    return render_info(jobs, key, job["request"], None, client)
 
 
-def _file(jobs: JobService, key: str, which: str) -> FileResponse:
+def _file(jobs: JobService, key: str, which: str, client) -> FileResponse:
     result = jobs.cached(KIND, key)
     if result is None:
-        job = jobs.store.latest_for(KIND, key)
-        hint = f"; job {job['id']} is {job['state']}" if job is not None else ""
-        raise HTTPException(404, f"no finished render {key}{hint}")
+        raise HTTPException(404, f"no finished render {key}{jobs.job_hint(KIND, key, client)}")
     media = "image/png" if which == "png" else "image/x-exr"
     return FileResponse(jobs.artefact_dir / result["files"][which], media_type=media, filename=f"{key}.{which}")
 
 
 @router.get("/{key}/image.png", response_class=FileResponse, summary="The image, tone-mapped sRGB PNG",
             responses={**NOT_FOUND, 200: {"content": {"image/png": {}}, "description": "the image"}})
-def get_png(key: Hash, jobs: JobsDep) -> FileResponse:
-    return _file(jobs, key, "png")
+def get_png(key: Hash, jobs: JobsDep, client: ClientDep) -> FileResponse:
+    return _file(jobs, key, "png", client)
 
 
 @router.get("/{key}/image.exr", response_class=FileResponse, summary="The image, linear OpenEXR",
             responses={**NOT_FOUND, 200: {"content": {"image/x-exr": {}}, "description": "the image"}})
-def get_exr(key: Hash, jobs: JobsDep) -> FileResponse:
-    return _file(jobs, key, "exr")
+def get_exr(key: Hash, jobs: JobsDep, client: ClientDep) -> FileResponse:
+    return _file(jobs, key, "exr", client)

@@ -8,13 +8,14 @@ from fastapi.responses import FileResponse, JSONResponse
 
 from bsdflab.jobs import tabulate as tabulate_kind
 from bsdflab.service import artefact_refs
+from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
 from bsdflab.service.job_service import JobService
 from bsdflab.service.schemas import HASH_PATTERN, JobInfo, TableInfo, TableList, TableRequest
 from bsdflab.service.views import job_info
 
-router = APIRouter(prefix="/v1/tables", tags=["tables"])
+router = APIRouter(prefix="/v1/tables", tags=["tables"], route_class=ThreadedBody)
 Hash = Annotated[str, Path(pattern=HASH_PATTERN, description="the table's key (64 hex digits)")]
 KIND = "tabulate"
 QUEUED = {202: {"model": JobInfo, "description": "tabulation queued (or already running): follow the job"},
@@ -54,25 +55,23 @@ def list_tables(jobs: JobsDep, client: ClientDep, limit: Annotated[int, Query(ge
     return TableList(tables=[table_info(r["result"]) for r in rows])
 
 
-def _found(jobs: JobService, key: str) -> dict[str, Any]:
+def _found(jobs: JobService, key: str, client) -> dict[str, Any]:
     result = jobs.table(key)
     if result is None:
-        job = jobs.store.latest_for(KIND, key)
-        hint = f"; job {job['id']} is {job['state']}" if job is not None else ""
-        raise HTTPException(404, f"no table {key}{hint}")
+        raise HTTPException(404, f"no table {key}{jobs.job_hint(KIND, key, client)}")
     return result
 
 
 @router.get("/{key}", response_model=TableInfo, responses=NOT_FOUND, summary="A table's metadata")
-def get_table(key: Hash, jobs: JobsDep) -> TableInfo:
+def get_table(key: Hash, jobs: JobsDep, client: ClientDep) -> TableInfo:
     """Model, grid, lobes, channels, effort (walks per cell) and the achieved relative
     error of the luminance (rms, 95th percentile, max over significant cells)."""
-    return table_info(_found(jobs, key))
+    return table_info(_found(jobs, key, client))
 
 
 @router.get("/{key}/file", response_class=FileResponse, summary="The table file (OpenEXR)",
             responses={**NOT_FOUND, 200: {"content": {"image/x-exr": {}}, "description": "the table file"}})
-def get_table_file(key: Hash, jobs: JobsDep) -> FileResponse:
-    result = _found(jobs, key)
+def get_table_file(key: Hash, jobs: JobsDep, client: ClientDep) -> FileResponse:
+    result = _found(jobs, key, client)
     return FileResponse(jobs.artefact_dir / result["files"]["exr"], media_type="image/x-exr",
                         filename=f"{key}.exr")

@@ -7,14 +7,16 @@ from fastapi import APIRouter, Request
 from fastapi.responses import Response
 
 from bsdflab.optics import film_reflectance, film_transmittance
+from bsdflab.optics.thin_film import FilmStack, Layer
 from bsdflab.plots.film_colour import display_exposure, display_srgb, spectral_rgb
+from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import HeavyDep, SettingsDep
 from bsdflab.service.errors import ERRORS, over_limit
 from bsdflab.service.schemas import ThinFilmRequest, ThinFilmResponse
 from bsdflab.service.settings import Settings
 from bsdflab.util import args as check
 
-router = APIRouter(prefix="/v1/thinfilm", tags=["thin film"], responses=ERRORS)
+router = APIRouter(prefix="/v1/thinfilm", tags=["thin film"], responses=ERRORS, route_class=ThreadedBody)
 DEFAULT_ANGLES = np.arange(0.0, 86.0, 5.0)
 # Physical ranges: indices of optical materials (1e-3..1e3), films up to 1 cm, wavelengths
 # from 1 nm to 1 mm; beyond them the film arithmetic loses all precision.
@@ -31,11 +33,31 @@ def _hex(encoded: np.ndarray) -> list[str]:
 
 @router.post("/spectrum", response_model=ThinFilmResponse, summary="Film spectra and colour vs angle")
 async def spectrum(body: ThinFilmRequest, request: Request, settings: SettingsDep, heavy: HeavyDep) -> Response:
-    """One film of index ``film_ior`` and ``thickness_nm`` between the incident medium and a
-    substrate (real indices): unpolarised R and T at each angle and wavelength, and the
-    reflected colour (CIE 1931 2 deg, D65, linear sRGB) at each angle, integrated on a grid
-    fine enough for the film's fringes."""
+    """One film of index ``film_ior`` and ``thickness_nm``, or a stack of ``layers`` (top
+    first), between the incident medium and a substrate (real indices): unpolarised R and T
+    at each angle and wavelength, and the reflected colour (CIE 1931 2 deg, D65, linear
+    sRGB) at each angle, integrated on a grid fine enough for the film's fringes."""
     return await heavy.run(request, _spectrum, body, settings)
+
+
+def _film(body: ThinFilmRequest):
+    """One film as (ext, film, thickness, substrate), or a FilmStack of ``layers``."""
+    ext = check.real_scalar("ext_ior", body.ext_ior, *IOR_RANGE)
+    substrate = check.real_scalar("substrate_ior", body.substrate_ior, *IOR_RANGE)
+    if body.layers is None:
+        return (ext, check.real_scalar("film_ior", body.film_ior, *IOR_RANGE),
+                check.real_scalar("thickness_nm", body.thickness_nm, 0.0, MAX_THICKNESS_NM), substrate)
+    given = {"film_ior", "thickness_nm"} & body.model_fields_set
+    if given:
+        raise ValueError(f"give the film either as layers or as film_ior and thickness_nm, not both "
+                         f"(layers and {', '.join(sorted(given))} were given)")
+    layers = [Layer(check.real_scalar(f"layers[{i}].ior", layer.ior, *IOR_RANGE),
+                    check.real_scalar(f"layers[{i}].thickness_nm", layer.thickness_nm, 0.0, MAX_THICKNESS_NM))
+              for i, layer in enumerate(body.layers)]
+    total = sum(layer.thickness_nm for layer in layers)
+    if total > MAX_THICKNESS_NM:
+        raise ValueError(f"layers: the stack is {total:g} nm thick, more than {MAX_THICKNESS_NM:g} nm")
+    return FilmStack(ext, layers, substrate)
 
 
 def _spectrum(body: ThinFilmRequest, settings: Settings) -> Response:
@@ -45,10 +67,7 @@ def _spectrum(body: ThinFilmRequest, settings: Settings) -> Response:
     over_limit(settings, "limit_wavelengths", len(wavelengths), "wavelengths")
     check.real_array("angles", angles, 0.0, 90.0)
     check.real_array("wavelengths", wavelengths, *WAVELENGTH_RANGE_NM)
-    film = (check.real_scalar("ext_ior", body.ext_ior, *IOR_RANGE),
-            check.real_scalar("film_ior", body.film_ior, *IOR_RANGE),
-            check.real_scalar("thickness_nm", body.thickness_nm, 0.0, MAX_THICKNESS_NM),
-            check.real_scalar("substrate_ior", body.substrate_ior, *IOR_RANGE))
+    film = _film(body)
     theta = np.radians(angles)[:, None]
     r = film_reflectance(film, wavelengths[None, :], theta)
     t = film_transmittance(film, wavelengths[None, :], theta)

@@ -139,3 +139,24 @@ def test_binary_answer_equals_the_json_one(client, body):
     else:
         assert r.headers["x-layout"] == "values"
         np.testing.assert_array_equal(array, as_json["values"])
+
+
+FILMED = {"type": "roughconductor", "alpha": 0.3, "material": "Au", "film": [{"material": 1.5, "thickness_nm": 400}]}
+
+
+def test_a_film_thickness_per_query(client):
+    """``thickness_nm`` (one per pair, or one) replaces the film's thickness for that query:
+    equal to the model made with that thickness, evaluated alone. Mutation caught: ignoring
+    the field (both rows answer the 400 nm film)."""
+    angles = {"theta_i": [30, 30], "theta_o": [30, 40], "phi": [180, 180], "wavelengths": [500.0, 600.0]}
+    r = client.post("/v1/bsdf/eval", json={"model": FILMED, **angles, "thickness_nm": [300.0, 500.0]})
+    assert r.status_code == 200, r.text
+    got = np.array(r.json()["values"])
+    for row, t in enumerate((300.0, 500.0)):
+        alone = {**FILMED, "film": [{"material": 1.5, "thickness_nm": t}]}
+        one = {k: [v[row]] if isinstance(v, list) and k != "wavelengths" else v for k, v in angles.items()}
+        want = np.array(client.post("/v1/bsdf/eval", json={"model": alone, **one}).json()["values"])
+        np.testing.assert_allclose(got[row], want[0], rtol=1e-12, atol=0)
+    for bad in ([300.0, 500.0, 700.0], [-1.0]):
+        r = client.post("/v1/bsdf/eval", json={"model": FILMED, **angles, "thickness_nm": bad})
+        assert r.status_code == 422 and "thickness" in r.text, r.text

@@ -45,3 +45,19 @@ def test_api_key_guards_work_and_deletes(tmp_path):
         assert c.delete(f"/v1/jobs/{'0' * 32}").status_code == 401
         assert c.get("/v1/presets").status_code == 401 and c.get("/healthz").status_code == 200
         assert c.get("/v1/version", headers={"X-API-Key": "s3cret"}).json()["api_key_required"]
+
+
+def test_the_api_docs_load_nothing_from_a_cdn(client):
+    """Before: /docs and /redoc loaded Swagger UI and ReDoc from a CDN (blank offline,
+    unpinned). Now every script and stylesheet they name is served here, from the
+    fastapi-offline wheel. Mutation caught: FastAPI's default docs (a cdn.jsdelivr.net URL)."""
+    import re
+
+    for page in ("/docs", "/redoc"):
+        html = client.get(page).text
+        urls = re.findall(r'(?:src|href)=["\']([^"\']+)["\']', html) + re.findall(r'url: ["\']([^"\']+)', html)
+        assert urls and not [u for u in urls if u.startswith(("http:", "https:", "//"))], (page, urls)
+        for url in urls:
+            if url.startswith("/vendor/"):
+                r = client.get(url)
+                assert r.status_code == 200 and len(r.content) > 1000, url

@@ -30,3 +30,33 @@ def test_missing_renders_are_404(client):
     assert client.get(f"/v1/renders/{missing}").status_code == 404
     assert client.get(f"/v1/renders/{missing}/image.png").status_code == 404
     assert client.get(f"/v1/renders/{missing}/image.exr").status_code == 404
+
+
+def test_a_render_is_sized_not_built_before_admission(tmp_path, monkeypatch):
+    """Finding M8 of issue 33: a render's mesh was built in the web process before the
+    queue check (furnace subdivisions 2048: 1.4 s and +612 MB, paid even when the 429
+    followed). Now its size is estimated (the builder stops at its size check) and only the
+    worker builds it. Mutation caught: ``build_mesh`` in render_checks again (the request
+    thread builds a grid)."""
+    import threading
+
+    from bsdflab.render import geometry
+
+    built_by = []
+    real = geometry.grid_indices
+
+    def counted(*args, **kwargs):
+        built_by.append(threading.current_thread().name)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(geometry, "grid_indices", counted)
+    with make_client(tmp_path, limit_queue=1) as client:
+        body = {"scene": "furnace", "options": {"subdivisions": 2048}, "width": 4, "height": 4, "spp": 1}
+        first = client.post("/v1/renders", json=body)
+        assert first.status_code == 202, first.text
+        full = client.post("/v1/renders", json={**body, "seed": 1})
+        assert full.status_code == 429
+        bad = client.post("/v1/renders", json={**body, "options": {"subdivisions": 10 ** 9}})
+        assert bad.status_code == 422 and "subdivisions" in bad.text
+        client.delete(f"/v1/jobs/{first.json()['id']}")
+    assert not [name for name in built_by if not name.startswith("bsdflab-job")], built_by
