@@ -81,103 +81,121 @@ def main() -> int:
 
 
 def attack(url: str, pid: int, seconds: float, chosen: list[str] | None = None) -> int:
-    statuses: collections.Counter[int | str] = collections.Counter()
-    lock, stop = threading.Lock(), threading.Event()
-    health: list[float] = []
-    health_ok = [0]
+    return Attack(url, pid, chosen).run(seconds)
 
-    def count(status) -> None:
-        with lock:
-            statuses[status] += 1
 
-    def loop(send, limit=10_000):
-        with httpx.Client(base_url=url, timeout=60) as client:
+class Attack:
+    """The shared counters, lock and stop event of one run, one method per kind of thread."""
+
+    def __init__(self, url: str, pid: int, chosen: list[str] | None = None) -> None:
+        self.url, self.pid = url, pid
+        self.statuses: collections.Counter[int | str] = collections.Counter()
+        self.lock, self.stop = threading.Lock(), threading.Event()
+        self.health: list[float] = []
+        self.health_ok = 0
+        groups = self.groups()
+        self.hostile = set(groups) | {"idle"} if chosen is None else set(chosen)
+        self.attackers = [a for name, group in groups.items() if name in self.hostile for a in group]
+        self.host, self.port = url.rsplit(":", 1)[0].split("//")[1], int(url.rsplit(":", 1)[1])
+
+    @staticmethod
+    def groups() -> dict[str, list]:
+        empty = json.dumps({"model": {"type": "diffuse", "reflectance": 0.5}, "wi": [[]] * 100_000,
+                            "wo": [[0, 0, 1]]})
+        table = json.dumps({"model": {"type": "diffuse", "reflectance": 0.5}, "wavelengths": [[]] * 100_000})
+        ref = {"type": "measured", "hash": "0" * 64}
+        refs = {"model": {"type": "layered", "interfaces": [ref] * 17, "slabs": [{}] * 17, "base": ref},
+                "theta_i": [0], "theta_o": [0]}
+        heavy = {"preset": "xenopeltis", "theta_i": [30], "theta_o": [40], "samples": 4096}
+        render = {"scene": "furnace", "options": {"subdivisions": 2048}, "width": 8, "height": 8, "spp": 1}
+        junk = os.urandom(1 << 20)
+
+        def chunks():
+            for _ in range(16):
+                yield junk
+
+        return {
+            "bodies": [lambda c: c.post("/v1/bsdf/eval", content=empty, headers={"content-type": "application/json"}),
+                       lambda c: c.post("/v1/tables", content=table, headers={"content-type": "application/json"})] * 4,
+            "methods": [lambda c: c.request("".join(random.choices(string.ascii_uppercase, k=8)), "/v1/jobs")] * 2,
+            "refs": [lambda c: c.post("/v1/bsdf/eval", json=refs)] * 2,
+            "uploads": [lambda c: c.post("/v1/measured", params={"format": "merl"}, content=chunks())] * 8,
+            "renders": [lambda c: c.post("/v1/renders", json={**render, "seed": random.randrange(1 << 30)})] * 2,
+            "heavy": [lambda c: c.post("/v1/bsdf/eval", json=heavy)] * 8,
+        }
+
+    def count(self, status) -> None:
+        with self.lock:
+            self.statuses[status] += 1
+
+    def loop(self, send, limit=10_000) -> None:
+        with httpx.Client(base_url=self.url, timeout=60) as client:
             for _ in range(limit):
-                if stop.is_set():
+                if self.stop.is_set():
                     return
                 try:
-                    count(send(client).status_code)
+                    self.count(send(client).status_code)
                 except httpx.HTTPError as e:
-                    count(type(e).__name__)
+                    self.count(type(e).__name__)
 
-    empty = json.dumps({"model": {"type": "diffuse", "reflectance": 0.5}, "wi": [[]] * 100_000,
-                        "wo": [[0, 0, 1]]})
-    table = json.dumps({"model": {"type": "diffuse", "reflectance": 0.5}, "wavelengths": [[]] * 100_000})
-    ref = {"type": "measured", "hash": "0" * 64}
-    refs = {"model": {"type": "layered", "interfaces": [ref] * 17, "slabs": [{}] * 17, "base": ref},
-            "theta_i": [0], "theta_o": [0]}
-    heavy = {"preset": "xenopeltis", "theta_i": [30], "theta_o": [40], "samples": 4096}
-    render = {"scene": "furnace", "options": {"subdivisions": 2048}, "width": 8, "height": 8, "spp": 1}
-    junk = os.urandom(1 << 20)
-
-    def chunks():
-        for _ in range(16):
-            yield junk
-
-    attackers = {
-        "bodies": [lambda c: c.post("/v1/bsdf/eval", content=empty, headers={"content-type": "application/json"}),
-                   lambda c: c.post("/v1/tables", content=table, headers={"content-type": "application/json"})] * 4,
-        "methods": [lambda c: c.request("".join(random.choices(string.ascii_uppercase, k=8)), "/v1/jobs")] * 2,
-        "refs": [lambda c: c.post("/v1/bsdf/eval", json=refs)] * 2,
-        "uploads": [lambda c: c.post("/v1/measured", params={"format": "merl"}, content=chunks())] * 8,
-        "renders": [lambda c: c.post("/v1/renders", json={**render, "seed": random.randrange(1 << 30)})] * 2,
-        "heavy": [lambda c: c.post("/v1/bsdf/eval", json=heavy)] * 8,
-    }
-    hostile = set(attackers) | {"idle"} if chosen is None else set(chosen)
-    attackers = [a for name, group in attackers.items() if name in hostile for a in group]
-    host, port = url.rsplit(":", 1)[0].split("//")[1], int(url.rsplit(":", 1)[1])
-    idle = [socket.create_connection((host, port)) for _ in range(40 if "idle" in hostile else 0)]
-
-    def trickle():
-        s = socket.create_connection((host, port))
+    def trickle(self) -> None:
+        s = socket.create_connection((self.host, self.port))
         try:
             for byte in b"GET /v1/presets HTTP/1.1\r\nHost: x\r\n":
-                if stop.is_set():
+                if self.stop.is_set():
                     return
                 s.sendall(bytes([byte]))
                 time.sleep(1.0)
         except OSError:
-            count("trickle closed by server")
+            self.count("trickle closed by server")
         finally:
             s.close()
 
-    def probe():
-        with httpx.Client(base_url=url, timeout=60) as client:
-            while not stop.is_set():
+    def probe(self) -> None:
+        with httpx.Client(base_url=self.url, timeout=60) as client:
+            while not self.stop.is_set():
                 start = time.perf_counter()
                 try:
                     ok = client.get("/healthz").status_code == 200
                 except httpx.HTTPError:
                     ok = False
-                health.append(time.perf_counter() - start)
-                health_ok[0] += ok
+                self.health.append(time.perf_counter() - start)
+                self.health_ok += ok
                 time.sleep(0.02)
 
-    threads = [threading.Thread(target=loop, args=(a,)) for a in attackers]
-    threads += [threading.Thread(target=trickle) for _ in range(4 if "idle" in hostile else 0)]
-    threads += [threading.Thread(target=probe)]
-    peak = 0
-    for t in threads:
-        t.start()
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        peak = max(peak, vm_hwm_kib(pid))
-        time.sleep(0.25)
-    stop.set()
-    for t in threads:
-        t.join(120)
-    peak = max(peak, vm_hwm_kib(pid))
-    for s in idle:
-        s.close()
-    h = sorted(health)
-    p = lambda q: 1000 * h[min(len(h) - 1, int(q * len(h)))]
-    fives = sum(n for s, n in statuses.items() if isinstance(s, int) and s >= 500 and s != 503)
-    print(f"requests: {sum(statuses.values())}  statuses: {dict(sorted(statuses.items(), key=str))}")
-    print(f"5xx other than the connection cap's 503: {fives}")
-    print(f"/healthz: {len(h)} probes, {health_ok[0]} answered 200; p50 {p(0.5):.1f} ms, p99 {p(0.99):.1f} ms, "
-          f"max {1000 * h[-1]:.1f} ms")
-    print(f"server peak RSS (VmHWM): {peak / 1024:.0f} MiB")
-    return 0
+    def run(self, seconds: float) -> int:
+        idle = [socket.create_connection((self.host, self.port)) for _ in range(40 if "idle" in self.hostile else 0)]
+        threads = [threading.Thread(target=self.loop, args=(a,)) for a in self.attackers]
+        threads += [threading.Thread(target=self.trickle) for _ in range(4 if "idle" in self.hostile else 0)]
+        threads += [threading.Thread(target=self.probe)]
+        peak = 0
+        for t in threads:
+            t.start()
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            peak = max(peak, vm_hwm_kib(self.pid))
+            time.sleep(0.25)
+        self.stop.set()
+        for t in threads:
+            t.join(120)
+        peak = max(peak, vm_hwm_kib(self.pid))
+        for s in idle:
+            s.close()
+        self.report(peak)
+        return 0
+
+    def report(self, peak: int) -> None:
+        statuses, h = self.statuses, sorted(self.health)
+
+        def p(q: float) -> float:
+            return 1000 * h[min(len(h) - 1, int(q * len(h)))]
+
+        fives = sum(n for s, n in statuses.items() if isinstance(s, int) and s >= 500 and s != 503)
+        print(f"requests: {sum(statuses.values())}  statuses: {dict(sorted(statuses.items(), key=str))}")
+        print(f"5xx other than the connection cap's 503: {fives}")
+        print(f"/healthz: {len(h)} probes, {self.health_ok} answered 200; p50 {p(0.5):.1f} ms, "
+              f"p99 {p(0.99):.1f} ms, max {1000 * h[-1]:.1f} ms")
+        print(f"server peak RSS (VmHWM): {peak / 1024:.0f} MiB")
 
 
 if __name__ == "__main__":
