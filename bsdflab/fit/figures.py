@@ -30,7 +30,10 @@ def _plt():
 
 
 def _label(name: str) -> str:
-    unit = parameter(name).unit
+    try:
+        unit = parameter(name).unit
+    except ValueError:  # a structure fit's parameter (bsdflab.fit.structure): the name says it
+        return name
     return f"{name} [{unit}]" if unit else name
 
 

@@ -14,7 +14,7 @@ from bsdflab import _core
 from bsdflab.fit.data import GEOMETRIES, Dataset
 from bsdflab.fit.structure import Structure
 
-BANDWIDTH_NODES = 9      # Gauss-Hermite nodes of the slit function (odd: the middle one is the nominal wavelength)
+BANDWIDTH_NODES = 7      # Gauss-Hermite nodes of the slit function (odd: the middle one is the nominal wavelength)
 CONE_NODES = 4           # Gauss-Legendre nodes over the cone's polar angle
 CONE_AZIMUTHS = 6        # midpoint nodes over the cone's azimuth in [0, pi]
 FWHM_TO_SIGMA = 1.0 / (2.0 * np.sqrt(2.0 * np.log(2.0)))

@@ -4,6 +4,7 @@
 #include <limits>
 #include <numeric>
 #include <stdexcept>
+#include <vector>
 #include "bsdflab/parallel.h"
 #include "bsdflab/thin_film.h"
 
@@ -91,6 +92,31 @@ void InstrumentStack::evaluate_angle(const cplx *n, const double *wl, const doub
     // Only the middle wavelength node without a bandwidth.
     const std::size_t k0 = fwhm > 0 ? 0 : B / 2, k1 = fwhm > 0 ? B : B / 2 + 1;
     cplx media_n[kMaxMedia];
+    // Non-dispersive media (constants such as guanine, cytoplasm, a fitted n + ik): the
+    // stack's interfaces depend on the angle only, and film_stack_spectrum reuses them over
+    // all wavelengths (bit-identical to film_stack except for its lossless one-film closed form).
+    bool constant = layers_ <= kFilmSpectrumMaxLayers;
+    for (std::size_t m = 0; constant && m < M; ++m)
+        for (std::size_t q = 1; constant && q < E; ++q) constant = n[m * E + q] == n[m * E];
+    if (constant) {
+        for (std::size_t m = 0; m < M; ++m) media_n[m] = n[m * E];
+        const std::size_t used = k1 - k0;
+        std::vector<double> wls(wavelengths_ * used), R(wls.size()), T(wls.size()), acc(wls.size(), 0.0);
+        for (std::size_t j = 0; j < wavelengths_; ++j)
+            for (std::size_t k = k0; k < k1; ++k) wls[j * used + (k - k0)] = wl[j * B + k];
+        for (std::size_t q = 0; q < nodes; ++q) {
+            film_stack_spectrum(media_n, d, layers_, cos_in[q], wls.data(), static_cast<int>(wls.size()),
+                                R.data(), T.data());
+            for (std::size_t c = 0; c < wls.size(); ++c) acc[c] += weight[q] * R[c];
+        }
+        for (std::size_t j = 0; j < wavelengths_; ++j) {
+            double sum = 0.0;
+            for (std::size_t k = k0; k < k1; ++k)
+                sum += (fwhm > 0 ? band_w_[k] : 1.0) * acc[j * used + (k - k0)];
+            out[j] = sum / wsum;
+        }
+        return;
+    }
     for (std::size_t j = 0; j < wavelengths_; ++j) {
         double sum = 0.0;
         for (std::size_t k = k0; k < k1; ++k) {

@@ -42,6 +42,12 @@ STRUCTURES = {
         {"periods": 5, "layers": [{"name": "plate", "material": "guanine", "thickness_nm": 80.0},
                                   {"name": "gap", "material": "cytoplasm", "thickness_nm": 110.0}]}]},
     "bare": {"substrate": {"n": 1.5, "k": 0.3}},
+    # every medium non-dispersive: the core's film_stack_spectrum path (interfaces reused)
+    "constant periodic": {"substrate": {"n": 1.55, "k": 0.01}, "layers": [
+        {"periods": 4, "layers": [{"name": "plate", "material": "guanine", "thickness_nm": 90.0},
+                                  {"name": "gap", "material": "cytoplasm", "thickness_nm": 130.0}]}]},
+    "constant film": {"substrate": {"n": 1.55}, "layers": [
+        {"name": "film", "material": "guanine", "thickness_nm": 700.0}]},
 }
 
 
