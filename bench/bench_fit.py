@@ -44,7 +44,7 @@ CONFIG = f"""
 [parameters]
 film_thickness_nm = {{ prior = "uniform", low = 300.0, high = 600.0 }}
 film_thickness_spread_nm = {{ prior = "uniform", low = 0.0, high = 40.0 }}
-film_index_A = {{ prior = "normal", mean = 1.83, sd = 0.05 }}
+film_ior = {{ prior = "normal", mean = 1.83, sd = 0.05 }}
 [model]
 thickness_nodes = {NODES}
 [sampler]
@@ -76,10 +76,10 @@ class PeerForwardModel:
             d, w = d[:1], np.ones(1)
         else:
             w = self.w
-        n_e, n_s = t[COL["exterior_index"]], t[COL["substrate_index"]]
+        n_e, n_s = t[COL["exterior_ior"]], t[COL["substrate_ior"]]
         R = np.empty((len(self.wl), len(self.angles)))
         for j, lam in enumerate(self.wl):
-            n_f = t[COL["film_index_A"]] + t[COL["film_index_B"]] / lam**2
+            n_f = t[COL["film_ior"]] + t[COL["film_cauchy_b"]] / lam**2
             if self.film == "colour":
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")

@@ -15,8 +15,8 @@ from bsdflab.render.image_io import tone_map
 from bsdflab.util.extras import require
 
 # short titles over the corner plot's diagonal (the axis labels carry the full names)
-SYMBOLS = {"film_thickness_nm": "d", "film_thickness_spread_nm": "σ_d", "film_index_A": "A", "film_index_B": "B",
-           "substrate_index": "n_s", "exterior_index": "n_e", "sigma_a_550": "σ_a(550)",
+SYMBOLS = {"film_thickness_nm": "d", "film_thickness_spread_nm": "σ_d", "film_ior": "A", "film_cauchy_b": "B",
+           "substrate_ior": "n_s", "exterior_ior": "n_e", "pigment_absorption": "σ_a(550)",
            "absorption_exponent": "exponent", "slab_thickness_um": "h", "base_albedo": "ρ", "noise_scale": "s"}
 
 

@@ -28,7 +28,7 @@ from bsdflab.fit.data import Dataset, read_csv
 from bsdflab.fit.diagnostics import inference_data, summary_rows, table_markdown
 from bsdflab.fit.figures import appearance_plot, corner_plot, predictive_plot, trace_plot
 from bsdflab.fit.material import material_dict
-from bsdflab.fit.parameters import ALL_NAMES
+from bsdflab.fit.parameters import ALL_NAMES, canonical
 from bsdflab.fit.posterior import LogPosterior
 from bsdflab.fit.sampling import run_sampler
 
@@ -43,7 +43,7 @@ def truths_from_comments(dataset: Dataset) -> dict | None:
             for item in c[len("truth:"):].split(","):
                 k, _, v = item.strip().partition("=")
                 try:
-                    out[k] = float(v)
+                    out[canonical(k, "data comment: ")] = float(v)
                 except ValueError:
                     return None
             return out

@@ -218,3 +218,14 @@ def test_named_materials():
     free = material("x", {"cauchy": [1.5, 4000.0], "k": 0.01})
     got = free.index({"ior": np.array([1.6]), "cauchy_b": np.array([0.0]), "k": np.array([0.0])}, wl)
     np.testing.assert_allclose(got, np.full((1, 3), 1.6), rtol=0, atol=0)
+
+
+def test_old_parameter_names_read_with_a_warning():
+    """Issue 30's one vocabulary: the snake model's old names (film_index_A, sigma_a_550, ...)
+    still read, mapped to the presets' names, with a FutureWarning that names the new one."""
+    from bsdflab.fit.config import FitConfig
+
+    with pytest.warns(FutureWarning, match="'film_index_A' is deprecated: it is now called 'film_ior'"):
+        cfg = FitConfig.parse({"parameters": {"film_index_A": {"prior": "normal", "mean": 1.83, "sd": 0.05},
+                                              "sigma_a_550": 1.0}})
+    assert "film_ior" in cfg.priors and cfg.fixed["pigment_absorption"] == 1.0
