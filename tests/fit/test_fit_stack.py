@@ -70,10 +70,10 @@ def test_stack_matches_tmm(key):
 
 
 def test_bandwidth_matches_dense_convolution():
-    """The slit's Gauss-Hermite average (9 nodes) against a 0.25 nm trapezoid convolution of
-    tmm spectra. Tolerance 2e-4 absolute: the trapezoid rule's error on the sampled
-    Gaussian (measured 3e-5 here) plus GH's for fringes ~90 nm apart at FWHM 20 nm.
-    Mutation caught: reading the FWHM as the Gaussian's sd (misses by ~1e-2)."""
+    """The slit's Gauss-Hermite average (7 nodes, the default) against a 0.25 nm trapezoid
+    convolution of tmm spectra, FWHM 20 nm over fringes ~90 nm apart. Tolerance 3e-6: measured
+    9.0e-7 at 7 nodes (7.6e-9 at 9, 1.2e-10 at 15, the reference's own floor).
+    Mutation caught: reading the FWHM as the Gaussian's sd (misses by 3.5e-2)."""
     s = Structure.parse(two_layer_config({})["structure"])
     wls = np.array([420.0, 505.0, 590.0, 680.0])
     ds = specular([30.0], wls)
@@ -81,7 +81,7 @@ def test_bandwidth_matches_dense_convolution():
               "substrate_ior": 1.532, "substrate_cauchy_b": 5890.0, "substrate_k": 0.0}
     got = StackForward(ds, s).exact(lambda n: np.array([values[n]]), [0.0], [0.0], [20.0])[0]
     ref = smeared(two_layer_media(1.83, 1.532), [900.0, 150.0], 30.0, wls, 20.0)
-    np.testing.assert_allclose(got, ref, rtol=0, atol=2e-4)
+    np.testing.assert_allclose(got, ref, rtol=0, atol=3e-6)
     unsmeared = smeared(two_layer_media(1.83, 1.532), [900.0, 150.0], 30.0, wls, 0.0)
     assert np.max(np.abs(unsmeared - ref)) > 1e-2  # the slit matters at this bandwidth
 
