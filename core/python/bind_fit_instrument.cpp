@@ -38,6 +38,22 @@ py::array_t<double> evaluate(const fit::InstrumentStack &model, const Carr &n, c
     return out;
 }
 
+py::array_t<double> smear(const Darr &r, const Darr &sigma, double step, std::size_t first,
+                          std::size_t stride, std::size_t wavelengths, std::size_t reach) {
+    if (r.ndim() != 3 || sigma.ndim() != 1 || sigma.shape(0) != r.shape(0))
+        throw std::invalid_argument("r must have shape (P, angles, grid) and sigma (P,)");
+    if (!(step > 0)) throw std::invalid_argument("step must be > 0");
+    const std::size_t P = r.shape(0), A = r.shape(1), G = r.shape(2);
+    py::array_t<double> out({P, A, wavelengths});
+    double *o = out.mutable_data();
+    const double *pr = r.data(), *ps = sigma.data();
+    {
+        py::gil_scoped_release nogil;
+        fit::smear_uniform(pr, P, A, G, ps, step, first, stride, wavelengths, reach, o);
+    }
+    return out;
+}
+
 } // namespace
 
 void bind_fit_instrument(py::module_ &m) {
@@ -55,4 +71,8 @@ void bind_fit_instrument(py::module_ &m) {
         .def_property_readonly("media", &fit::InstrumentStack::media)
         .def("evaluate", &evaluate, py::arg("n"), py::arg("wl"), py::arg("d"), py::arg("inst"),
              "Smeared specular reflectance (P, angles, wavelengths); NaN outside the domain.");
+    m.def(
+        "smear_uniform", &smear, py::arg("r"), py::arg("sigma_nm"), py::arg("step_nm"), py::arg("first"),
+        py::arg("stride"), py::arg("wavelengths"), py::arg("reach"),
+        "Gaussian slit on a uniform grid (fit_instrument.h): (P, angles, grid) -> (P, angles, wavelengths).");
 }

@@ -133,4 +133,34 @@ void InstrumentStack::evaluate_angle(const cplx *n, const double *wl, const doub
     }
 }
 
+void smear_uniform(const double *r, std::size_t count, std::size_t angles, std::size_t grid,
+                   const double *sigma_nm, double step_nm, std::size_t first, std::size_t stride,
+                   std::size_t wavelengths, std::size_t reach, double *out) {
+    if (wavelengths > 0 && (first < reach || first + (wavelengths - 1) * stride + reach >= grid))
+        throw std::invalid_argument("smear_uniform: the kernel reaches past the grid");
+    parallel_for(count, 64, [&](std::size_t s, std::size_t e) {
+        std::vector<double> w(2 * reach + 1);
+        for (std::size_t set = s; set < e; ++set) {
+            const double sg = sigma_nm[set];
+            double sum = 0.0;
+            for (std::size_t i = 0; i <= 2 * reach; ++i) {
+                const double x = (static_cast<double>(i) - static_cast<double>(reach)) * step_nm / sg;
+                w[i] = sg > 0 ? std::exp(-0.5 * x * x) : (i == reach ? 1.0 : 0.0);
+                sum += w[i];
+            }
+            for (double &v : w) v /= sum;
+            for (std::size_t a = 0; a < angles; ++a) {
+                const double *ra = r + (set * angles + a) * grid;
+                double *oa = out + (set * angles + a) * wavelengths;
+                for (std::size_t j = 0; j < wavelengths; ++j) {
+                    const std::size_t c = first + j * stride - reach;
+                    double v = 0.0;
+                    for (std::size_t i = 0; i <= 2 * reach; ++i) v += w[i] * ra[c + i];
+                    oa[j] = v;
+                }
+            }
+        }
+    });
+}
+
 } // namespace bsdflab::fit

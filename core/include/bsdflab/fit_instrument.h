@@ -61,4 +61,15 @@ class InstrumentStack {
     std::vector<double> band_w_, cone_u_, cone_w_, psi_cos_;
 };
 
+// The slit on a uniform wavelength grid (the fast path for evenly spaced data): R on the
+// grid lambda_0 + i step, i in [0, G), is smoothed by a Gaussian of standard deviation
+// sigma_nm (per set) sampled on the grid -- the trapezoid rule, whose error for a Gaussian of
+// sd sigma >= 1.2 step is below e^(-2 pi^2 1.2^2) ~ 5e-13 relative (plus the spectrum's own
+// fringes, resolved when their period exceeds a few steps) -- and read at the nominal
+// wavelengths, which sit at grid points first + j stride. The kernel reaches `reach` steps
+// (>= 4 sigma / step). r: (count, A, G); out: (count, A, W). Threads over sets.
+void smear_uniform(const double *r, std::size_t count, std::size_t angles, std::size_t grid,
+                   const double *sigma_nm, double step_nm, std::size_t first, std::size_t stride,
+                   std::size_t wavelengths, std::size_t reach, double *out);
+
 } // namespace bsdflab::fit
