@@ -243,7 +243,10 @@ def test_old_parameter_names_read_with_a_warning():
     still read, mapped to the presets' names, with a FutureWarning that names the new one."""
     from bsdflab.fit.config import FitConfig
 
-    with pytest.warns(FutureWarning, match="'film_index_A' is deprecated: it is now called 'film_ior'"):
+    with pytest.warns(FutureWarning) as caught:
         cfg = FitConfig.parse({"parameters": {"film_index_A": {"prior": "normal", "mean": 1.83, "sd": 0.05},
                                               "sigma_a_550": 1.0}})
+    messages = [str(w.message) for w in caught]
+    assert "[parameters] parameter 'film_index_A' is deprecated: it is now called 'film_ior'" in messages
+    assert "[parameters] parameter 'sigma_a_550' is deprecated: it is now called 'pigment_absorption'" in messages
     assert "film_ior" in cfg.priors and cfg.fixed["pigment_absorption"] == 1.0
