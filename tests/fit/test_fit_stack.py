@@ -250,3 +250,29 @@ def test_old_parameter_names_read_with_a_warning():
     assert "[parameters] parameter 'film_index_A' is deprecated: it is now called 'film_ior'" in messages
     assert "[parameters] parameter 'sigma_a_550' is deprecated: it is now called 'pigment_absorption'" in messages
     assert "film_ior" in cfg.priors and cfg.fixed["pigment_absorption"] == 1.0
+
+
+def test_structure_study_through_the_cli(tmp_path):
+    """`bsdflab fit - --config co.toml`: a config with a [structure] table writes the structure
+    study folder, reading its [[dataset]] files (a short run: the folder, not the fit, is
+    checked here); a bad structure key is a one-line error naming it."""
+    import json
+    import shutil
+
+    from support.cli import cli, one_line_error
+
+    shutil.copy("examples/fit/stack_data.csv", tmp_path / "a.csv")
+    text = open("examples/fit/stack.toml", encoding="utf-8").read()
+    text = text.replace("walkers = 20\nmax_steps = 8000", "walkers = 20\nmax_steps = 20\ncheck_every = 10\nmap_starts = 1")
+    co = text.replace("[instrument]", "[[dataset]]\nname = \"spec\"\ndata = \"a.csv\"\n[dataset.instrument]")
+    (tmp_path / "co.toml").write_text(co)
+    r = cli("fit", "-", "--config", str(tmp_path / "co.toml"), "--out", str(tmp_path / "co"), "--quiet")
+    assert r.returncode == 0, r.stderr[-2000:]
+    for name in ("parameters.md", "corner.png", "predictive.png", "trace.png", "summary.json", "draws.npz"):
+        assert (tmp_path / "co" / name).is_file(), name
+    summary = json.loads((tmp_path / "co" / "summary.json").read_text())
+    assert summary["rows"] == 124 and "spec.bandwidth_nm" in summary["free"]
+
+    (tmp_path / "bad.toml").write_text(text.replace('exterior = "air"', 'exterior = "vacuum"'))
+    r = cli("fit", str(tmp_path / "a.csv"), "--config", str(tmp_path / "bad.toml"), "--out", str(tmp_path / "b"))
+    one_line_error(r, "unknown material 'vacuum'")
