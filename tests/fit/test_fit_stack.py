@@ -263,7 +263,8 @@ def test_structure_study_through_the_cli(tmp_path):
 
     shutil.copy("examples/fit/stack_data.csv", tmp_path / "a.csv")
     text = open("examples/fit/stack.toml", encoding="utf-8").read()
-    text = text.replace("walkers = 20\nmax_steps = 8000", "walkers = 20\nmax_steps = 20\ncheck_every = 10\nmap_starts = 1")
+    text = text.replace("walkers = 20\nmax_steps = 8000",
+                        "walkers = 20\nmax_steps = 20\ncheck_every = 10\nmap_starts = 1")
     co = text.replace("[instrument]", "[[dataset]]\nname = \"spec\"\ndata = \"a.csv\"\n[dataset.instrument]")
     (tmp_path / "co.toml").write_text(co)
     r = cli("fit", "-", "--config", str(tmp_path / "co.toml"), "--out", str(tmp_path / "co"), "--quiet")
