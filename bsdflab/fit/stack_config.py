@@ -73,28 +73,7 @@ class StackConfig:
                              f"known: {', '.join(sorted(known))}")
         structure = Structure.parse(d.get("structure"))
         base = os.path.dirname(os.path.abspath(source)) if source else os.getcwd()
-        if "dataset" in d:
-            if "instrument" in d:
-                raise ValueError("give the instrument per dataset ([dataset.instrument]) when [[dataset]] is used, "
-                                 "not [instrument]")
-            entries = d["dataset"]
-            if not isinstance(entries, list) or not entries:
-                raise ValueError("[[dataset]] must be a non-empty array of tables")
-            specs, names = [], set()
-            for i, e in enumerate(entries):
-                where = f"[[dataset]] {i}"
-                if not isinstance(e, dict) or set(e) - {"name", "data", "instrument"} or not {"name", "data"} <= set(e):
-                    raise ValueError(f"{where}: takes name, data and an optional instrument table")
-                name, data = e["name"], e["data"]
-                if not isinstance(name, str) or not _DATASET.match(name) or name in names:
-                    raise ValueError(f"{where}: name must be a new lower-case identifier, got {name!r}")
-                if not isinstance(data, str) or not data:
-                    raise ValueError(f"{where}: data must be a CSV path, got {data!r}")
-                names.add(name)
-                specs.append(DatasetSpec(name, os.path.join(base, data),
-                                         Instrument.parse(f"dataset.{name}.instrument", e.get("instrument", {}))))
-        else:
-            specs = [DatasetSpec("", None, Instrument.parse("instrument", d.get("instrument", {})))]
+        specs = _dataset_specs(d, base)
         params = d.get("parameters", {})
         if not isinstance(params, dict):
             raise ValueError("[parameters] must be a table")
@@ -132,6 +111,33 @@ class StackConfig:
         except ValueError as e:
             msg = str(e)
             raise ValueError(msg if msg.startswith(path) else f"{path}: {msg}") from None
+
+
+def _dataset_specs(d: dict, base: str) -> list[DatasetSpec]:
+    """The [[dataset]] entries (paths relative to ``base``), or the one dataset of [instrument]."""
+    if "dataset" in d:
+        if "instrument" in d:
+            raise ValueError("give the instrument per dataset ([dataset.instrument]) when [[dataset]] is used, "
+                             "not [instrument]")
+        entries = d["dataset"]
+        if not isinstance(entries, list) or not entries:
+            raise ValueError("[[dataset]] must be a non-empty array of tables")
+        specs, names = [], set()
+        for i, e in enumerate(entries):
+            where = f"[[dataset]] {i}"
+            if not isinstance(e, dict) or set(e) - {"name", "data", "instrument"} or not {"name", "data"} <= set(e):
+                raise ValueError(f"{where}: takes name, data and an optional instrument table")
+            name, data = e["name"], e["data"]
+            if not isinstance(name, str) or not _DATASET.match(name) or name in names:
+                raise ValueError(f"{where}: name must be a new lower-case identifier, got {name!r}")
+            if not isinstance(data, str) or not data:
+                raise ValueError(f"{where}: data must be a CSV path, got {data!r}")
+            names.add(name)
+            specs.append(DatasetSpec(name, os.path.join(base, data),
+                                     Instrument.parse(f"dataset.{name}.instrument", e.get("instrument", {}))))
+    else:
+        specs = [DatasetSpec("", None, Instrument.parse("instrument", d.get("instrument", {})))]
+    return specs
 
 
 def is_stack_config(d: dict) -> bool:

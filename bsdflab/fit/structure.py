@@ -99,40 +99,51 @@ class Structure:
         layers, thickness, order, names = [], [], [], {"exterior", "substrate"}
 
         def add(where, e) -> int:
-            if not isinstance(e, dict):
-                raise ValueError(f"{where} must be a table")
-            extra = set(e) - {"name", "material", "thickness_nm"}
-            if extra or not {"name", "material", "thickness_nm"} <= set(e):
-                raise ValueError(f"{where} takes name, material and thickness_nm, got keys {sorted(e)}")
-            name = e["name"]
-            if not isinstance(name, str) or not _NAME.match(name):
-                raise ValueError(f"{where}: name must be lower-case letters, digits, _ (a letter first), got {name!r}")
-            if name in names:
-                raise ValueError(f"{where}: name {name!r} is used twice (layers share parameters by "
-                                 "repeating inside a periodic block, not by name)")
-            names.add(name)
-            t = e["thickness_nm"]
-            if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t) or not 0 <= t <= 1e5:
-                raise ValueError(f"{where}: thickness_nm must be a number in [0, 1e5], got {t!r}")
-            layers.append(Medium(name, material(f"{where} material", e["material"])))
-            thickness.append(float(t))
+            medium, t = _layer(where, e, names)
+            layers.append(medium)
+            thickness.append(t)
             return len(layers) - 1
 
         for i, e in enumerate(entries):
             where = f"[structure] layers[{i}]"
             if isinstance(e, dict) and "periods" in e:
-                if set(e) - {"periods", "layers"}:
-                    raise ValueError(f"{where}: a periodic block takes periods and layers, got keys {sorted(e)}")
-                p = e["periods"]
-                if isinstance(p, bool) or not isinstance(p, int) or not 1 <= p <= MAX_LAYERS:
-                    raise ValueError(f"{where}: periods must be an integer in [1, {MAX_LAYERS}], got {p!r}")
-                block = e.get("layers")
-                if not isinstance(block, list) or not block:
-                    raise ValueError(f"{where}: layers must be a non-empty list of layer tables")
-                ids = [add(f"{where} layers[{j}]", b) for j, b in enumerate(block)]
-                order += ids * p
+                periods, block = _block(where, e)
+                order += [add(f"{where} layers[{j}]", b) for j, b in enumerate(block)] * periods
             else:
                 order.append(add(where, e))
         if len(order) > MAX_LAYERS:
             raise ValueError(f"[structure]: {len(order)} layers after the periods; at most {MAX_LAYERS}")
         return cls(exterior, tuple(layers), tuple(thickness), tuple(order), substrate)
+
+
+def _layer(where: str, e, names: set) -> tuple[Medium, float]:
+    """One layer table (name, material, thickness_nm); its name joins ``names``."""
+    if not isinstance(e, dict):
+        raise ValueError(f"{where} must be a table")
+    extra = set(e) - {"name", "material", "thickness_nm"}
+    if extra or not {"name", "material", "thickness_nm"} <= set(e):
+        raise ValueError(f"{where} takes name, material and thickness_nm, got keys {sorted(e)}")
+    name = e["name"]
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise ValueError(f"{where}: name must be lower-case letters, digits, _ (a letter first), got {name!r}")
+    if name in names:
+        raise ValueError(f"{where}: name {name!r} is used twice (layers share parameters by "
+                         "repeating inside a periodic block, not by name)")
+    names.add(name)
+    t = e["thickness_nm"]
+    if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t) or not 0 <= t <= 1e5:
+        raise ValueError(f"{where}: thickness_nm must be a number in [0, 1e5], got {t!r}")
+    return Medium(name, material(f"{where} material", e["material"])), float(t)
+
+
+def _block(where: str, e: dict) -> tuple[int, list]:
+    """A periodic block's (periods, layer tables)."""
+    if set(e) - {"periods", "layers"}:
+        raise ValueError(f"{where}: a periodic block takes periods and layers, got keys {sorted(e)}")
+    p = e["periods"]
+    if isinstance(p, bool) or not isinstance(p, int) or not 1 <= p <= MAX_LAYERS:
+        raise ValueError(f"{where}: periods must be an integer in [1, {MAX_LAYERS}], got {p!r}")
+    block = e.get("layers")
+    if not isinstance(block, list) or not block:
+        raise ValueError(f"{where}: layers must be a non-empty list of layer tables")
+    return p, block
