@@ -112,5 +112,4 @@ def _run_stack(args: argparse.Namespace) -> int:
     print(summary["stop_reason"])
     with open(os.path.join(args.out, "parameters.md"), encoding="utf-8") as f:
         print(f.read())
-    print(f"wrote {args.out}")
-    return 0
+    return _report(summary, args)

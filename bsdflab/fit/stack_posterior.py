@@ -45,11 +45,17 @@ class BoundConfig:
         return tuple(n for n in self.names if n in self.priors)
 
 
-def concatenate(datasets) -> Dataset:
+def concatenate(datasets, names=None) -> Dataset:
+    """All rows in one Dataset; each row's series is ``<dataset name>/<its series>`` (either
+    part left out where empty), so checks and figures tell the datasets apart."""
+    names = names or [""] * len(datasets)
+
     def cat(key):
         return np.concatenate([getattr(d, key) for d in datasets])
+    series = np.concatenate([np.array(["/".join(p for p in (name, str(s)) if p) for s in d.series], dtype=object)
+                             for name, d in zip(names, datasets)])
     return Dataset(cat("geometry"), cat("angle_deg"), cat("angle_out_deg"), cat("wavelength_nm"),
-                   cat("reflectance"), cat("sigma"), [c for d in datasets for c in d.comments], cat("phi_deg"))
+                   cat("reflectance"), cat("sigma"), [c for d in datasets for c in d.comments], cat("phi_deg"), series)
 
 
 class StackPosterior:
@@ -87,7 +93,7 @@ class StackPosterior:
         self._lo = np.array([domains[n].lo for n in names])
         self._hi = np.array([domains[n].hi for n in names])
         self._lo_open = np.array([domains[n].lo_open for n in names])
-        self.dataset = concatenate(datasets)
+        self.dataset = concatenate(datasets, [spec.name for spec in config.datasets])
         self.evaluations = 0
 
     @property

@@ -1,8 +1,10 @@
 """The study folder of a structure fit (a config with ``[structure]``; docs/fit.md):
-posterior draws, parameter table, corner, predictive and trace figures, summary.json, the
-inputs. Written into a temporary folder beside ``out`` and renamed at the end, like
-bsdflab.fit.study (whose snake-specific parts -- material.json, appearance, renders -- have
-no counterpart for a general stack)."""
+posterior draws, parameter table, corner, predictive, residual and trace figures,
+summary.json, the inputs. summary.json carries the predictive checks (bsdflab.fit.checks,
+per dataset and series: a row's model value comes through its dataset's instrument) and the
+warnings (bsdflab.fit.alerts). Written into a temporary folder beside ``out`` and renamed at
+the end, like bsdflab.fit.study (whose snake-specific parts -- material.json, appearance,
+renders -- have no counterpart for a general stack)."""
 from __future__ import annotations
 
 import csv
@@ -15,8 +17,10 @@ import time
 
 import numpy as np
 
+from bsdflab.fit.alerts import fit_alerts
+from bsdflab.fit.checks import ALPHA, normalised_residuals, predictive_checks, sidak_level
 from bsdflab.fit.data import Dataset, read_csv
-from bsdflab.fit.figures import corner_plot, predictive_plot, trace_plot
+from bsdflab.fit.figures import corner_plot, predictive_plot, residual_plot, trace_plot
 from bsdflab.fit.sampling import run_sampler
 from bsdflab.fit.stack_config import StackConfig
 from bsdflab.fit.stack_posterior import StackPosterior
@@ -88,9 +92,14 @@ def _write(datasets, config: StackConfig, folder: str, progress: bool) -> dict:
     corner_plot(draws, run.names, os.path.join(folder, "corner.png"))
     pick = draws[rng.choice(len(draws), min(PREDICTIVE_DRAWS, len(draws)), replace=False)]
     model = post.predict(pick)
-    noise = post.named(pick)["noise_scale"][:, None] * post.dataset.sigma[None, :]
+    scales = post.named(pick)["noise_scale"]
+    noise = scales[:, None] * post.dataset.sigma[None, :]
     predictive_plot(post.dataset, model, model + noise * rng.standard_normal(model.shape),
                     os.path.join(folder, "predictive.png"))
+    checks = predictive_checks(post.dataset, model, scales)
+    residual_plot(post.dataset, normalised_residuals(post.dataset, model, scales), checks,
+                  os.path.join(folder, "residuals.png"))
+    alerts = fit_alerts(run, draws, post.config.priors, checks, post.config.domains)
     trace_plot(run, os.path.join(folder, "trace.png"), config.sampler.tau_multiple)
     np.savez_compressed(os.path.join(folder, "draws.npz"), draws=draws, names=np.array(run.names))
     for spec, d in zip(config.datasets, datasets, strict=True):
@@ -104,6 +113,9 @@ def _write(datasets, config: StackConfig, folder: str, progress: bool) -> dict:
         "acceptance_fraction": float(np.mean(run.acceptance)), "map": dict(zip(run.names, run.map.x.tolist())),
         "posterior_draws": int(len(draws)), "sampling_seconds": run.seconds,
         "forward_evaluations": run.evaluations + run.map.evaluations, "parameters": rows,
+        "predictive_checks": {"alpha": ALPHA, "level_per_check": sidak_level(len(checks)),
+                              "draws": int(len(pick)), "series": [c.to_dict() for c in checks]},
+        "warnings": [a.to_dict() for a in alerts],
         "seconds": time.perf_counter() - t0,
     }
     _text(os.path.join(folder, "summary.json"), json.dumps(summary, indent=1, default=float) + "\n")
