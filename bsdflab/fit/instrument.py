@@ -7,7 +7,8 @@ scale, bkg, dq)``, Nelson & Prescott 2019, J. Appl. Cryst. 52:193):
 |---|---|---|---|
 | ``scale``          | —    | 1   | reflectance relative to the reference (against a white diffuse |
 |                    |      |     | standard, the specular beam times an unknown factor); one per    |
-|                    |      |     | dataset, or one per series (angle): ``scale_per_series = true``  |
+|                    |      |     | dataset, or ``scale_per_series = true``: one per named series   |
+|                    |      |     | (``Dataset.series``), else one per angle                         |
 | ``background``     | —    | 0   | additive offset (stray light, dark-current residue) |
 | ``angle_offset_deg`` | deg | 0  | goniometer zero / sample tilt, added to every nominal angle |
 | ``bandwidth_nm``   | nm   | 0   | FWHM of the spectrometer's Gaussian slit function |

@@ -10,6 +10,7 @@ Same interface as bsdflab.fit.posterior.LogPosterior, so bsdflab.fit.sampling ru
 from __future__ import annotations
 
 import copy
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,6 +28,22 @@ _LOG_2PI = float(np.log(2.0 * np.pi))
 
 def series_name(angle_deg: float) -> str:
     return "scale_" + f"{angle_deg:g}".replace(".", "p").replace("-", "m")
+
+
+def series_scales(dataset: Dataset) -> tuple[list[str], np.ndarray]:
+    """``scale_per_series``'s parameter names (without the dataset prefix) and each row's
+    index into them: one per named series (``Dataset.series``, as ``bsdflab fit import``
+    writes it: one per file, sample or instrument) when the rows name any, else one per
+    incidence angle (``scale_<angle>``)."""
+    if any(dataset.series):
+        keys, index = np.unique(dataset.series.astype(str), return_inverse=True)
+        names = ["scale_" + (re.sub(r"[^a-z0-9_]+", "_", k.lower()).strip("_") or "unnamed") for k in keys]
+        if len(set(names)) < len(names):
+            raise ValueError(f"scale_per_series: the series names {', '.join(map(repr, keys))} do not give "
+                             "distinct parameter names (scale_<series> in lower-case letters, digits and _)")
+        return names, index
+    angles, index = np.unique(dataset.angle_deg, return_inverse=True)
+    return [series_name(a) for a in angles], index
 
 
 @dataclass(frozen=True)
@@ -70,11 +87,12 @@ class StackPosterior:
                        for d in datasets]
         domains = {p.name: p for p in (*config.structure.parameters(), P.NOISE)}
         priors, fixed = dict(config.priors), dict(config.fixed)
-        for spec, model in zip(config.datasets, self.models):
+        self._series = [series_scales(d) if spec.instrument.scale_per_series else None
+                        for spec, d in zip(config.datasets, datasets)]
+        for spec, per in zip(config.datasets, self._series):
             inst = spec.instrument
             for name, p in INSTRUMENT.items():
-                names = ([spec.prefix(series_name(a)) for a in model.angles]
-                         if name == "scale" and inst.scale_per_series else [spec.prefix(name)])
+                names = ([spec.prefix(n) for n in per[0]] if name == "scale" and per else [spec.prefix(name)])
                 for full in names:
                     domains[full] = p
                     if name in inst.priors:
@@ -122,12 +140,11 @@ class StackPosterior:
         def value(name):
             return f[:, self.col[name]]
         parts = []
-        for spec, model in zip(self.stack.datasets, self.models):
+        for spec, model, per in zip(self.stack.datasets, self.models, self._series):
             def inst(name, spec=spec):
                 return value(spec.prefix(name))
-            if spec.instrument.scale_per_series:
-                per = np.column_stack([value(spec.prefix(series_name(a))) for a in model.angles])
-                scale = per[:, model._ai]
+            if per:
+                scale = np.column_stack([value(spec.prefix(n)) for n in per[0]])[:, per[1]]
             else:
                 scale = inst("scale")
             parts.append(model.evaluate(value, scale, inst("background"), inst("angle_offset_deg"),

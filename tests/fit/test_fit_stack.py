@@ -207,6 +207,30 @@ def test_co_refinement_shares_the_structure():
     np.testing.assert_array_equal(joint, np.concatenate([own_a, own_b]))
 
 
+def test_scale_per_series_keys_on_named_series():
+    """``scale_per_series`` with rows that name their series (as ``bsdflab fit import`` writes
+    them: one per file or sample): one scale per series, ``scale_<series>``, each applied to its
+    own rows only, whatever their angles (mutation caught: keying on the angle, as for unnamed
+    rows, would give one scale_20 for both series and break the per-row ratio); names that
+    collide after lower-casing are refused."""
+    from dataclasses import replace
+
+    base = specular([20.0, 40.0], [450.0, 550.0, 650.0])
+    two = replace(base, series=np.array(["Bird 1"] * 3 + ["bird-2"] * 3, dtype=object))
+    c = two_layer_config({"scale": {"prior": "uniform", "low": 0.5, "high": 1.5}, "scale_per_series": True})
+    post = StackPosterior([two], StackConfig.parse(c))
+    assert post.free[-2:] == ("scale_bird_1", "scale_bird_2")
+    structure = [900.0, 150.0, 1.85, 1.54]
+    scaled = post.predict(np.array([[*structure, 0.7, 1.2]]))[0]
+    plain = StackPosterior([base], StackConfig.parse(two_layer_config({"scale": {"prior": "uniform", "low": 0.5,
+                                                                                 "high": 1.5}})))
+    unscaled = plain.predict(np.array([[*structure, 1.0]]))[0]
+    np.testing.assert_allclose(scaled / unscaled, np.repeat([0.7, 1.2], 3), rtol=1e-12, atol=0)
+    clash = replace(base, series=np.array(["a b"] * 3 + ["a-b"] * 3, dtype=object))
+    with pytest.raises(ValueError, match="do not give distinct parameter names"):
+        StackPosterior([clash], StackConfig.parse(c))
+
+
 @pytest.mark.parametrize("change, message", [
     (lambda c: c["structure"].update(substrate="unobtainium"), "unknown material 'unobtainium'"),
     (lambda c: c["structure"]["layers"].append({"name": "film", "material": "air", "thickness_nm": 1.0}),
