@@ -12,10 +12,15 @@ on one (BSDFLAB_THREADS=1); the peers on one.
     python3 bench/bench_fit.py
 Profile:  python3 -m cProfile -s cumtime bench/bench_fit.py | head -40
 
+    python3 bench/bench_fit.py --stack      # only the third part
+
 Second part: the full model (the rendered Layered model through the adding-doubling solver,
 docs/fit.md) against the smooth model on the same gonio brdf rows: forward evaluations/s of
 the smooth C++ model, the full model's emulator and its direct solves, the emulator's build
 time, and ESS/s of an emcee run with each (the direct-solve ESS/s from its evaluation rate).
+
+Third part: issue 30's speed case, a structure + instrument fit of 852 specular rows to
+convergence, beside the forward cost of today's smooth model (structure_with_instrument).
 """
 from __future__ import annotations
 
@@ -39,7 +44,7 @@ CONFIG = f"""
 [parameters]
 film_thickness_nm = {{ prior = "uniform", low = 300.0, high = 600.0 }}
 film_thickness_spread_nm = {{ prior = "uniform", low = 0.0, high = 40.0 }}
-film_index_A = {{ prior = "normal", mean = 1.83, sd = 0.05 }}
+film_ior = {{ prior = "normal", mean = 1.83, sd = 0.05 }}
 [model]
 thickness_nodes = {NODES}
 [sampler]
@@ -71,10 +76,10 @@ class PeerForwardModel:
             d, w = d[:1], np.ones(1)
         else:
             w = self.w
-        n_e, n_s = t[COL["exterior_index"]], t[COL["substrate_index"]]
+        n_e, n_s = t[COL["exterior_ior"]], t[COL["substrate_ior"]]
         R = np.empty((len(self.wl), len(self.angles)))
         for j, lam in enumerate(self.wl):
-            n_f = t[COL["film_index_A"]] + t[COL["film_index_B"]] / lam**2
+            n_f = t[COL["film_ior"]] + t[COL["film_cauchy_b"]] / lam**2
             if self.film == "colour":
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
@@ -249,6 +254,86 @@ def full_vs_smooth():
           f"{(ess_s / t_s) / (per_eval * rates['full, direct solves']):.0f}x")
 
 
+STACK_TRUTH = {"film_thickness_nm": 420.0, "gap_thickness_nm": 160.0, "film_ior": 1.82, "substrate_ior": 1.54,
+               "scale": 0.85, "background": 0.008, "angle_offset_deg": 1.2, "bandwidth_nm": 12.0, "noise_scale": 1.0}
+STACK_CONFIG = {
+    "structure": {"exterior": "air", "substrate": {"cauchy": [1.532, 5890.0]}, "layers": [
+        {"name": "film", "material": {"n": 1.83}, "thickness_nm": 400.0},
+        {"name": "gap", "material": "cytoplasm", "thickness_nm": 150.0}]},
+    "instrument": {"scale": {"prior": "uniform", "low": 0.5, "high": 1.5},
+                   "background": {"prior": "normal", "mean": 0.0, "sd": 0.02},
+                   "angle_offset_deg": {"prior": "normal", "mean": 0.0, "sd": 2.0},
+                   "bandwidth_nm": {"prior": "uniform", "low": 0.0, "high": 30.0}},
+    "parameters": {"film_thickness_nm": {"prior": "uniform", "low": 350.0, "high": 500.0},
+                   "gap_thickness_nm": {"prior": "uniform", "low": 80.0, "high": 250.0},
+                   "film_ior": {"prior": "normal", "mean": 1.83, "sd": 0.05},
+                   "substrate_ior": {"prior": "normal", "mean": 1.532, "sd": 0.03},
+                   "noise_scale": {"prior": "lognormal", "median": 1.0, "sigma": 0.5}},
+    "sampler": {"walkers": 24, "max_steps": 20000, "tau_multiple": 50, "check_every": 200, "seed": 0},
+}
+
+
+def structure_with_instrument():
+    """Issue 30's speed case: 12 angles (15-70 deg) x 71 wavelengths (350-700 nm) = 852
+    specular rows of air | film | cytoplasm gap | keratin-like substrate through scale,
+    background, angle offset and a slit (9 free parameters with noise_scale), run by the
+    study's sampler to its stop rule (N > 50 tau, tau stable). Beside it, in the same run,
+    the forward cost per parameter set of today's smooth model (one film) on the same rows
+    and of the stack without and with the slit."""
+    from bsdflab.fit import Dataset, default_theta, run_sampler
+    from bsdflab.fit.stack_config import StackConfig
+    from bsdflab.fit.stack_posterior import StackPosterior
+
+    angles, wls = np.linspace(15.0, 70.0, 12), np.arange(350.0, 701.0, 5.0)
+    n = len(angles) * len(wls)
+    rows = Dataset(np.zeros(n, int), np.repeat(angles, len(wls)), np.full(n, np.nan), np.tile(wls, len(angles)),
+                   np.zeros(n), np.ones(n))
+    config = StackConfig.parse(STACK_CONFIG)
+    truth_post = StackPosterior([rows], config)
+    truth = np.array([[STACK_TRUTH[k] for k in truth_post.free]])
+    y = truth_post.predict(truth)[0]
+    sigma = np.sqrt(0.002**2 + (0.01 * y) ** 2)
+    data = rows.with_reflectance(y + sigma * np.random.default_rng(3).standard_normal(n), sigma)
+    post = StackPosterior([data], config)
+    print(f"\nstructure + instrument: {n} specular rows (12 angles x {len(wls)} wavelengths), "
+          f"{post.ndim} free parameters; load {os.getloadavg()[0]:.1f}")
+    smooth = ForwardModel(data)
+    sets = 16
+    rates = {"smooth model (1 film), today": evals_per_second(smooth, np.repeat(default_theta()[None], sets, 0))}
+
+    class Stack:
+        def __init__(self, bandwidth):
+            x = np.repeat(truth, sets, 0)
+            x[:, post.free.index("bandwidth_nm")] = bandwidth
+            self.x = x
+
+        def evaluate(self, theta):
+            return post.predict(self.x)
+    rates["stack, no slit"] = evals_per_second(Stack(0.0), np.zeros((sets, 1)))
+    rates["stack + slit, shared grid"] = evals_per_second(Stack(12.0), np.zeros((sets, 1)))
+    grid_step = post.models[0]._step
+    post.models[0]._step = None  # force the per-row Gauss-Hermite slit for comparison
+    rates["stack + slit, 7 GH nodes"] = evals_per_second(Stack(12.0), np.zeros((sets, 1)))
+    post.models[0]._step = grid_step
+    base = rates["smooth model (1 film), today"]
+    for name, r in rates.items():
+        print(f"  {name:<30} {r:10.1f} evaluations/s  ({base / r:5.1f}x the smooth model's cost)")
+    cpu = time.process_time()
+    run = run_sampler(post, config.sampler, progress=False)
+    cpu = time.process_time() - cpu
+    lo, hi = np.quantile(run.draws(), [0.0015, 0.9985], axis=0)
+    inside = int(np.sum((lo < truth[0]) & (truth[0] < hi)))
+    print(f"  sampler: {run.seconds:.1f} s wall ({run.seconds / 60:.2f} min), {run.steps} steps x "
+          f"{config.sampler.walkers} walkers, max tau {np.max(run.tau):.1f}, {run.evaluations} evaluations; "
+          f"{cpu:.1f} CPU-s (2 cores x 5 min = 600 CPU-s)")
+    print(f"  stop: {run.stop_reason}")
+    print(f"  truth inside the 99.7 % interval for {inside} of {post.ndim} parameters")
+
+
 if __name__ == "__main__":
-    main()
-    full_vs_smooth()
+    import sys
+
+    if "--stack" not in sys.argv:
+        main()
+        full_vs_smooth()
+    structure_with_instrument()

@@ -7,6 +7,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import shlex
 import sys
 
@@ -53,9 +54,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {len(dataset)} synthetic rows to {args.out} (noise seed {config.seed})")
         return 0
 
-    from bsdflab.fit.config import FitConfig
+    from bsdflab.fit.config import FitConfig, load_toml
     from bsdflab.fit.study import run_study
 
+    if "structure" in load_toml(args.config):  # a structure fit (docs/fit.md, "Structures and instruments")
+        return _run_stack(args)
     config = FitConfig.load(args.config)
     try:
         summary = run_study(args.data, config, args.out, progress=not args.quiet, overwrite=args.overwrite)
@@ -72,6 +75,12 @@ def run(args: argparse.Namespace) -> int:
     with open(os.path.join(args.out, "parameters.md"), encoding="utf-8") as f:
         print(f.read())
     print(summary["appearance"]["statement"])
+    return _report(summary, args)
+
+
+def _report(summary: dict, args: argparse.Namespace) -> int:
+    """The predictive checks' line, the folder, and the warnings block on stderr; status 3
+    under --strict when there are warnings."""
     checks = summary["predictive_checks"]["series"]
     worst = min(checks[1:] or checks, key=lambda c: c["p_value"])
     print(f"posterior predictive checks (alpha {summary['predictive_checks']['alpha']:g}): all rows p = "
@@ -86,3 +95,21 @@ def run(args: argparse.Namespace) -> int:
         if args.strict:
             return 3
     return 0
+
+
+def _run_stack(args: argparse.Namespace) -> int:
+    """A structure + instrument fit; DATA is '-' when the config lists its [[dataset]] files."""
+    from bsdflab.fit.stack_config import StackConfig
+    from bsdflab.fit.stack_study import run_stack_study
+
+    config = StackConfig.load(args.config)
+    try:
+        summary = run_stack_study(config, args.out, None if args.data == "-" else args.data,
+                                  progress=not args.quiet, overwrite=args.overwrite)
+    except KeyboardInterrupt:
+        print(f"\nbsdflab fit: interrupted; nothing was written to {args.out}", file=sys.stderr)
+        return 130
+    print(summary["stop_reason"])
+    with open(os.path.join(args.out, "parameters.md"), encoding="utf-8") as f:
+        print(f.read())
+    return _report(summary, args)

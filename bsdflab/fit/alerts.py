@@ -23,6 +23,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from bsdflab.fit.checks import ALPHA
 from bsdflab.fit.parameters import parameter
 
 EDGE = 0.02              # "at a bound": within 2 % of the prior's range of it
@@ -31,7 +32,7 @@ NOISE_RANGE = (0.5, 2.0)
 MODE_LOG_RATIO = float(np.log(100.0))   # another optimum within a factor 100 of the best density
 MODE_MIN_MASS = 0.05     # a mode in the draws holds >= 5 % of them
 MODE_GAP = 3.0           # ... and is separated from the next by a gap >= 3 sd of its neighbours
-THICKNESS_NAMES = ("film_thickness_nm", "platelet_nm")
+THICKNESS_NAMES = ("film_thickness_nm", "platelet_nm")   # the snake model's; a stack's are <layer>_thickness_nm
 PRIOR_TAIL = 1e-4        # an unbounded prior's range: its 1e-4 and 1 - 1e-4 quantiles
 CONFLICT_TAIL = 0.00135  # prior-data conflict: the posterior median beyond the prior's +-3 sd quantiles
 
@@ -46,24 +47,35 @@ class Alert:
         return asdict(self)
 
 
-def prior_range(name: str, prior) -> tuple[float, float, float]:
+def thickness_names(names) -> list[str]:
+    """The layer thicknesses among ``names``: the snake model's and a stack's layers'."""
+    return [n for n in names if n in THICKNESS_NAMES or n.endswith("_thickness_nm")]
+
+
+def _domain(name: str, domains: dict | None):
+    """The parameter's domain: from ``domains`` (a stack's layer and instrument parameters),
+    else the snake model's table."""
+    return domains[name] if domains is not None and name in domains else parameter(name)
+
+
+def prior_range(name: str, prior, domains: dict | None = None) -> tuple[float, float, float]:
     """(lo, hi, width): the finite ends of the prior's support within the model's domain
     (+-inf where open) and the width of its central mass."""
-    p = parameter(name)
+    p = _domain(name, domains)
     lo, hi = prior.support()
     lo, hi = max(lo, p.lo), min(hi, p.hi)
     wlo, whi = float(prior.ppf(PRIOR_TAIL)), float(prior.ppf(1 - PRIOR_TAIL))
     return lo, hi, max(min(whi, hi) - max(wlo, lo), 0.0)
 
 
-def bound_alerts(names, draws: np.ndarray, priors: dict) -> list[Alert]:
+def bound_alerts(names, draws: np.ndarray, priors: dict, domains: dict | None = None) -> list[Alert]:
     out = []
     for j, name in enumerate(names):
-        lo, hi, width = prior_range(name, priors[name])
+        lo, hi, width = prior_range(name, priors[name], domains)
         if not width > 0:
             continue
         x = draws[:, j]
-        p = parameter(name)
+        p = _domain(name, domains)
         for end, side, near, limit in ((lo, "lower", x <= lo + EDGE * width, p.lo),
                                        (hi, "upper", x >= hi - EDGE * width, p.hi)):
             if not (np.isfinite(end) and np.mean(near) >= PILE):
@@ -142,9 +154,7 @@ def mode_alerts(names, draws: np.ndarray, optima) -> list[Alert]:
     """Several thickness modes: in the draws, or among the MAP optima (x, log p) within a
     factor exp(MODE_LOG_RATIO) of the best density and further apart than 5 posterior sds."""
     out = []
-    for name in THICKNESS_NAMES:
-        if name not in names:
-            continue
+    for name in thickness_names(names):
         j = list(names).index(name)
         modes = draw_modes(draws[:, j])
         if len(modes) > 1:
@@ -168,6 +178,30 @@ def mode_alerts(names, draws: np.ndarray, optima) -> list[Alert]:
                              + "); the sampler explored only the best (interference-order ambiguity): run "
                              "[sampler] kind = \"nested\" or narrow the thickness prior", name))
     return out
+
+
+def check_alert(checks) -> list[Alert]:
+    """One PREDICTIVE_CHECK warning naming the failed checks (bsdflab.fit.checks)."""
+    failed = [c for c in checks if c.flagged]
+    if not failed:
+        return []
+    return [Alert("PREDICTIVE_CHECK", f"{len(failed)} of {len(checks)} posterior predictive checks fail "
+                  f"(family-wise alpha {ALPHA:g}): " + "; ".join(
+                      f"{c.series}: p = {c.p_value:.2g}, chi2/n = {c.chi2_per_row:.2f}" for c in failed[:6])
+                  + ("; ..." if len(failed) > 6 else "") + " -- the model does not describe these data "
+                  "(see residuals.png)")]
+
+
+def fit_alerts(run, draws: np.ndarray, priors: dict, checks, domains: dict | None = None) -> list[Alert]:
+    """Every warning a fit's run and checks raise, in the order a reader should act on them
+    (``domains``: parameters beyond the snake model's table, as a structure fit's)."""
+    alerts = [] if run.converged else [Alert("NOT_CONVERGED", run.stop_reason)]
+    alerts += bound_alerts(run.names, draws, priors, domains)
+    alerts += conflict_alerts(run.names, draws, priors)
+    alerts += noise_alert(run.names, draws)
+    alerts += check_alert(checks)
+    alerts += mode_alerts(run.names, draws, run.map.optima)
+    return alerts
 
 
 def emulator_alert(forward: dict) -> list[Alert]:

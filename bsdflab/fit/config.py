@@ -125,10 +125,10 @@ class ModelSettings:
         """The parameters this model uses (canonical order); the others may not be given."""
         if self.kind == "smooth":
             return (*P.FORWARD_NAMES, P.NOISE.name)
-        film = {"single": ("film_thickness_nm", "film_index_A", "film_index_B"), "none": (),
-                "stack": ("film_index_A", "film_index_B", "platelet_nm", "gap_nm", "gap_index")}[self.film]
-        unused = {"film_thickness_spread_nm", "film_thickness_nm", "film_index_A", "film_index_B",
-                  "platelet_nm", "gap_nm", "gap_index"} - set(film)
+        film = {"single": ("film_thickness_nm", "film_ior", "film_cauchy_b"), "none": (),
+                "stack": ("film_ior", "film_cauchy_b", "platelet_nm", "gap_nm", "gap_ior")}[self.film]
+        unused = {"film_thickness_spread_nm", "film_thickness_nm", "film_ior", "film_cauchy_b",
+                  "platelet_nm", "gap_nm", "gap_ior"} - set(film)
         return tuple(n for n in P.ALL_NAMES if n not in unused)
 
     def fixed_implied(self) -> dict[str, float]:
@@ -211,6 +211,7 @@ class FitConfig:
         model = ModelSettings.parse(d.get("model", {}))
         used = model.names()
         priors, fixed = {}, {}
+        params = {P.canonical(k, "[parameters] "): v for k, v in params.items()}
         for name, spec in params.items():
             P.parameter(name)  # ValueError for an unknown name
             if name not in used:
@@ -274,7 +275,7 @@ class SimulationConfig:
         model = ModelSettings.parse(d.get("model", {}))
         used = model.names()
         truth = {n: P.parameter(n).default for n in used}
-        for name, value in d.get("truth", {}).items():
+        for name, value in {P.canonical(k, "[truth] "): v for k, v in d.get("truth", {}).items()}.items():
             P.parameter(name)
             if name not in used:
                 raise ValueError(f"[truth] {name} is not part of the {model.kind} model; its parameters: "

@@ -38,10 +38,10 @@ from bsdflab.fit.parameters import ALL_NAMES, parameter
 ALBEDO_NODES = (0.2, 0.5, 0.8)
 # a study sets this around building its posterior: a progress bar over the grid's solves
 SHOW_PROGRESS: contextvars.ContextVar[bool] = contextvars.ContextVar("bsdflab_fit_emulator_progress", default=False)
-LOG_SCALE = ("roughness", "sigma_s", "sigma_a_550", "slab_thickness_um")
+LOG_SCALE = ("roughness", "sigma_s", "pigment_absorption", "slab_thickness_um")
 TAIL = 1e-4
-TOP_NAMES = ("roughness", "film_thickness_nm", "film_index_A", "film_index_B", "platelet_nm", "gap_nm", "gap_index",
-             "exterior_index")        # prior mass left out of the box on each side of an unbounded prior
+TOP_NAMES = ("roughness", "film_thickness_nm", "film_ior", "film_cauchy_b", "platelet_nm", "gap_nm", "gap_ior",
+             "exterior_ior")        # prior mass left out of the box on each side of an unbounded prior
 
 
 def prior_box(name: str, prior) -> tuple[float, float]:

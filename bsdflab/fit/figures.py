@@ -15,11 +15,11 @@ from bsdflab.render.image_io import tone_map
 from bsdflab.util.extras import require
 
 # short titles over the corner plot's diagonal (the axis labels carry the full names)
-SYMBOLS = {"film_thickness_nm": "d", "film_thickness_spread_nm": "σ_d", "film_index_A": "A", "film_index_B": "B",
-           "substrate_index": "n_s", "exterior_index": "n_e", "sigma_a_550": "σ_a(550)",
+SYMBOLS = {"film_thickness_nm": "d", "film_thickness_spread_nm": "σ_d", "film_ior": "A", "film_cauchy_b": "B",
+           "substrate_ior": "n_s", "exterior_ior": "n_e", "pigment_absorption": "σ_a(550)",
            "absorption_exponent": "exponent", "slab_thickness_um": "h", "base_albedo": "ρ", "noise_scale": "s",
            "roughness": "α", "sigma_s": "σ_s", "hg_g": "g", "platelet_nm": "d_p", "gap_nm": "d_gap",
-           "gap_index": "n_gap"}
+           "gap_ior": "n_gap"}
 
 
 def _plt():
@@ -32,7 +32,10 @@ def _plt():
 
 
 def _label(name: str) -> str:
-    unit = parameter(name).unit
+    try:
+        unit = parameter(name).unit
+    except ValueError:  # a structure fit's parameter (bsdflab.fit.structure): the name says it
+        return name
     return f"{name} [{unit}]" if unit else name
 
 

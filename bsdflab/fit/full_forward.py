@@ -109,7 +109,7 @@ class SolverForwardModel:
     def predict_one(self, values) -> np.ndarray:
         """pi f for every row of one full parameter vector (NaN outside the domain)."""
         v = dict(zip(ALL_NAMES, map(float, values)))
-        if not all(in_domain(n, v[n]) for n in self._names) or v["substrate_index"] <= v["exterior_index"]:
+        if not all(in_domain(n, v[n]) for n in self._names) or v["substrate_ior"] <= v["exterior_ior"]:
             return np.full(self.rows, np.nan)
         try:
             sol = self._solution(self.layered(v))

@@ -24,7 +24,7 @@ SIGMA_A_GRID_NM = np.arange(MODEL_RANGE_NM[0], MODEL_RANGE_NM[1] + 2.5, 5.0)
 
 def film_layers(v: dict, model: ModelSettings) -> list[dict] | None:
     """The top's film as the engine's layer list (None: no film)."""
-    index = {"model": "cauchy", "A": v["film_index_A"], "B": v["film_index_B"]}
+    index = {"model": "cauchy", "A": v["film_ior"], "B": v["film_cauchy_b"]}
     if model.film == "single":
         return [{"material": index, "thickness_nm": v["film_thickness_nm"]}] if v["film_thickness_nm"] > 0 else None
     if model.film == "stack":
@@ -32,7 +32,7 @@ def film_layers(v: dict, model: ModelSettings) -> list[dict] | None:
         for i in range(model.platelets):
             layers.append({"material": index, "thickness_nm": v["platelet_nm"]})
             if i + 1 < model.platelets:
-                layers.append({"material": v["gap_index"], "thickness_nm": v["gap_nm"]})
+                layers.append({"material": v["gap_ior"], "thickness_nm": v["gap_nm"]})
         return layers
     return None
 
@@ -43,8 +43,8 @@ def material_dict(values, samples: int = 256, model: ModelSettings | None = None
     model = model or ModelSettings()
     v = dict(zip(ALL_NAMES, map(float, values))) if not isinstance(values, dict) else values
     wl = SIGMA_A_GRID_NM
-    sigma_a = v["sigma_a_550"] * (wl / 550.0) ** -v["absorption_exponent"]
-    top = {"type": "dielectric", "int_ior": v["substrate_index"], "ext_ior": v["exterior_index"],
+    sigma_a = v["pigment_absorption"] * (wl / 550.0) ** -v["absorption_exponent"]
+    top = {"type": "dielectric", "int_ior": v["substrate_ior"], "ext_ior": v["exterior_ior"],
            "film": film_layers(v, model)}
     slab = {"thickness_um": v["slab_thickness_um"],
             "sigma_a": {"type": "tabulated", "wavelengths": wl.tolist(), "values": sigma_a.tolist()},

@@ -11,6 +11,7 @@ top) and a non-scattering slab; ``SMOOTH_VALUES`` records that.
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 from bsdflab import presets
@@ -32,17 +33,17 @@ PARAMETERS: tuple[Parameter, ...] = (
               "mean thickness of the guanine (iridophore) film"),
     Parameter("film_thickness_spread_nm", "nm", 0.0, 0.0, 5000.0,
               "standard deviation of the film thickness across the measured spot"),
-    Parameter("film_index_A", "", presets.GUANINE_IOR, 0.0, 10.0,
+    Parameter("film_ior", "", presets.GUANINE_IOR, 0.0, 10.0,
               "film index, Cauchy A (n = A + B / lambda^2)", lo_open=True),
-    Parameter("film_index_B", "nm^2", 0.0, -1e6, 1e6, "film index, Cauchy B"),
-    Parameter("substrate_index", "", presets.KERATIN_IOR_550, 0.0, 10.0,
-              "index of the slab under the film (keratin); must exceed exterior_index",
+    Parameter("film_cauchy_b", "nm^2", 0.0, -1e6, 1e6, "film index, Cauchy B"),
+    Parameter("substrate_ior", "", presets.KERATIN_IOR_550, 0.0, 10.0,
+              "index of the slab under the film (keratin); must exceed exterior_ior",
               lo_open=True),
-    Parameter("exterior_index", "", presets.AIR_IOR, 0.0, 10.0, "index of the exterior (air)",
+    Parameter("exterior_ior", "", presets.AIR_IOR, 0.0, 10.0, "index of the exterior (air)",
               lo_open=True),
-    Parameter("sigma_a_550", "1/um", 1.2, 0.0, 1000.0, "slab absorption coefficient at 550 nm"),
+    Parameter("pigment_absorption", "1/um", 1.2, 0.0, 1000.0, "slab absorption coefficient at 550 nm"),
     Parameter("absorption_exponent", "", 3.33, -20.0, 20.0,
-              "sigma_a(lambda) = sigma_a_550 (lambda / 550 nm)^-exponent (eumelanin 3.33)"),
+              "sigma_a(lambda) = pigment_absorption (lambda / 550 nm)^-exponent (eumelanin 3.33)"),
     Parameter("slab_thickness_um", "um", 4.0, 0.0, 10000.0, "pigment slab thickness"),
     Parameter("base_albedo", "", 0.04, 0.0, 1.0, "Lambertian albedo of the base"),
 )
@@ -55,15 +56,30 @@ FULL_PARAMETERS: tuple[Parameter, ...] = (
     Parameter("sigma_s", "1/um", 0.2, 0.0, 1000.0, "slab scattering coefficient (grey)"),
     Parameter("hg_g", "", 0.6, -0.95, 0.95, "Henyey-Greenstein asymmetry of the slab's phase function"),
     Parameter("platelet_nm", "nm", 80.0, 0.0, 20000.0,
-              "guanine platelet thickness of the iridophore stack (index: film_index_A, B)"),
+              "guanine platelet thickness of the iridophore stack (index: film_ior, B)"),
     Parameter("gap_nm", "nm", 100.0, 0.0, 20000.0, "cytoplasm gap between platelets"),
-    Parameter("gap_index", "", presets.CYTOPLASM_IOR, 0.0, 10.0, "index of the gaps (cytoplasm)",
+    Parameter("gap_ior", "", presets.CYTOPLASM_IOR, 0.0, 10.0, "index of the gaps (cytoplasm)",
               lo_open=True),
 )
 FULL_NAMES = tuple(p.name for p in FULL_PARAMETERS)
 SMOOTH_VALUES = {"roughness": 0.0, "sigma_s": 0.0, "hg_g": 0.0}
 ALL = {p.name: p for p in (*PARAMETERS, NOISE, *FULL_PARAMETERS)}
 ALL_NAMES = tuple(ALL)
+
+
+# Names before issue 30's single vocabulary (the presets', the page's and the exporters'
+# names); still read, with a FutureWarning (shown by default, unlike DeprecationWarning).
+RENAMED = {"film_index_A": "film_ior", "film_index_B": "film_cauchy_b", "sigma_a_550": "pigment_absorption",
+           "substrate_index": "substrate_ior", "exterior_index": "exterior_ior", "gap_index": "gap_ior"}
+
+
+def canonical(name: str, where: str = "") -> str:
+    """``name``, or its new name (with a FutureWarning) if it is one of RENAMED's old names."""
+    if name in RENAMED:
+        warnings.warn(f"{where}parameter {name!r} is deprecated: it is now called {RENAMED[name]!r}",
+                      FutureWarning, stacklevel=3)
+        return RENAMED[name]
+    return name
 
 
 def parameter(name: str) -> Parameter:

@@ -23,16 +23,7 @@ from dataclasses import replace
 import numpy as np
 
 from bsdflab.bsdfs import from_dict
-from bsdflab.fit.alerts import (
-    THICKNESS_NAMES,
-    Alert,
-    bound_alerts,
-    conflict_alerts,
-    draw_modes,
-    emulator_alert,
-    mode_alerts,
-    noise_alert,
-)
+from bsdflab.fit.alerts import Alert, draw_modes, emulator_alert, fit_alerts, thickness_names
 from bsdflab.fit.appearance import appearance_posterior, full_appearance
 from bsdflab.fit.checks import ALPHA, normalised_residuals, predictive_checks, sidak_level
 from bsdflab.fit.config import FitConfig
@@ -56,7 +47,7 @@ from bsdflab.fit.figures import (
 )
 from bsdflab.fit.material import material_dict
 from bsdflab.fit.nested import run_nested
-from bsdflab.fit.parameters import ALL_NAMES
+from bsdflab.fit.parameters import ALL_NAMES, canonical
 from bsdflab.fit.posterior import LogPosterior
 from bsdflab.fit.sampling import run_sampler
 
@@ -71,7 +62,7 @@ def truths_from_comments(dataset: Dataset) -> dict | None:
             for item in c[len("truth:"):].split(","):
                 k, _, v = item.strip().partition("=")
                 try:
-                    out[k] = float(v)
+                    out[canonical(k, "data comment: ")] = float(v)
                 except ValueError:
                     return None
             return out
@@ -120,22 +111,7 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
         SHOW_PROGRESS.reset(token)
     truths = truths_from_comments(data)
     nested = config.sampler.kind == "nested"
-    if nested:
-        s = config.sampler
-        run = run_nested(logpost, s.live_points, s.seed, s.dlogz, progress=progress)
-        idata = nested_inference_data(run, logpost, data)
-        rows = nested_summary_rows(run, truths)
-    else:
-        run = run_sampler(logpost, config.sampler, progress=progress)
-        idata = inference_data(run, logpost, data)
-        rows = summary_rows(run, idata, truths)
-    idata.to_netcdf(os.path.join(folder, "posterior.nc"), engine="h5netcdf")
-    _text(os.path.join(folder, "parameters.md"), table_markdown(rows))
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
-    w.writeheader()
-    w.writerows(rows)
-    _text(os.path.join(folder, "parameters.csv"), buf.getvalue())
+    run, rows = _sample(logpost, data, config, folder, progress, truths)
 
     draws = run.draws()
     rng = np.random.default_rng(config.sampler.seed + 1)
@@ -195,19 +171,39 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
     return summary
 
 
+def _sample(logpost, data: Dataset, config: FitConfig, folder: str, progress: bool, truths: dict):
+    """Run the configured sampler; write posterior.nc and the parameter tables."""
+    if config.sampler.kind == "nested":
+        s = config.sampler
+        run = run_nested(logpost, s.live_points, s.seed, s.dlogz, progress=progress)
+        idata = nested_inference_data(run, logpost, data)
+        rows = nested_summary_rows(run, truths)
+    else:
+        run = run_sampler(logpost, config.sampler, progress=progress)
+        idata = inference_data(run, logpost, data)
+        rows = summary_rows(run, idata, truths)
+    idata.to_netcdf(os.path.join(folder, "posterior.nc"), engine="h5netcdf")
+    _text(os.path.join(folder, "parameters.md"), table_markdown(rows))
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    _text(os.path.join(folder, "parameters.csv"), buf.getvalue())
+    return run, rows
+
+
 def main_mode(draws: np.ndarray, names) -> tuple[np.ndarray, str]:
     """The draws of the heaviest thickness mode (all draws when there is one): the mean of a
     multi-modal posterior lies between interference orders, a thickness no draw has."""
-    for name in THICKNESS_NAMES:
-        if name in names:
-            x = draws[:, list(names).index(name)]
-            modes = draw_modes(x)
-            if len(modes) > 1:
-                centres = np.array([m for m, _ in modes])
-                heaviest = int(np.argmax([w for _, w in modes]))
-                keep = np.argmin(np.abs(x[:, None] - centres[None, :]), axis=1) == heaviest
-                return draws[keep], (f"; the posterior has {len(modes)} {name} modes: the posterior-mean material "
-                                     f"and renders use the heaviest ({modes[heaviest][1]:.0%} of the draws)")
+    for name in thickness_names(names):
+        x = draws[:, list(names).index(name)]
+        modes = draw_modes(x)
+        if len(modes) > 1:
+            centres = np.array([m for m, _ in modes])
+            heaviest = int(np.argmax([w for _, w in modes]))
+            keep = np.argmin(np.abs(x[:, None] - centres[None, :]), axis=1) == heaviest
+            return draws[keep], (f"; the posterior has {len(modes)} {name} modes: the posterior-mean material "
+                                 f"and renders use the heaviest ({modes[heaviest][1]:.0%} of the draws)")
     return draws, ""
 
 
@@ -231,22 +227,7 @@ def _nested_summary(run) -> dict:
 
 def study_alerts(run, draws: np.ndarray, config: FitConfig, checks, forward: dict) -> list[Alert]:
     """Every warning of the study, in the order a reader should act on them."""
-    alerts = []
-    if not run.converged:
-        alerts.append(Alert("NOT_CONVERGED", run.stop_reason))
-    alerts += bound_alerts(run.names, draws, config.priors)
-    alerts += conflict_alerts(run.names, draws, config.priors)
-    alerts += noise_alert(run.names, draws)
-    failed = [c for c in checks if c.flagged]
-    if failed:
-        alerts.append(Alert("PREDICTIVE_CHECK", f"{len(failed)} of {len(checks)} posterior predictive checks fail "
-                            f"(family-wise alpha {ALPHA:g}): " + "; ".join(
-                                f"{c.series}: p = {c.p_value:.2g}, chi2/n = {c.chi2_per_row:.2f}" for c in failed[:6])
-                            + ("; ..." if len(failed) > 6 else "") + " -- the model does not describe these data "
-                            "(see residuals.png)"))
-    alerts += mode_alerts(run.names, draws, run.map.optima)
-    alerts += emulator_alert(forward)
-    return alerts
+    return fit_alerts(run, draws, config.priors, checks) + emulator_alert(forward)
 
 
 def _write_appearance(app_draws, mean_full, config: FitConfig, folder: str, progress: bool = False) -> dict:

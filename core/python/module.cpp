@@ -6,6 +6,7 @@ namespace py = pybind11;
 void bind_adding_doubling(py::module_ &m);
 void bind_bsdf(py::module_ &m);
 void bind_fit(py::module_ &m);
+void bind_fit_instrument(py::module_ &m);
 void bind_fresnel(py::module_ &m);
 void bind_interfaces(py::module_ &m);
 void bind_layered(py::module_ &m);
@@ -21,6 +22,7 @@ PYBIND11_MODULE(_core, m) {
     bind_adding_doubling(m);
     bind_bsdf(m);
     bind_fit(m);
+    bind_fit_instrument(m);
     bind_fresnel(m);
     bind_interfaces(m);
     bind_layered(m);

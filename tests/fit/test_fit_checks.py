@@ -22,8 +22,8 @@ from bsdflab.fit.sampling import stop_reason
 TRUTH = """
 [truth]
 film_thickness_nm = 430.0
-film_index_A = 1.83
-sigma_a_550 = 0.4
+film_ior = 1.83
+pigment_absorption = 0.4
 base_albedo = 0.3
 [noise]
 relative = 0.02
@@ -38,8 +38,8 @@ wavelengths_nm = {{ start = 400, stop = 740, step = 20 }}
 FIT = """
 [parameters]
 film_thickness_nm = {{ prior = "normal", mean = 430.0, sd = 10.0 }}
-film_index_A = {{ prior = "normal", mean = 1.83, sd = 0.02 }}
-sigma_a_550 = 0.4
+film_ior = {{ prior = "normal", mean = 1.83, sd = 0.02 }}
+pigment_absorption = 0.4
 base_albedo = 0.3
 {extra}
 [model]
@@ -137,18 +137,18 @@ def test_bound_noise_and_mode_alerts():
     1.5 sd does not; a noise scale of 23 warns, 1.1 does not; MAP optima two orders apart
     with similar density warn, a far-worse second optimum does not."""
     rng = np.random.default_rng(1)
-    priors = {"film_index_A": Prior.make("film_index_A", {"prior": "uniform", "low": 1.3, "high": 1.9})}
+    priors = {"film_ior": Prior.make("film_ior", {"prior": "uniform", "low": 1.3, "high": 1.9})}
     piled = 1.3 + np.abs(rng.normal(0, 0.005, (500, 1)))
-    alerts = bound_alerts(("film_index_A",), piled, priors)
+    alerts = bound_alerts(("film_ior",), piled, priors)
     assert [a.code for a in alerts] == ["PRIOR_BOUND"] and "lower bound 1.3" in alerts[0].message
-    assert bound_alerts(("film_index_A",), 1.6 + rng.normal(0, 0.05, (500, 1)), priors) == []
+    assert bound_alerts(("film_ior",), 1.6 + rng.normal(0, 0.05, (500, 1)), priors) == []
     spread = {"film_thickness_spread_nm": Prior.make("s", {"prior": "uniform", "low": 0.0, "high": 40.0})}
     alerts = bound_alerts(("film_thickness_spread_nm",), np.abs(rng.normal(0, 0.3, (500, 1))), spread)
     assert [a.code for a in alerts] == ["DOMAIN_BOUND"], alerts   # a spread of 0 is the model's limit
-    normal = {"film_index_A": Prior.make("film_index_A", {"prior": "normal", "mean": 1.83, "sd": 0.02})}
-    assert [a.code for a in conflict_alerts(("film_index_A",), np.full((10, 1), 1.726), normal)] == ["PRIOR_CONFLICT"]
-    assert conflict_alerts(("film_index_A",), np.full((10, 1), 1.80), normal) == []   # 1.5 sd: no conflict
-    assert conflict_alerts(("film_index_A",), piled, priors) == []                     # uniform: PRIOR_BOUND's
+    normal = {"film_ior": Prior.make("film_ior", {"prior": "normal", "mean": 1.83, "sd": 0.02})}
+    assert [a.code for a in conflict_alerts(("film_ior",), np.full((10, 1), 1.726), normal)] == ["PRIOR_CONFLICT"]
+    assert conflict_alerts(("film_ior",), np.full((10, 1), 1.80), normal) == []   # 1.5 sd: no conflict
+    assert conflict_alerts(("film_ior",), piled, priors) == []                     # uniform: PRIOR_BOUND's
     assert noise_alert(("noise_scale",), np.full((10, 1), 23.0))[0].code == "NOISE_SCALE"
     assert noise_alert(("noise_scale",), np.full((10, 1), 1.1)) == []
     draws = rng.normal(430, 2, (400, 1))

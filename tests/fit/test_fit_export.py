@@ -33,11 +33,11 @@ def test_fit_material_is_exportable(model):
     """Cauchy B = 0: the film index is A exactly, nothing about dispersion dropped (the issue's
     "a spectral or named index cannot be exported" was this case). B != 0: n(550 nm) with the
     dispersion listed as dropped. An absorbing film index is still refused."""
-    m = export_material(fitted(model, film_index_A=1.77, film_thickness_nm=412.0))
+    m = export_material(fitted(model, film_ior=1.77, film_thickness_nm=412.0))
     assert m.film_ior == 1.77 and m.film_thickness_nm == 412.0
     assert not [d for d in m.dropped if "dispersion" in d]
     assert m.alpha == (ALL["roughness"].default if model.kind == "full" else 0.0)
-    m = export_material(fitted(model, film_index_A=1.77, film_index_B=6000.0))
+    m = export_material(fitted(model, film_ior=1.77, film_cauchy_b=6000.0))
     assert np.isclose(m.film_ior, 1.77 + 6000.0 / 550.0**2, rtol=1e-12, atol=0)
     assert [d for d in m.dropped if d.startswith("film material: dispersion")]
     absorbing = fitted(model)

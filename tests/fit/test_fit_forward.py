@@ -30,7 +30,7 @@ def tmm_reflectance(n_list, d_list, theta, wl):
 def test_specular_matches_tmm(d, A, B):
     wls, angles = [380.0, 455.0, 530.0, 640.0, 780.0], [0.0, 25.0, 55.0, 80.0, 89.0]
     ds = design([(SPEC, a, np.nan, w) for a in angles for w in wls])
-    theta = default_theta(film_thickness_nm=d, film_index_A=A, film_index_B=B, substrate_index=1.5515)
+    theta = default_theta(film_thickness_nm=d, film_ior=A, film_cauchy_b=B, substrate_ior=1.5515)
     got = ForwardModel(ds).evaluate(theta)
     n_e = theta[5]
     ref = [tmm_reflectance([n_e, A + B / w**2, 1.5515], [np.inf, d, np.inf], np.radians(a), w)
@@ -48,8 +48,8 @@ def test_diffuse_and_total_match_the_coated_diffuse_oracle(d, sigma_a, rho, n_s)
     rows += [(SPEC, a, np.nan, w) for a in (8, 50) for w in wls]
     ds = design(rows)
     A, B = 1.83, 4000.0
-    theta = default_theta(film_thickness_nm=d, film_index_A=A, film_index_B=B, substrate_index=n_s,
-                          sigma_a_550=sigma_a, slab_thickness_um=4.0, base_albedo=rho)
+    theta = default_theta(film_thickness_nm=d, film_ior=A, film_cauchy_b=B, substrate_ior=n_s,
+                          pigment_absorption=sigma_a, slab_thickness_um=4.0, base_albedo=rho)
     got = ForwardModel(ds).evaluate(theta)
     oracles = {w: CoatedDiffuseOracle(
         int_ior=n_s, ext_ior=theta[5], thickness_um=4.0, sigma_a=sigma_a * (w / 550.0) ** -3.33, base_reflectance=rho,
@@ -73,7 +73,7 @@ def test_diffuse_and_total_match_the_coated_diffuse_oracle(d, sigma_a, rho, n_s)
 def test_lossless_white_base_reflects_everything():
     """sigma_a = 0, rho = 1: total reflectance is exactly 1 (etendue identity)."""
     ds = design([(TOT, a, np.nan, w) for a in (0.0, 40.0, 75.0) for w in (400.0, 600.0)])
-    theta = default_theta(film_thickness_nm=380.0, sigma_a_550=0.0, base_albedo=1.0)
+    theta = default_theta(film_thickness_nm=380.0, pigment_absorption=0.0, base_albedo=1.0)
     np.testing.assert_allclose(ForwardModel(ds).evaluate(theta), 1.0, atol=1e-12, rtol=0)
 
 
@@ -82,7 +82,7 @@ def test_thickness_spread_matches_brute_force_average(mean, spread):
     rows = [(SPEC, a, np.nan, w) for a in (10.0, 60.0) for w in (400.0, 520.0, 700.0)]
     rows += [(DIFF, 20.0, 50.0, w) for w in (450.0, 650.0)] + [(TOT, 8.0, np.nan, 500.0)]
     ds = design(rows)
-    kw = dict(sigma_a_550=0.3, base_albedo=0.5)
+    kw = dict(pigment_absorption=0.3, base_albedo=0.5)
     spread_model = ForwardModel(ds, thickness_nodes=24).evaluate(
         default_theta(film_thickness_nm=mean, film_thickness_spread_nm=spread, **kw))
     # brute force: the normal density on a fine grid over +-8 sd, each thickness exact
@@ -123,7 +123,7 @@ def test_smooth_in_the_parameters():
     """No Monte Carlo inside: central differences converge like h^2 (a noisy model would not)."""
     ds = design([(SPEC, 30.0, np.nan, 500.0), (DIFF, 0.0, 40.0, 600.0), (TOT, 8.0, np.nan, 450.0)])
     m = ForwardModel(ds)
-    base = default_theta(film_thickness_spread_nm=10.0, sigma_a_550=0.4, base_albedo=0.3)
+    base = default_theta(film_thickness_spread_nm=10.0, pigment_absorption=0.4, base_albedo=0.3)
 
     def deriv(h):
         e = np.zeros_like(base)
@@ -140,7 +140,7 @@ def test_threads_do_not_change_the_answer(monkeypatch):
     rows = [(SPEC, a, np.nan, w) for a in (10.0, 50.0) for w in np.arange(400.0, 701.0, 10.0)]
     rows += [(DIFF, 0.0, 45.0, w) for w in (450.0, 550.0, 650.0)]
     m = ForwardModel(design(rows))
-    thetas = np.array([default_theta(film_thickness_nm=d, film_thickness_spread_nm=10.0, sigma_a_550=0.3,
+    thetas = np.array([default_theta(film_thickness_nm=d, film_thickness_spread_nm=10.0, pigment_absorption=0.3,
                                      base_albedo=0.4) for d in np.linspace(300.0, 600.0, 64)])
     threaded = m.evaluate(thetas)
     monkeypatch.setenv("BSDFLAB_THREADS", "1")

@@ -129,7 +129,7 @@ def test_albedo_enters_exactly_as_a_rational_function():
     model = SolverForwardModel(ds, ModelSettings(kind="full"))
     rho = np.array([0.2, 0.5, 0.8, 0.37])
     # a weakly absorbing slab, so that the base matters (the preset's absorbs ~99 %)
-    y = model.evaluate(np.array([full_vector(base_albedo=r, sigma_a_550=0.05) for r in rho]))
+    y = model.evaluate(np.array([full_vector(base_albedo=r, pigment_absorption=0.05) for r in rho]))
     m = np.stack([np.ones((3, len(ds))), np.repeat(rho[:3, None], len(ds), 1), rho[:3, None] * y[:3]], -1)
     coef = np.linalg.solve(np.moveaxis(m, 0, 1), y[:3].T[..., None])[..., 0]
     predicted = (coef[:, 0] + coef[:, 1] * rho[3]) / (1 - coef[:, 2] * rho[3])
@@ -240,14 +240,14 @@ def test_full_model_study_folder(tmp_path):
     from bsdflab.fit import run_study
 
     ds = gonio_design(PAIRS[:4] + PAIRS[10:])
-    v = full_vector(base_albedo=0.3, sigma_a_550=0.05)
+    v = full_vector(base_albedo=0.3, pigment_absorption=0.05)
     y = SolverForwardModel(ds, ModelSettings(kind="full")).evaluate(v)
     rng = np.random.default_rng(0)
     data = ds.with_reflectance(y * (1 + 0.01 * rng.standard_normal(len(y))), 0.01 * y)
     cfg = FitConfig.parse(tomllib.loads("""
 [parameters]
 base_albedo = { prior = "uniform", low = 0.05, high = 0.6 }
-sigma_a_550 = 0.05
+pigment_absorption = 0.05
 [model]
 kind = "full"
 emulator_checks = 1
@@ -270,7 +270,7 @@ renders = 0
     assert top["type"] == "roughdielectric" and top["alpha"] == 0.08 and slab["sigma_s"] == 0.2
     assert abs(summary["posterior_mean"]["base_albedo"] - 0.3) < 0.05
     # the material read back predicts what the fit's forward model predicts at the mean
-    mean = full_vector(base_albedo=summary["posterior_mean"]["base_albedo"], sigma_a_550=0.05)
+    mean = full_vector(base_albedo=summary["posterior_mean"]["base_albedo"], pigment_absorption=0.05)
     det, src = row_directions(ds)
     solved = np.pi * solve(from_dict(material), wavelengths=[WAVELENGTH]).eval(det, src)[:, 0] / src[:, 2]
     assert np.allclose(solved, SolverForwardModel(ds, ModelSettings(kind="full")).evaluate(mean), rtol=1e-9, atol=0)

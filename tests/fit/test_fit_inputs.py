@@ -62,10 +62,10 @@ def fit_toml(parameters: str, sampler: str = "walkers = 8") -> dict:
 
 def test_config_defaults_and_fixed():
     c = FitConfig.parse(fit_toml('film_thickness_nm = {prior = "uniform", low = 300, high = 600}\n'
-                                 'film_index_A = {fixed = 1.8}\nbase_albedo = 0.2'))
+                                 'film_ior = {fixed = 1.8}\nbase_albedo = 0.2'))
     assert c.free == ("film_thickness_nm",)
-    assert c.fixed["film_index_A"] == 1.8 and c.fixed["base_albedo"] == 0.2
-    assert c.fixed["substrate_index"] == pytest.approx(1.5515, abs=1e-4)  # preset default
+    assert c.fixed["film_ior"] == 1.8 and c.fixed["base_albedo"] == 0.2
+    assert c.fixed["substrate_ior"] == pytest.approx(1.5515, abs=1e-4)  # preset default
     assert c.priors["film_thickness_nm"].logpdf(450.0) == pytest.approx(-np.log(300.0))
 
 

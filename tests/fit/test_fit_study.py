@@ -19,8 +19,8 @@ from support.sbc import NARROW, calibration_failures, narrowed, z_sum_power
 TRUTH_TOML = """
 [truth]
 film_thickness_nm = {d}
-film_index_A = {A}
-sigma_a_550 = 0.4
+film_ior = {A}
+pigment_absorption = 0.4
 base_albedo = 0.3
 [noise]
 relative = {rel}
@@ -35,8 +35,8 @@ wavelengths_nm = {{ start = 400, stop = 740, step = {step} }}
 FIT_TOML = """
 [parameters]
 film_thickness_nm = {{ prior = "normal", mean = 430.0, sd = 10.0 }}
-film_index_A = {{ prior = "normal", mean = 1.83, sd = 0.02 }}
-sigma_a_550 = 0.4
+film_ior = {{ prior = "normal", mean = 1.83, sd = 0.02 }}
+pigment_absorption = 0.4
 base_albedo = 0.3
 [model]
 thickness_nodes = 1
@@ -145,7 +145,7 @@ def test_study_folder(tmp_path):
                 "data.csv", "config.toml"}
     assert expected <= set(os.listdir(out))
     idata = az.from_netcdf(out / "posterior.nc")
-    assert set(idata.posterior.data_vars) == {"film_thickness_nm", "film_index_A"}
+    assert set(idata.posterior.data_vars) == {"film_thickness_nm", "film_ior"}
     assert idata.posterior.sizes["chain"] == 8
     assert idata.posterior.sizes["draw"] == summary["steps"] - summary["burn_in"]
     assert "stop_reason" in idata.posterior.attrs

@@ -16,8 +16,8 @@ from bsdflab.fit.simulate import simulate
 HERE = os.path.dirname(os.path.abspath(__file__))
 ANGLES = list(range(15, 71, 5))
 STANDARD = 0.99          # the white standard's nominal reflectance (as in angles.csv.toml)
-TRUTH = {"film_thickness_nm": 430.0, "film_thickness_spread_nm": 12.0, "film_index_A": 1.83,
-         "sigma_a_550": 0.4, "base_albedo": 0.3}
+TRUTH = {"film_thickness_nm": 430.0, "film_thickness_spread_nm": 12.0, "film_ior": 1.83,
+         "pigment_absorption": 0.4, "base_albedo": 0.3}
 
 
 def main() -> None:
