@@ -25,6 +25,7 @@ import numpy as np
 from bsdflab.bsdfs.base import from_dict
 from bsdflab.lobes import Lobe
 from bsdflab.tables.channels import LUMINANCE_RGB
+from bsdflab.tables.coverage import coverage_record
 from bsdflab.util import args as check
 from bsdflab.util import limits
 
@@ -171,7 +172,10 @@ class TableData:
         """Whether the tabulator reached its target: ``target_met`` is False when any cell
         of a stochastic (layered) table stopped at ``max_samples`` (its refinement was cut
         by the cap, not by the error), or when the table does not record its effort; for a
-        table by adding-doubling, when its error bound exceeds the target somewhere."""
+        table by adding-doubling, when its error bound exceeds the target somewhere.
+        ``coverage`` (PFMC tables): how often cell errors were exceeded by k sigma in the
+        coverage study of the table's estimator version (bsdflab.tables.coverage,
+        docs/coverage.md), None where that version was not measured."""
         if self.meta.get("method") == "adding-doubling":  # deterministic: its error bound decides
             bound = self.meta.get("error_bound_max_rel")
             met = isinstance(bound, float) and bound <= self.rel_error_target
@@ -182,7 +186,8 @@ class TableData:
         if isinstance(cap, bool) or not isinstance(cap, int):
             return {"target_met": False, "capped_cells": int(self.samples.size), "max_samples": None}
         capped = int(np.count_nonzero(self.samples >= cap))
-        return {"target_met": capped == 0, "capped_cells": capped, "max_samples": cap}
+        return {"target_met": capped == 0, "capped_cells": capped, "max_samples": cap,
+                "coverage": coverage_record(self.meta.get("estimator_version"))}
 
     def check_model(self):
         """The table's model rebuilt through ``from_dict`` (ValueError when it is not a

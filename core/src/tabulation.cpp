@@ -69,6 +69,13 @@ std::uint64_t Tabulator::estimate(std::size_t cell, int n, uint64_t seed, double
     return nonfinite;
 }
 
+double pooled_error(double fresh, int n, double pilot, int n0) {
+    if (n < 2 || n0 < 2 || !std::isfinite(pilot)) return fresh;
+    const double var0 = double(n0) * pilot * pilot, var1 = double(n) * fresh * fresh; // per walk
+    const double pooled = ((n0 - 1) * var0 + (n - 1) * var1) / double(n0 + n - 2);
+    return std::sqrt(pooled / n);
+}
+
 namespace {
 void check_cells(const std::vector<std::size_t> &cells, std::size_t count) {
     for (std::size_t c : cells)
@@ -155,6 +162,16 @@ FinishedCells Tabulator::finish(const std::vector<std::size_t> &cells, const std
         std::uint64_t cut = 0;
         nonfinite += estimate(cell, n, cell_seed(cell, 1), m.data(), e.data(), &cut);
         capped += cut;
+        if (estimator_) {
+            // The pilot measured luminance only: every channel's error takes the
+            // luminance's pooled/fresh ratio (one walk's channels rise and fall together);
+            // where the fresh luminance had no spread at all, the pooled luminance error.
+            const int n0 = settings_.min_samples;
+            const double lum_pooled = pooled_error(e[C], n, pilot_error[i], n0);
+            for (int r = 0; r < C; ++r)
+                e[r] = e[C] > 0 ? e[r] * (lum_pooled / e[C]) : std::max(e[r], lum_pooled);
+            e[C] = lum_pooled;
+        }
         std::copy(m.begin(), m.begin() + C, out.value.begin() + i * C);
         std::copy(e.begin(), e.begin() + C, out.error.begin() + i * C);
         out.lum[i] = m[C];

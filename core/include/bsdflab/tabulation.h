@@ -9,7 +9,9 @@
 //   finish  each cell gets n = clamp(1.1 min_samples (se / target)^2, min_samples,
 //           max_samples) walks, target = rel_error max(|pilot luminance|, floor x the mean
 //           pilot luminance of the cell's lobe), from a FRESH seed stream (1 of the cell).
-//           The stored value, error and sample count are those of the fresh walks alone.
+//           The stored value and sample count are those of the fresh walks alone; the
+//           error is the fresh mean's, with the walks' spread pooled over the pilot's and
+//           the fresh walks (pooled_error below).
 // Why this is unbiased: the pilot only chooses n. Given n, the finish walks are
 // independent of the pilot, so E[value | n] = f for every n, hence E[value] = f. (Pooling
 // the pilot into the value, as version 1 did, is biased low for heavy-tailed cells: a
@@ -56,6 +58,16 @@ struct TabulationControl {
         if (done) ++*done;
     }
 };
+
+// The standard error of a mean of `n` fresh walks whose own standard error is `fresh`,
+// with the per-walk spread pooled with an independent pilot of `n0` walks (standard error
+// `pilot`): sqrt(((n0 - 1) n0 pilot^2 + (n - 1) n fresh^2) / (n0 + n - 2) / n). Why: a
+// heavy-tailed cell whose fresh walks miss their rare large contributions reads low in
+// value AND in spread, so its own z is skewed toward large negative values (issue 32:
+// 15x the normal share beyond 4 sigma for the snake); the pilot's walks are independent
+// of the value, and twice the walks give the spread twice the degrees of freedom
+// (docs/coverage.md measures it). n0 or n < 2: the fresh error.
+double pooled_error(double fresh, int n, double pilot, int n0);
 
 // Outputs of the pilot stage, one entry per listed cell.
 struct PilotCells {
