@@ -14,7 +14,9 @@ Effort adapts per cell in two stages (core/include/bsdflab/tabulation.h has the 
    max_samples)`` walks with ``target = rel_error x max(|pilot luminance|, 5 % of the
    lobe's mean pilot luminance)``, from a fresh seed stream. The stored value is the mean of
    those fresh walks only, so it is unbiased: the pilot decides the effort, never the value
-   (given n, the fresh walks are independent of the pilot).
+   (given n, the fresh walks are independent of the pilot). Its standard error pools the
+   per-walk spread of the pilot's and the fresh walks (estimator version 7; the fresh
+   spread alone under-covered heavy-tailed cells: docs/coverage.md).
 
 Any split of the cells into blocks reproduces ``tabulate`` bit for bit (it is written with
 exactly these calls)::
