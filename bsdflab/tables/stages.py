@@ -66,6 +66,7 @@ class PilotBlock:
     nonfinite: int         # walks whose contribution was not finite (0 for a sound model)
     seconds: float = 0.0
     capped: int = 0        # walks cut by the model's max_depth (biased low; 0 for a sound model)
+    error: np.ndarray | None = None  # (n, channels) each channel's standard error (None: not kept)
 
 
 @dataclass(frozen=True)
@@ -103,7 +104,8 @@ def pilot_cells(model: BSDF, grid: TableGrid, cells, *, wavelengths=None,
     start = time.perf_counter()
     run_with_progress(job, progress, unit="cell", desc="tabulating (pilot)")
     return PilotBlock(idx, np.asarray(job.pilot_lum), np.asarray(job.pilot_error),
-                      int(job.pilot_nonfinite), time.perf_counter() - start, int(job.pilot_capped))
+                      int(job.pilot_nonfinite), time.perf_counter() - start, int(job.pilot_capped),
+                      np.asarray(job.pilot_channel_error).reshape(len(idx), tab.out_channels))
 
 
 def merge_pilots(blocks: Sequence[PilotBlock], n_cells: int) -> PilotBlock:
@@ -113,9 +115,11 @@ def merge_pilots(blocks: Sequence[PilotBlock], n_cells: int) -> PilotBlock:
     order = _cover(cells, n_cells, "pilot blocks")
     lum = np.concatenate([b.lum for b in blocks])[order]
     err = np.concatenate([b.lum_error for b in blocks])[order]
+    channel_err = (np.concatenate([b.error for b in blocks])[order]
+                   if blocks and all(b.error is not None for b in blocks) else None)
     return PilotBlock(np.arange(n_cells, dtype=np.int64), lum, err,
                       sum(b.nonfinite for b in blocks), sum(b.seconds for b in blocks),
-                      sum(b.capped for b in blocks))
+                      sum(b.capped for b in blocks), channel_err)
 
 
 def floor_scale(model: BSDF, grid: TableGrid, pilot: PilotBlock, *, wavelengths=None,
@@ -142,7 +146,11 @@ def finish_cells(model: BSDF, grid: TableGrid, cells, pilot: PilotBlock, scale, 
     scale = np.asarray(scale, dtype=np.float64).ravel()
     if scale.shape != (len(lobes_of(model)),) or not np.all(np.isfinite(scale)):
         raise ValueError(f"scale must hold one finite value per lobe ({len(lobes_of(model))}), got {scale!r}")
-    job = tab.finish_job(idx.tolist(), pilot.lum[idx].tolist(), pilot.lum_error[idx].tolist(), scale.tolist())
+    # the pilot's channel errors pool into the cells' errors (estimator version 7; without
+    # them each channel takes the luminance's pooled/fresh ratio)
+    channel_err = [] if pilot.error is None else np.asarray(pilot.error, np.float64)[idx].ravel().tolist()
+    job = tab.finish_job(idx.tolist(), pilot.lum[idx].tolist(), pilot.lum_error[idx].tolist(), scale.tolist(),
+                         pilot_channel_error=channel_err)
     start = time.perf_counter()
     run_with_progress(job, progress, unit="cell", desc="tabulating")
     C = tab.out_channels

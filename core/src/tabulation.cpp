@@ -88,6 +88,7 @@ PilotCells Tabulator::pilot(const std::vector<std::size_t> &cells, const Tabulat
     PilotCells out;
     out.lum.assign(cells.size(), 0.0);
     out.lum_error.assign(cells.size(), 0.0);
+    out.error.assign(cells.size() * out_channels(), 0.0);
     std::atomic<std::uint64_t> nonfinite{0}, capped{0};
     const int n = estimator_ ? settings_.min_samples : 1;
     parallel_for_each(cells.size(), [&](std::size_t i) {
@@ -98,6 +99,7 @@ PilotCells Tabulator::pilot(const std::vector<std::size_t> &cells, const Tabulat
         capped += cut;
         out.lum[i] = m[rows_ - 1];
         out.lum_error[i] = e[rows_ - 1];
+        std::copy(e.begin(), e.begin() + (rows_ - 1), out.error.begin() + i * (rows_ - 1));
         ctl.tick();
     });
     out.nonfinite = nonfinite;
@@ -130,10 +132,13 @@ int Tabulator::effort(std::size_t cell, double pilot_lum, double pilot_error,
 
 FinishedCells Tabulator::finish(const std::vector<std::size_t> &cells, const std::vector<double> &pilot_lum,
                                 const std::vector<double> &pilot_error, const std::vector<double> &scale,
-                                const TabulationControl &ctl) const {
+                                const TabulationControl &ctl,
+                                const std::vector<double> &pilot_channel_error) const {
     check_cells(cells, grid_.cells());
     if (pilot_lum.size() != cells.size() || pilot_error.size() != cells.size())
         throw std::invalid_argument("pilot luminance and error must have one entry per cell");
+    if (!pilot_channel_error.empty() && pilot_channel_error.size() != cells.size() * out_channels())
+        throw std::invalid_argument("pilot channel errors must have out_channels entries per cell");
     if (scale.size() != std::size_t(grid_.n_lobes))
         throw std::invalid_argument("floor scale must have one entry per lobe");
     const int C = out_channels();
@@ -163,13 +168,17 @@ FinishedCells Tabulator::finish(const std::vector<std::size_t> &cells, const std
         nonfinite += estimate(cell, n, cell_seed(cell, 1), m.data(), e.data(), &cut);
         capped += cut;
         if (estimator_) {
-            // The pilot measured luminance only: every channel's error takes the
-            // luminance's pooled/fresh ratio (one walk's channels rise and fall together);
-            // where the fresh luminance had no spread at all, the pooled luminance error.
+            // Each channel pools with its own pilot error; without them (a caller of the
+            // version-6 interface) every channel takes the luminance's pooled/fresh ratio
+            // (one walk's channels rise and fall together) or, where the fresh luminance had
+            // no spread at all, the pooled luminance error.
             const int n0 = settings_.min_samples;
             const double lum_pooled = pooled_error(e[C], n, pilot_error[i], n0);
-            for (int r = 0; r < C; ++r)
-                e[r] = e[C] > 0 ? e[r] * (lum_pooled / e[C]) : std::max(e[r], lum_pooled);
+            for (int r = 0; r < C; ++r) {
+                if (!pilot_channel_error.empty())
+                    e[r] = pooled_error(e[r], n, pilot_channel_error[i * C + r], n0);
+                else e[r] = e[C] > 0 ? e[r] * (lum_pooled / e[C]) : std::max(e[r], lum_pooled);
+            }
             e[C] = lum_pooled;
         }
         std::copy(m.begin(), m.begin() + C, out.value.begin() + i * C);
@@ -186,16 +195,18 @@ FinishedCells Tabulator::finish(const std::vector<std::size_t> &cells, const std
 
 TabulationStageJob::TabulationStageJob(std::shared_ptr<const Tabulator> tabulator, Stage stage,
                                        std::vector<std::size_t> cells, std::vector<double> pilot_lum,
-                                       std::vector<double> pilot_error, std::vector<double> scale)
+                                       std::vector<double> pilot_error, std::vector<double> scale,
+                                       std::vector<double> pilot_channel_error)
     : tabulator_(std::move(tabulator)), stage_(stage), cells_(std::move(cells)),
-      pilot_lum_(std::move(pilot_lum)), pilot_error_(std::move(pilot_error)), scale_(std::move(scale)) {
+      pilot_lum_(std::move(pilot_lum)), pilot_error_(std::move(pilot_error)), scale_(std::move(scale)),
+      pilot_channel_error_(std::move(pilot_channel_error)) {
     if (!tabulator_) throw std::invalid_argument("no tabulator");
 }
 
 void TabulationStageJob::run() {
     TabulationControl ctl{&done_, &cancelled_};
     if (stage_ == kPilot) pilot = tabulator_->pilot(cells_, ctl);
-    else finished = tabulator_->finish(cells_, pilot_lum_, pilot_error_, scale_, ctl);
+    else finished = tabulator_->finish(cells_, pilot_lum_, pilot_error_, scale_, ctl, pilot_channel_error_);
 }
 
 } // namespace bsdflab

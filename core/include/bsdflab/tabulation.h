@@ -72,6 +72,7 @@ double pooled_error(double fresh, int n, double pilot, int n0);
 // Outputs of the pilot stage, one entry per listed cell.
 struct PilotCells {
     std::vector<double> lum, lum_error;
+    std::vector<double> error; // out_channels per cell: each channel's standard error
     std::uint64_t nonfinite = 0;
     std::uint64_t capped = 0; // walks cut by the model's depth cap (biased; 0 for a sound model)
 };
@@ -106,10 +107,13 @@ class Tabulator {
     // The number of final walks of a cell from its pilot (1 for a deterministic model).
     int effort(std::size_t cell, double pilot_lum, double pilot_error,
                const std::vector<double> &scale) const;
-    // pilot_lum / pilot_error: aligned with `cells`.
+    // pilot_lum / pilot_error: aligned with `cells`. pilot_channel_error: the pilot's
+    // per-channel errors (out_channels per cell, PilotCells::error) for the pooled errors,
+    // or empty: each channel then takes the luminance's pooled/fresh ratio.
     FinishedCells finish(const std::vector<std::size_t> &cells, const std::vector<double> &pilot_lum,
                          const std::vector<double> &pilot_error, const std::vector<double> &scale,
-                         const TabulationControl &ctl = {}) const;
+                         const TabulationControl &ctl = {},
+                         const std::vector<double> &pilot_channel_error = {}) const;
 
   private:
     // Mean and standard error of f (no cosine) for one cell, all rows of P (luminance last).
@@ -138,7 +142,8 @@ class TabulationStageJob {
     enum Stage { kPilot = 0, kFinish = 1 };
     TabulationStageJob(std::shared_ptr<const Tabulator> tabulator, Stage stage,
                        std::vector<std::size_t> cells, std::vector<double> pilot_lum = {},
-                       std::vector<double> pilot_error = {}, std::vector<double> scale = {});
+                       std::vector<double> pilot_error = {}, std::vector<double> scale = {},
+                       std::vector<double> pilot_channel_error = {});
     void run();  // blocking; call without the GIL
     void cancel() { cancelled_ = true; }
     bool cancelled() const { return cancelled_; }
@@ -152,7 +157,7 @@ class TabulationStageJob {
     std::shared_ptr<const Tabulator> tabulator_;
     Stage stage_;
     std::vector<std::size_t> cells_;
-    std::vector<double> pilot_lum_, pilot_error_, scale_;
+    std::vector<double> pilot_lum_, pilot_error_, scale_, pilot_channel_error_;
     std::atomic<std::size_t> done_{0};
     std::atomic<bool> cancelled_{false};
 };
