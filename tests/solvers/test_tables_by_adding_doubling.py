@@ -55,7 +55,7 @@ def test_01b_agreement_at_20_consecutive_seeds(snake_ad_table, seed, estimator):
     while 25-40 % of other seeds exceeded the Sidak limit with version 6's cell errors;
     version 7 pools the pilot's walk spread into them, docs/coverage.md). Each seed is its
     own family at alpha 0.01 (40 such runs with exact errors would all pass with
-    probability 0.99^40 = 0.67); the seeds are fixed: pfmc2 recorded 20 of 20 passing."""
+    probability 0.99^40 = 0.67); the seeds are fixed: 20 of 20 recorded passing for each estimator."""
     ad = snake_ad_table
     model = from_dict({**preset("xenopeltis").to_dict(), "estimator": estimator})
     mc = tabulate(model, GRID, rel_error=0.05, wavelengths=WL, progress=False, seed=seed, min_samples=32768)
