@@ -64,6 +64,9 @@ lint_imports() {
     cp -r bsdflab/. "$stage/bsdflab/"
     cp -r service "$stage/bsdflab/service"
     cp -r reference "$stage/bsdflab/reference"
+    # the compiled core as a placeholder module, so `from bsdflab import _core` reads as an
+    # import of bsdflab._core (below every layer), not of the package root
+    : > "$stage/bsdflab/_core.py"
     (cd "$stage" && "$repo/$VENV/bin/python" -S -c '
 import sys
 sys.path[:0] = [".", sys.argv[2]]

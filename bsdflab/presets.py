@@ -29,6 +29,8 @@ Parameters and where they come from
 """
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 
 from bsdflab.bsdfs import Diffuse, RoughDielectric
@@ -141,7 +143,14 @@ def preset(name: str, **kwargs):
     """A preset by name (see PRESETS)."""
     if not isinstance(name, str) or name not in PRESETS:
         raise ValueError(f"unknown preset {check.brief(name)}; known presets: {', '.join(PRESETS)}")
-    try:
-        return PRESETS[name](**kwargs)
-    except TypeError as e:  # an option the preset does not take
-        raise ValueError(f"preset {name!r}: {check.one_line(e)}") from None
+    valid = preset_options(name)
+    unknown = sorted(set(kwargs) - set(valid))
+    if unknown:
+        raise ValueError(f"preset {name!r} has no option {', '.join(map(repr, unknown))}; "
+                         f"its options: {', '.join(valid) or 'none'}")
+    return PRESETS[name](**kwargs)
+
+
+def preset_options(name: str) -> list[str]:
+    """The keyword options preset ``name`` takes (what a request's overrides may set)."""
+    return list(inspect.signature(PRESETS[name]).parameters)

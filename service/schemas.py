@@ -183,14 +183,18 @@ class TableRequest(ModelSpec):
                           "grid": {"n_theta_i": 2, "n_theta_o": 4, "n_phi": 3}})
     grid: dict[str, Any] | None = Field(None, description="n_theta_i, n_theta_o, n_phi, thickness_nm",
                                         examples=[{"n_theta_i": 4, "n_theta_o": 8, "n_phi": 5}])
-    rel_error: float = Field(0.01, description="target relative standard error per cell")
+    rel_error: float = Field(0.01, description="target: the 95th percentile over the cells of each cell's "
+                                               "relative error of luminance (docs/table_format.md)")
     wavelengths: Floats | None = None
     min_samples: Count = 512
     max_samples: Count = 65536
     seed: Seed = 0
-    method: Literal["pfmc", "adding-doubling"] = Field(
-        "pfmc", description="pfmc (Monte Carlo) or adding-doubling (deterministic; reflecting layered "
-                            "models; the walk settings do not apply)")
+    method: Literal["auto", "pfmc", "adding-doubling"] = Field(
+        "auto", description="auto: adding-doubling wherever it covers the model (reflecting layered stacks), "
+                            "else pfmc; pfmc (Monte Carlo) or adding-doubling (deterministic; the walk "
+                            "settings do not apply) to choose")
+    nodes: int | None = Field(None, ge=4, le=256, description="adding-doubling: nodes per cosine panel")
+    orders: int | None = Field(None, ge=1, le=4096, description="adding-doubling: Fourier orders")
 
 
 class TableInfo(BaseModel):

@@ -11,11 +11,12 @@ def register(sub) -> None:
     p = sub.add_parser(
         "export", help="export a material to OpenPBR/MaterialX, glTF, USD or Blender (fitted, with a report)",
         description="Fit the target standard's thin-film parameters to bsdflab's exact film (CIEDE2000 over "
-                    "incidence angle and the +-15 %% film-thickness spread), write the target's file and "
+                    "incidence angle and the ±15 % film-thickness spread), write the target's file and "
                     "<out>.report.json / <out>.report.png (the Delta E00 map, what was dropped). See docs/export.md.")
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--preset", metavar="NAME", help="a named preset (e.g. xenopeltis)")
-    src.add_argument("--json", metavar="MODEL", help="the material as a JSON dict (BSDF.to_dict form)")
+    src.add_argument("--json", metavar="MODEL", help="the material as a JSON dict (BSDF.to_dict form), or a "
+                                                     "file holding one (a fit study's material.json)")
     src.add_argument("--table", metavar="T.exr", help="a table file: exports the model its header records")
     p.add_argument("--set", action="append", default=[], metavar="K=V",
                    help="a preset parameter (repeatable; value parsed as JSON, else a string)")
@@ -38,10 +39,17 @@ def model_from_args(args: argparse.Namespace):
 
         return model_from_spec({"preset": args.preset, "overrides": key_values(args.set, "--set")}).to_dict()
     if args.json is not None:
+        text, where = args.json, "--json"
+        if not text.lstrip().startswith("{"):   # a file (a fit study's material.json)
+            try:
+                with open(text, encoding="utf-8") as f:
+                    text, where = f.read(), text
+            except (OSError, UnicodeDecodeError) as e:
+                raise ValueError(f"--json is neither a JSON dict nor a readable file: {e}") from None
         try:
-            d = json.loads(args.json)
+            d = json.loads(text)
         except json.JSONDecodeError as e:
-            raise ValueError(f"--json is not valid JSON: {e}") from None
+            raise ValueError(f"{where} is not valid JSON: {e}") from None
         from bsdflab.requests import model_from_spec
 
         return model_from_spec({"model": d}).to_dict()

@@ -12,7 +12,8 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from bsdflab import __version__, _core
+    from bsdflab import _core
+    from bsdflab._version import __version__
     from bsdflab.optics.metals import METALS, metal_provenance
 
     print(f"bsdflab       {__version__}")

@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from bsdflab import __version__
+from bsdflab._version import __version__
 from bsdflab.cli import export, fit, info, lobe, render, serve, table, tabulate, thinfilm, validate
 
 COMMANDS = (render, lobe, thinfilm, tabulate, table, info, fit, serve)

@@ -14,7 +14,7 @@ def register(sub) -> None:
                                    "then reusing the cached tables) or a scene file (.json). Writes a "
                                    "linear EXR and a tone-mapped sRGB PNG beside it; scenes that are "
                                    "a set (appearance-grid, ablation) become a labelled contact sheet.")
-    p.add_argument("scene", help="scene name (see --list) or a scene file path ending in .json")
+    p.add_argument("scene", nargs="?", help="scene name (see --list) or a scene file path ending in .json")
     p.add_argument("--list", action="store_true", help="list the built-in scenes and exit")
     p.add_argument("--width", type=int, default=None, help="image width in pixels (default: the scene's)")
     p.add_argument("--height", type=int, default=None, help="image height in pixels (default: the scene's)")
@@ -63,22 +63,23 @@ def _scenes(args):
     return [("", scene(args.scene, **kwargs))], None
 
 
-def run(args: argparse.Namespace) -> int:
-    from dataclasses import replace
-
-    from bsdflab.cli.errors import check_writable
-    from bsdflab.plots.contact_sheet import contact_sheet, mosaic
-    from bsdflab.render import render
-    from bsdflab.render.image_io import EXR_SUFFIX, PNG_SUFFIX, exr_writer, write_exr_and_png
+def _list_scenes() -> int:
     from bsdflab.scenes import SCENE_SETS, SCENES
-    from bsdflab.scenes.scene_file import save_scene
-    from bsdflab.util.files import write_together
 
-    if args.list:
-        for name, make in {**SCENES, **SCENE_SETS}.items():
-            first = ((make.__doc__ or "").strip().splitlines() or [""])[0]
-            print(f"{name:<18} {first}")
-        return 0
+    for name, make in {**SCENES, **SCENE_SETS}.items():
+        first = ((make.__doc__ or "").strip().splitlines() or [""])[0]
+        print(f"{name:<18} {first}")
+    return 0
+
+
+def _check_arguments(args: argparse.Namespace) -> str:
+    """Every argument checked and every output folder writable before anything renders;
+    returns the PNG path."""
+    from bsdflab.cli.errors import check_writable
+    from bsdflab.scenes import SCENE_SETS
+
+    if args.scene is None:
+        raise ValueError("name a scene or a scene file (.json); bsdflab render --list lists the scenes")
     if not (abs(args.exposure) <= 64):  # also rejects NaN
         raise ValueError(f"--exposure must be a number of stops in [-64, 64], got {args.exposure}")
     if not args.out.lower().endswith(".exr"):
@@ -90,20 +91,67 @@ def run(args: argparse.Namespace) -> int:
         check_writable(args.save_scene, "--save-scene")
     if args.denoise and args.scene in SCENE_SETS:
         raise ValueError("--denoise works on a single scene, not a scene set")
-    scenes, base_dir = _scenes(args)
+    return png
+
+
+def _prepared(args: argparse.Namespace, scenes) -> list:
+    """The scenes with the command line's size and depth applied (to every scene of a set)."""
+    from dataclasses import replace
+
     prepared = []
     for label, s in scenes:
-        if args.width is not None or args.height is not None:  # resizes every scene of a set
+        if args.width is not None or args.height is not None:
             s = s.with_resolution(s.camera.width if args.width is None else args.width,
                                   s.camera.height if args.height is None else args.height)
         if args.max_depth is not None:
             s = replace(s, max_depth=args.max_depth)
         prepared.append((label, s))
+    return prepared
+
+
+def _write_one(args: argparse.Namespace, png: str, result) -> dict:
+    """The EXR and the PNG appear together or not at all; a denoised preview goes beside
+    the unbiased EXR, never instead of it."""
+    from bsdflab.render.image_io import write_exr_and_png
+
+    summary = result.summary()
+    write_exr_and_png(args.out, png, result.mean, summary, args.exposure)
+    if args.denoise:
+        from bsdflab.render.denoise import denoise
+
+        stem = os.path.splitext(args.out)[0] + ".denoised"
+        write_exr_and_png(stem + ".exr", stem + ".png", denoise(result),
+                          dict(summary, denoised="Intel Open Image Denoise (pyoidn)"), args.exposure)
+        print(f"wrote the denoised preview {stem}.exr and {stem}.png")
+    return summary
+
+
+def _write_set(args: argparse.Namespace, png: str, results) -> dict:
+    """A scene set: the EXR mosaic and the labelled contact sheet, published together."""
+    from bsdflab.plots.contact_sheet import contact_sheet, mosaic
+    from bsdflab.render.image_io import EXR_SUFFIX, PNG_SUFFIX, exr_writer
+    from bsdflab.util.files import write_together
+
+    items = [(label, r.mean) for label, r in results]
+    sheet = mosaic([im for _, im in items], min(len(items), 3))
+    write_together([(args.out, exr_writer(sheet, {"scene": args.scene}), EXR_SUFFIX),
+                    (png, lambda tmp: contact_sheet(items, tmp, args.exposure, title=args.scene), PNG_SUFFIX)])
+    return {"scene": args.scene, "images": [dict(r.summary(), label=label) for label, r in results]}
+
+
+def run(args: argparse.Namespace) -> int:
+    from bsdflab.render import render
+    from bsdflab.scenes.scene_file import save_scene
+
+    if args.list:
+        return _list_scenes()
+    png = _check_arguments(args)
+    scenes, base_dir = _scenes(args)
+    prepared = _prepared(args, scenes)
     if args.save_scene:
         if len(prepared) != 1:
             raise ValueError("--save-scene needs a single scene, not a set")
         save_scene(prepared[0][1], args.save_scene)
-
     results = []
     with client_from_args(args) as client:
         for label, s in prepared:
@@ -112,24 +160,7 @@ def run(args: argparse.Namespace) -> int:
             results.append((label, render(s, spp=args.spp, seed=args.seed, progress=not args.quiet,
                                           base_dir=base_dir, cache_dir=args.cache_dir, aovs=args.denoise,
                                           spectral=args.spectral, client=client)))
-    if len(results) == 1:  # the EXR and the PNG appear together or not at all
-        result = results[0][1]
-        summary = result.summary()
-        write_exr_and_png(args.out, png, result.mean, summary, args.exposure)
-        if args.denoise:  # a preview beside the unbiased EXR, never instead of it
-            from bsdflab.render.denoise import denoise
-
-            stem = os.path.splitext(args.out)[0] + ".denoised"
-            preview = denoise(result)
-            write_exr_and_png(stem + ".exr", stem + ".png", preview,
-                              dict(summary, denoised="Intel Open Image Denoise (pyoidn)"), args.exposure)
-            print(f"wrote the denoised preview {stem}.exr and {stem}.png")
-    else:
-        items = [(label, r.mean) for label, r in results]
-        summary = {"scene": args.scene, "images": [dict(r.summary(), label=label) for label, r in results]}
-        sheet = mosaic([im for _, im in items], min(len(items), 3))
-        write_together([(args.out, exr_writer(sheet, {"scene": args.scene}), EXR_SUFFIX),
-                        (png, lambda tmp: contact_sheet(items, tmp, args.exposure, title=args.scene), PNG_SUFFIX)])
+    summary = _write_one(args, png, results[0][1]) if len(results) == 1 else _write_set(args, png, results)
     print(json.dumps(summary, indent=1))
     print(f"wrote {args.out} and {png}")
     return 0

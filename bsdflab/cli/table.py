@@ -17,15 +17,20 @@ def register(sub) -> None:
 
     info = actions.add_parser("info", help="print a table file's metadata and accuracy",
                               description="Print the model, grid, lobes, channels, units, samples "
-                                          "per cell, target and achieved relative error, and the "
-                                          "writer's version of a table file, after verifying it.")
+                                          "per cell (PFMC) or the solver's settings (adding-doubling), "
+                                          "the target, the achieved error (95th percentile, max, RMS) "
+                                          "and whether the target was met, and the writer's version of "
+                                          "a table file, after verifying it.")
     info.add_argument("file", metavar="FILE", help="table file (.exr)")
 
     plot = actions.add_parser("plot", help="plot a table's in-plane slices and error map (PNG)",
                               description="Plot f(theta_o) in the plane of incidence (phi = 0 and "
-                                          "phi = 180 deg) at a few theta_i per channel with +-2 "
-                                          "standard-error bands, and the relative standard error "
-                                          "over theta_o x phi at one theta_i.")
+                                          "phi = 180 deg) at a few theta_i per channel with error "
+                                          "bands (PFMC: +-2 standard errors; adding-doubling: +- the "
+                                          "solver's deterministic bound), and that relative error "
+                                          "over theta_o x phi at one theta_i. A layered model's "
+                                          "table holds its scattered part: the top's own reflection, "
+                                          "the specular peak included, is added at lookup.")
     plot.add_argument("file", metavar="FILE", help="table file (.exr)")
     plot.add_argument("--out", default="table.png", help="output PNG path (default table.png)")
     plot.add_argument("--thickness-index", type=int, default=0,
@@ -66,15 +71,16 @@ def run_plot(args: argparse.Namespace) -> int:
     if not 0 <= args.thickness_index < table.n_thickness:
         raise ValueError(f"--thickness-index must be in [0, {table.n_thickness - 1}] for this table, "
                          f"got {args.thickness_index}")
-    table_figure(table, args.out, thickness_index=args.thickness_index,
-                 source=f"{os.path.basename(args.file)}: ")
+    shows = table_figure(table, args.out, thickness_index=args.thickness_index,
+                         source=f"{os.path.basename(args.file)}: ")
     print(f"wrote         {args.out}")
+    print(f"shows         {shows}")
     return 0
 
 
 def run_info(args: argparse.Namespace) -> int:
     from bsdflab.tables.file_format import read_attributes, read_table
-    from bsdflab.tables.summary import relative_error_summary
+    from bsdflab.tables.summary import BOUND, describe_accuracy
 
     table = read_table(args.file)  # verifies everything, the hash included
     attributes = read_attributes(args.file)
@@ -82,8 +88,17 @@ def run_info(args: argparse.Namespace) -> int:
     meta = dict(table.meta)
     preset = meta.pop("preset", None)
     step = np.degrees(0.5 * np.pi / np.array([g.n_theta_i, g.n_theta_o]))
-    err = relative_error_summary(table)
+    accuracy, accuracy_lines = describe_accuracy(table)
     samples = table.samples
+    if accuracy["kind"] == BOUND:  # one solve, no walks: no sample counts to show
+        effort = ("method", f"adding-doubling (deterministic; stored errors are the solver's bound, "
+                            f"{meta.get('solver', {}).get('nodes', '?')} nodes per panel, "
+                            f"{meta.get('solver', {}).get('orders', '?')} Fourier orders)")
+        for k in ("min_samples", "max_samples"):  # written by older versions, meaningless here
+            meta.pop(k, None)
+    else:
+        effort = ("samples", f"min {samples.min()}  median {np.median(samples):g}  max {samples.max()}"
+                             "  (walks per cell)")
     lines = [
         ("file", args.file),
         ("model", str(table.model.get("type", "?")) + (f" (preset {preset})" if preset else "")),
@@ -97,11 +112,8 @@ def run_info(args: argparse.Namespace) -> int:
         ("split direct", "yes: the top interface's reflection is evaluated exactly at lookup"
          if table.split_direct else "no: the table holds the whole non-delta BSDF"),
         ("units", ", ".join(f"{k} {v}" for k, v in json.loads(attributes["bsdflab.units"]).items())),
-        ("samples", f"min {samples.min()}  median {np.median(samples):g}  max {samples.max()}"
-                    "  (walks per cell)"),
-        ("target error", f"{table.rel_error_target:g} (relative standard error of luminance)"),
-        ("achieved", f"RMS {err['rms']:.4g}  95th pct {err['p95']:.4g}  max {err['max']:.4g}  "
-                     f"over {err['cells']} cells with luminance > 1 % of the table max"),
+        effort,
+        *accuracy_lines,
         ("written by", f"bsdflab {attributes.get('bsdflab.version', '?')}, "
                        f"table format version {attributes.get('bsdflab.format_version', '?')}"),
         ("content hash", f"OK ({attributes['bsdflab.content_hash'][:16]}...)"),

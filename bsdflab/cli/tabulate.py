@@ -6,6 +6,9 @@ import sys
 
 from bsdflab.cli.cluster_options import add_cluster_options, client_from_args
 from bsdflab.cli.materials import add_material_options, material_from_args
+from bsdflab.tables.adding_doubling import TABLE_NODES
+from bsdflab.tables.request import CHOICES, DEFAULT_REL_ERROR
+from bsdflab.tables.stages import DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES
 
 
 def register(sub) -> None:
@@ -15,8 +18,9 @@ def register(sub) -> None:
                                    "self-describing OpenEXR table (see docs/table_format.md).")
     add_material_options(p)
     p.add_argument("--out", default=None, help="output .exr path (default: only the cache)")
-    p.add_argument("--rel-error", type=float, default=0.01,
-                   help="target relative standard error per cell (default 0.01)")
+    p.add_argument("--rel-error", type=float, default=DEFAULT_REL_ERROR,
+                   help=f"target: the 95th percentile over the cells of each cell's relative error "
+                        f"(default {DEFAULT_REL_ERROR:g}; docs/table_format.md, 'Target met')")
     p.add_argument("--theta-i", type=int, default=12, dest="n_theta_i", help="incidence nodes (default 12)")
     p.add_argument("--theta-o", type=int, default=24, dest="n_theta_o", help="outgoing nodes (default 24)")
     p.add_argument("--phi", type=int, default=13, dest="n_phi", help="azimuth nodes over [0, pi] (default 13)")
@@ -24,12 +28,20 @@ def register(sub) -> None:
                    help="film-thickness nodes in nm (default: the model's own thickness only)")
     p.add_argument("--wavelengths", type=float, nargs="*", default=None, metavar="NM",
                    help="store these wavelengths instead of linear sRGB")
-    p.add_argument("--min-samples", type=int, default=512, help="walks per cell in the first pass (default 512)")
-    p.add_argument("--max-samples", type=int, default=65536, help="cap on walks per cell (default 65536)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--method", choices=("pfmc", "adding-doubling"), default="pfmc",
-                   help="pfmc (Monte Carlo, default) or adding-doubling (deterministic, layered "
-                        "reflectors, docs/solvers.md; cached under its own key)")
+    p.add_argument("--min-samples", type=int, default=DEFAULT_MIN_SAMPLES,
+                   help=f"pfmc: walks per cell in the first pass (default {DEFAULT_MIN_SAMPLES})")
+    p.add_argument("--max-samples", type=int, default=DEFAULT_MAX_SAMPLES,
+                   help=f"pfmc: cap on walks per cell (default {DEFAULT_MAX_SAMPLES})")
+    p.add_argument("--seed", type=int, default=0, help="pfmc: random seed (default 0)")
+    p.add_argument("--method", choices=CHOICES, default="auto",
+                   help="auto (default): adding-doubling wherever the solver covers the model (reflecting "
+                        "layered stacks, docs/solvers.md), else pfmc; pfmc (Monte Carlo) or adding-doubling "
+                        "(deterministic) to choose; each is cached under its own key")
+    p.add_argument("--nodes", type=int, default=None,
+                   help=f"adding-doubling: Gauss-Legendre nodes per cosine panel, 4-256 (default {TABLE_NODES}); "
+                        "more nodes shrink the error bound")
+    p.add_argument("--orders", type=int, default=None,
+                   help="adding-doubling: Fourier orders in azimuth, 1-4096 (default: automatic)")
     p.add_argument("--no-cache", action="store_true", help="always tabulate; do not read or fill the cache")
     p.add_argument("--cache-dir", default=None, help="cache folder (default: $BSDFLAB_CACHE_DIR or the user cache)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -39,39 +51,31 @@ def register(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from bsdflab.cli.errors import check_writable
-    from bsdflab.tables import TableGrid, tabulate
-    from bsdflab.tables.data import check_table_memory
+    from bsdflab.tables import TableGrid, TableRequest, get
+    from bsdflab.util import runners
 
     if args.out is not None:
         check_writable(args.out, "--out")  # before the tabulation, not after it
-    model = material_from_args(args)
+    if args.no_cache and args.out is None:
+        raise ValueError("--no-cache needs --out")
     grid = TableGrid(args.n_theta_i, args.n_theta_o, args.n_phi, tuple(args.thickness))
-    wavelengths = args.wavelengths if args.wavelengths else None
-    check_table_memory(grid, 3 if wavelengths is None else len(wavelengths))
-    channels = "rgb" if wavelengths is None else [float(w) for w in wavelengths]
-
+    request = TableRequest.make(material_from_args(args), grid, args.rel_error, args.wavelengths or None,
+                                args.method, args.min_samples, args.max_samples, args.seed, args.nodes,
+                                args.orders)
     with client_from_args(args) as client:  # connected (or refused) before any work
-        def make():
-            return tabulate(model, grid, rel_error=args.rel_error, wavelengths=wavelengths,
-                            min_samples=args.min_samples, max_samples=args.max_samples,
-                            seed=args.seed, progress=not args.quiet, client=client, method=args.method)
-
-        return _tabulate(args, model, grid, channels, make)
+        runner = runners.resolve(None, client)
+        fetched = get(request, cache=False if args.no_cache else args.cache_dir, runner=runner,
+                      progress=not args.quiet)
+    return _report(args, request, fetched)
 
 
-def _tabulate(args, model, grid, channels, make) -> int:
+def _report(args, request, fetched) -> int:
     import shutil
 
-    from bsdflab.tables import cached_table, write_table
+    from bsdflab.tables import write_table
+    from bsdflab.tables.summary import describe_accuracy
 
-    if args.no_cache:
-        if args.out is None:
-            raise ValueError("--no-cache needs --out")
-        table, path, hit = make(), None, False
-    else:
-        table, path, hit = cached_table(model.to_dict(), grid, args.rel_error, channels, make,
-                                        directory=args.cache_dir, min_samples=args.min_samples,
-                                        max_samples=args.max_samples, seed=args.seed, method=args.method)
+    table, path, hit = fetched
     if args.out is not None:
         if path is not None and hit:
             from bsdflab.util.files import write_atomically
@@ -79,25 +83,16 @@ def _tabulate(args, model, grid, channels, make) -> int:
             write_atomically(args.out, lambda tmp: shutil.copyfile(path, tmp), suffix=".tmp.exr")
         else:
             write_table(args.out, table)
-    m = table.meta
+    grid, m = request.grid, table.meta
     print(f"table         {args.out or path}")
     print(f"from cache    {'yes' if hit else 'no'}" + (f" ({path})" if path else ""))
+    print(f"method        {request.method} ({request.method_note})")
     print(f"grid          {grid.n_theta_i} x {grid.n_theta_o} x {grid.n_phi}, lobes {', '.join(table.lobes)}, "
           f"thickness nodes {list(grid.thickness_nm) or 'model default'}")
-    print(f"rel. error    target {table.rel_error_target:g}; achieved RMS {m.get('rel_error_rms', 0):.4g}, "
-          f"95 % {m.get('rel_error_p95', 0):.4g}, max {m.get('rel_error_max', 0):.4g}")
+    accuracy, lines = describe_accuracy(table)
+    for label, text in lines:
+        print(f"{label:<13} {text}")
     print(f"time          {m.get('seconds', 0):.1f} s on {m.get('threads', '?')} threads")
-    accuracy = table.accuracy()
-    if m.get("method") == "adding-doubling":
-        print(f"target met    {'yes' if accuracy['target_met'] else 'NO'}: the solver's error bound, "
-              f"max {m.get('error_bound_max_rel', 0):.3g} relative")
-    else:
-        print(f"target met    {'yes' if accuracy['target_met'] else 'NO'}: {accuracy['capped_cells']} of "
-              f"{table.samples.size} cells stopped at --max-samples {accuracy['max_samples']}")
-    if not accuracy["target_met"] and m.get("method") == "adding-doubling":
-        print(f"bsdflab tabulate: warning: the solver's error bound exceeds the target "
-              f"{table.rel_error_target:g} somewhere (docs/solvers.md: more nodes)", file=sys.stderr)
-    elif not accuracy["target_met"]:
-        print(f"bsdflab tabulate: warning: the table does not reach the target error "
-              f"{table.rel_error_target:g} everywhere; raise --max-samples", file=sys.stderr)
+    if not accuracy["target_met"]:
+        print(f"bsdflab tabulate: warning: {accuracy['advice']}", file=sys.stderr)
     return 0

@@ -14,7 +14,7 @@ def register(sub) -> None:
     p.add_argument("--level", choices=("quick", "standard", "full"), default="quick",
                    help="effort: quick (CI, minutes on 2 cores), standard, full (long studies)")
     p.add_argument("--only", metavar="PATTERN", help="only checks whose name matches this glob or contains it")
-    p.add_argument("--out", required=True, help="folder for index.html and results.json")
+    p.add_argument("--out", help="folder for index.html and results.json (needed unless --list)")
     p.add_argument("--plugin", action="append", default=[], metavar="FILE.py",
                    help="a Python file whose checks() returns more Check objects (e.g. your own BSDF "
                         "through Check.with_model); repeatable")
@@ -44,6 +44,8 @@ def run(args: argparse.Namespace) -> int:
         for c in checks:
             print(f"{c.name:60s} {c.family:9s} {c.title}")
         return 0
+    if args.out is None:
+        raise ValueError("--out is required: the folder for index.html and results.json")
     if not checks:
         raise ValueError(f"--only {args.only!r} matches no check (see bsdflab validate --list)")
     doc = validate(args.out, level=args.level, only=args.only, checks=checks, progress=not args.quiet,

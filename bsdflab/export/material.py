@@ -48,12 +48,35 @@ class ExportMaterial:
                 "stack": [list(layer) for layer in self.stack]}
 
 
-def _scalar_ior(value, name: str) -> float:
-    if isinstance(value, (int, float)):
+VISIBLE_NM = np.arange(380.0, 781.0, 5.0)
+DESIGN_NM = 550.0   # where a dispersive index is read when the dispersion is dropped
+
+
+def _scalar_ior(value, name: str, dropped: list[str] | None = None) -> float:
+    """One real index: a number, or a dispersion dict (constant, Cauchy, tabulated) that is
+    constant over the visible (a Cauchy with B = C = 0, a fit's film), or else read at
+    DESIGN_NM with the dispersion listed as dropped. An absorbing index (k > 0) is refused."""
+    from bsdflab.optics.dispersion import as_dispersion
+
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
         return float(value)
-    if isinstance(value, dict) and value.get("model") == "constant" and not value.get("k"):
-        return float(value["n"])
-    raise ValueError(f"{name}: a spectral or named index cannot be exported (the targets take one real index)")
+    if not isinstance(value, dict):
+        raise ValueError(f"{name}: an index must be a number or a dispersion dict, got {type(value).__name__}")
+    try:
+        z = as_dispersion(value, name).index(VISIBLE_NM)
+    except ValueError as e:
+        raise ValueError(f"{name}: {e}") from None
+    if np.max(z.imag) > 0:
+        raise ValueError(f"{name}: an absorbing index (k up to {np.max(z.imag):.3g}) cannot be exported "
+                         "(the targets take one real index)")
+    n = z.real
+    if np.ptp(n) <= 1e-9 * np.max(n):
+        return float(n[0])
+    at = float(np.interp(DESIGN_NM, VISIBLE_NM, n))
+    if dropped is not None:
+        dropped.append(f"{name}: dispersion (n {np.min(n):.4f}-{np.max(n):.4f} over 380-780 nm): the targets take "
+                       f"one real index, exported n({DESIGN_NM:g} nm) = {at:.4f}")
+    return at
 
 
 def _top(d: dict, dropped: list[str], substitute: bool = False):
@@ -69,18 +92,19 @@ def _top(d: dict, dropped: list[str], substitute: bool = False):
     if len(film) > 1:
         if not substitute:
             raise ValueError(f"a film stack of {len(film)} layers is beyond the targets, which take one "
-                             "thin film (export one film, or ask for the best single-film substitute)")
-        stack = tuple((_scalar_ior(f["material"], "film material"), float(f["thickness_nm"])) for f in film)
+                             "thin film: export one film, or ask for the single film that looks most like the stack "
+                             "(substitute=True; on the command line, bsdflab export --substitute)")
+        stack = tuple((_scalar_ior(f["material"], "film material", dropped), float(f["thickness_nm"])) for f in film)
         dropped.append(f"the {len(film)}-layer film stack: replaced by the single film that looks most like "
                        "it (fitted against the stack's exact reflectance)")
         # the fit's start: the densest layer's index at the stack's optical thickness
         n_film = max(n for n, _ in stack)
         t = sum(n * t for n, t in stack) / n_film
     else:
-        n_film, t = (None, 0.0) if not film else (_scalar_ior(film[0]["material"], "film material"),
+        n_film, t = (None, 0.0) if not film else (_scalar_ior(film[0]["material"], "film material", dropped),
                                                   float(film[0]["thickness_nm"]))
-    return (_scalar_ior(d.get("ext_ior", 1.000277), "ext_ior"), _scalar_ior(d.get("int_ior", 1.5046), "int_ior"),
-            n_film, t, alpha, stack)
+    return (_scalar_ior(d.get("ext_ior", 1.000277), "ext_ior", dropped),
+            _scalar_ior(d.get("int_ior", 1.5046), "int_ior", dropped), n_film, t, alpha, stack)
 
 
 def _slab_transmittance(slabs: list[dict], wl: np.ndarray, dropped: list[str]) -> np.ndarray:

@@ -3,8 +3,9 @@
 fit.toml
     [parameters]   one entry per parameter: a prior (bsdflab.fit.priors) or a fixed value;
                    parameters left out are fixed at their defaults (bsdflab.fit.parameters)
-    [sampler]      walkers, max_steps (the step cap), tau_multiple (run until
-                   N > tau_multiple * tau), check_every, seed, map_starts
+    [sampler]      kind (emcee | nested); emcee: walkers, max_steps (the step cap),
+                   tau_multiple (run until N > tau_multiple * tau), check_every, map_starts;
+                   nested: live_points, dlogz; both: seed
     [model]        kind (smooth | full), film (single | none | stack), distribution,
                    platelets; thickness_nodes, angle_nodes (the smooth model's quadrature
                    orders); nodes, orders (the full model's adding-doubling solver)
@@ -136,20 +137,33 @@ class ModelSettings:
         return dict(P.SMOOTH_VALUES) if self.kind == "smooth" else {}
 
 
+SAMPLERS = ("emcee", "nested")
+
+
 @dataclass(frozen=True)
 class SamplerSettings:
+    """``kind`` emcee (MAP starts, then the ensemble with the autocorrelation stop) or nested
+    (dynesty, bsdflab.fit.nested: every mode and the evidence; ``live_points``, ``dlogz``)."""
+
     walkers: int = 32
     max_steps: int = 20000
     tau_multiple: float = 50.0
     check_every: int = 200
     seed: int = 0
     map_starts: int = 8
+    kind: str = "emcee"
+    live_points: int = 200
+    dlogz: float = 0.1
 
     @classmethod
     def parse(cls, d: dict) -> SamplerSettings:
-        s = cls(**_settings(cls, "sampler", d, {
+        kind = d.get("kind", "emcee")
+        if kind not in SAMPLERS:
+            raise ValueError(f"[sampler] kind must be one of {', '.join(SAMPLERS)}, got {kind!r}")
+        s = cls(kind=kind, **_settings(cls, "sampler", {k: v for k, v in d.items() if k != "kind"}, {
             "walkers": (4, 10000), "max_steps": (10, 10_000_000), "tau_multiple": (1.0, math.inf),
-            "check_every": (10, 1_000_000), "seed": (0, 2**63 - 1), "map_starts": (1, 1000)}))
+            "check_every": (10, 1_000_000), "seed": (0, 2**63 - 1), "map_starts": (1, 1000),
+            "live_points": (4, 1_000_000), "dlogz": (1e-6, math.inf)}))
         if s.walkers % 2:
             raise ValueError(f"[sampler] walkers must be even (emcee's stretch move), got {s.walkers}")
         return s

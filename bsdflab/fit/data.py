@@ -2,12 +2,16 @@
 
 A CSV file with a header row and the columns
 
-    angle_deg, angle_out_deg, phi_deg, wavelength_nm, reflectance, sigma, geometry
+    angle_deg, angle_out_deg, phi_deg, wavelength_nm, reflectance, sigma, geometry, series
 
 ``angle_out_deg`` may be left out of the header when no row is ``diffuse`` or ``brdf`` and
 is empty for specular and total rows; ``phi_deg`` (the detector's azimuth, brdf rows only)
-may be left out when no row is ``brdf``. Lines starting with ``#`` are comments (kept, e.g. to label
-synthetic data). Every problem is a ``ValueError`` naming the file, the line and the column.
+may be left out when no row is ``brdf``; ``series`` (a name per measured data set, e.g. one
+per instrument or sample; empty: the one unnamed series) may be left out. Lines starting
+with ``#`` are comments (kept, e.g. to label synthetic data), except ``# units: percent`` /
+``# units: fraction``, which declare the reflectance units (bsdflab.fit.units: percent is
+converted; undeclared values that look like percent are refused). Every problem is a
+``ValueError`` naming the file, the line and the column.
 """
 from __future__ import annotations
 
@@ -19,13 +23,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bsdflab.fit.units import near_mirror, percent_suspect, refuse_percent, scale, units_comment
 from bsdflab.util.files import write_atomically
 
 # index = the geometry code (0-2: the smooth C++ model's; brdf rows become diffuse ones there)
 GEOMETRIES = ("specular", "diffuse", "total", "brdf")
 MODEL_RANGE_NM = (350.0, 1000.0)                # Cauchy film index and melanin power law
-COLUMNS = ("angle_deg", "angle_out_deg", "phi_deg", "wavelength_nm", "reflectance", "sigma", "geometry")
-OPTIONAL = ("angle_out_deg", "phi_deg")
+COLUMNS = ("angle_deg", "angle_out_deg", "phi_deg", "wavelength_nm", "reflectance", "sigma", "geometry", "series")
+OPTIONAL = ("angle_out_deg", "phi_deg", "series")
 REQUIRED = tuple(c for c in COLUMNS if c not in OPTIONAL)
 SPECULAR_TOLERANCE_DEG = 1e-6
 
@@ -35,7 +40,8 @@ class Dataset:
     """Measured (or simulated) reflectances, one entry per row of the file.
 
     geometry: int codes into GEOMETRIES; angle_out_deg is NaN except for diffuse and brdf
-    rows, phi_deg NaN except for brdf rows (None: all NaN).
+    rows, phi_deg NaN except for brdf rows (None: all NaN); series: the data set each row
+    belongs to (strings; None: all "", the one unnamed series).
     """
 
     geometry: np.ndarray
@@ -46,10 +52,19 @@ class Dataset:
     sigma: np.ndarray
     comments: list[str] = field(default_factory=list)
     phi_deg: np.ndarray | None = None
+    series: np.ndarray | None = None
 
     def __post_init__(self):
         if self.phi_deg is None:
             self.phi_deg = np.full(len(self.geometry), np.nan)
+        if self.series is None:
+            self.series = np.full(len(self.geometry), "", dtype=object)
+        else:
+            self.series = np.asarray(self.series, dtype=object)
+
+    def series_names(self) -> list[str]:
+        """The series in file order ("" is the unnamed one)."""
+        return list(dict.fromkeys(self.series.tolist()))
 
     def __len__(self) -> int:
         return len(self.geometry)
@@ -58,19 +73,20 @@ class Dataset:
         return Dataset(self.geometry, self.angle_deg, self.angle_out_deg, self.wavelength_nm,
                        np.asarray(reflectance, float),
                        self.sigma if sigma is None else np.asarray(sigma, float),
-                       self.comments if comments is None else list(comments), self.phi_deg)
+                       self.comments if comments is None else list(comments), self.phi_deg, self.series)
 
     def groups(self) -> list[tuple[str, np.ndarray]]:
-        """(label, row indices) per measured curve (geometry and angles), in file order."""
+        """(label, row indices) per measured curve (series, geometry and angles), in file order."""
         keys: dict[tuple, list[int]] = {}
         for i in range(len(self)):
             g = GEOMETRIES[self.geometry[i]]
-            key = (g, float(self.angle_deg[i]), float(self.angle_out_deg[i]) if g in ("diffuse", "brdf") else None,
+            key = (self.series[i], g, float(self.angle_deg[i]),
+                   float(self.angle_out_deg[i]) if g in ("diffuse", "brdf") else None,
                    float(self.phi_deg[i]) if g == "brdf" else None)
             keys.setdefault(key, []).append(i)
         out = []
-        for (g, a, b, phi), rows in keys.items():
-            label = (f"{g} {a:g}°" + (f" → {b:g}°" if b is not None else "")
+        for (series, g, a, b, phi), rows in keys.items():
+            label = ((f"{series}: " if series else "") + f"{g} {a:g}°" + (f" → {b:g}°" if b is not None else "")
                      + (f" φ {phi:g}°" if phi is not None else ""))
             idx = np.array(rows)
             out.append((label, idx[np.argsort(self.wavelength_nm[idx], kind="stable")]))
@@ -80,16 +96,32 @@ class Dataset:
         buf = io.StringIO()
         for c in self.comments:
             buf.write(f"# {c}\n")
+        if self._needs_units_line():
+            buf.write("# units: fraction\n")
         w = csv.writer(buf, lineterminator="\n")
         with_phi = bool(np.any(~np.isnan(self.phi_deg)))
-        w.writerow([c for c in COLUMNS if with_phi or c != "phi_deg"])
+        with_series = any(self.series)
+        w.writerow([c for c in COLUMNS if (with_phi or c != "phi_deg") and (with_series or c != "series")])
         for i in range(len(self)):
             out = "" if math.isnan(self.angle_out_deg[i]) else repr(float(self.angle_out_deg[i]))
             phi = ["" if math.isnan(self.phi_deg[i]) else repr(float(self.phi_deg[i]))] if with_phi else []
             w.writerow([repr(float(self.angle_deg[i])), out, *phi, repr(float(self.wavelength_nm[i])),
                         f"{self.reflectance[i]:.10g}", f"{self.sigma[i]:.6g}",
-                        GEOMETRIES[self.geometry[i]]])
+                        GEOMETRIES[self.geometry[i]], *([self.series[i]] if with_series else [])])
         return buf.getvalue()
+
+    def _needs_units_line(self) -> bool:
+        """Whether reading the values back would take them for percent (fractions > 1.5 in a
+        specular row, e.g. relative to a white standard): then the file declares them."""
+        return any(self.percent_suspect(series) for series in self.series_names())
+
+    def percent_suspect(self, series: str) -> tuple[str, int] | None:
+        """bsdflab.fit.units.percent_suspect on one series: (why, row index) or None."""
+        rows = np.flatnonzero(self.series == series)
+        names = [GEOMETRIES[g] for g in self.geometry[rows]]
+        near = near_mirror(names, self.angle_deg[rows], self.angle_out_deg[rows], self.phi_deg[rows])
+        found = percent_suspect(names, self.reflectance[rows], near)
+        return None if found is None else (found[0], int(rows[found[1]]))
 
     def write_csv(self, path: str | os.PathLike) -> None:
         """Write the file atomically (temp file + rename)."""
@@ -112,19 +144,34 @@ def _number(text: str, column: str, where: str) -> float:
     return value
 
 
-def read_csv(path: str | os.PathLike) -> Dataset:
-    """Read and validate a data file; ValueError naming the file and line on bad input."""
+def read_csv(path: str | os.PathLike, units: str | None = None) -> Dataset:
+    """Read and validate a data file; ValueError naming the file and line on bad input.
+    ``units``: as parse_csv's."""
     path = os.fspath(path)
     try:
         with open(path, encoding="utf-8", newline="") as f:
             lines = f.read().splitlines()
     except (OSError, UnicodeDecodeError) as e:
         raise ValueError(f"cannot read data file {path}: {e}") from None
-    return parse_csv(lines, path)
+    return parse_csv(lines, path, units)
 
 
-def parse_csv(lines: list[str], name: str = "<data>") -> Dataset:
-    comments = [ln.lstrip("#").strip() for ln in lines if ln.lstrip().startswith("#")]
+def parse_csv(lines: list[str], name: str = "<data>", units: str | None = None) -> Dataset:
+    """Parse the lines of a data file; ``units`` ("percent"/"fraction") overrides the file's
+    ``# units:`` comment (both None: values that look like percent are refused)."""
+    comments, declared = [], None
+    for number, ln in enumerate(lines, 1):
+        if ln.lstrip().startswith("#"):
+            text = ln.lstrip().lstrip("#").strip()
+            found = units_comment(text, f"{name}: line {number}")
+            if found is None:
+                comments.append(text)
+            elif declared is not None and found != declared:
+                raise ValueError(f"{name}: line {number}: a second units comment says {found}, "
+                                 f"an earlier one {declared}")
+            else:
+                declared = found
+    units = units or declared
     numbered = [(i + 1, ln) for i, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith("#")]
     if not numbered:
         raise ValueError(f"{name}: empty data file (no header, no rows)")
@@ -140,7 +187,7 @@ def parse_csv(lines: list[str], name: str = "<data>") -> Dataset:
     if len(numbered) == 1:
         raise ValueError(f"{name}: no data rows after the header")
     col = {c: header.index(c) for c in header}
-    rows, seen = [], {}
+    rows, seen, names, numbers = [], {}, [], []
     for number, text in numbered[1:]:
         where = f"{name}: line {number}"
         cells = [c.strip() for c in next(csv.reader([text]))]
@@ -186,10 +233,27 @@ def parse_csv(lines: list[str], name: str = "<data>") -> Dataset:
         s = _number(cells[col["sigma"]], "sigma", where)
         if s <= 0:
             raise ValueError(f"{where}: sigma must be > 0, got {s:g}")
-        key = (g, a, b if g in ("diffuse", "brdf") else None, phi if g == "brdf" else None, wl)
+        series = cells[col["series"]] if "series" in col else ""
+        key = (series, g, a, b if g in ("diffuse", "brdf") else None, phi if g == "brdf" else None, wl)
         if key in seen:
-            raise ValueError(f"{where}: duplicate of line {seen[key]} (same geometry, angles and wavelength)")
+            raise ValueError(f"{where}: duplicate of line {seen[key]} (same series, geometry, angles and wavelength)")
         seen[key] = number
         rows.append((GEOMETRIES.index(g), a, b, wl, r, s, phi))
+        names.append(series)
+        numbers.append(number)
     arr = np.array(rows, dtype=float)
-    return Dataset(arr[:, 0].astype(int), arr[:, 1], arr[:, 2], arr[:, 3], arr[:, 4], arr[:, 5], comments, arr[:, 6])
+    ds = Dataset(arr[:, 0].astype(int), arr[:, 1], arr[:, 2], arr[:, 3], arr[:, 4], arr[:, 5], comments, arr[:, 6],
+                 np.array(names, dtype=object))
+    if units is None:
+        for series in ds.series_names():
+            found = ds.percent_suspect(series)
+            if found:
+                where = f"{name}: line {numbers[found[1]]}: column reflectance"
+                where += f" (series {series})" if series else ""
+                raise refuse_percent(where, found[0],
+                                     "add the comment line '# units: percent' (or '# units: fraction' if the "
+                                     "values are fractions above 1, e.g. relative to a white standard), or "
+                                     "import it with 'bsdflab fit import FILE --units percent'")
+    if units == "percent":
+        ds.reflectance, ds.sigma = ds.reflectance * scale(units), ds.sigma * scale(units)
+    return ds

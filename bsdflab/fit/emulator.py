@@ -23,6 +23,7 @@ records both.
 """
 from __future__ import annotations
 
+import contextvars
 import itertools
 import math
 
@@ -35,6 +36,8 @@ from bsdflab.fit.full_forward import SolverForwardModel
 from bsdflab.fit.parameters import ALL_NAMES, parameter
 
 ALBEDO_NODES = (0.2, 0.5, 0.8)
+# a study sets this around building its posterior: a progress bar over the grid's solves
+SHOW_PROGRESS: contextvars.ContextVar[bool] = contextvars.ContextVar("bsdflab_fit_emulator_progress", default=False)
 LOG_SCALE = ("roughness", "sigma_s", "sigma_a_550", "slab_thickness_um")
 TAIL = 1e-4
 TOP_NAMES = ("roughness", "film_thickness_nm", "film_index_A", "film_index_B", "platelet_nm", "gap_nm", "gap_index",
@@ -114,7 +117,12 @@ class EmulatedForward:
         albedos = ALBEDO_NODES if self.albedo_free else (float(self.base[self._albedo_col]),)
         shape = tuple(a.n for a in self.axes)
         grid = np.empty((len(albedos), *shape, len(dataset)))
-        for idx in itertools.product(*(range(n) for n in shape)):
+        nodes = itertools.product(*(range(n) for n in shape))
+        if SHOW_PROGRESS.get():
+            from tqdm import tqdm
+
+            nodes = tqdm(nodes, total=math.prod(shape), desc="emulator solves", unit="node", leave=False)
+        for idx in nodes:
             for k, rho in enumerate(albedos):
                 v = self.base.copy()
                 v[self._cols] = [a.nodes[i] for a, i in zip(self.axes, idx)]

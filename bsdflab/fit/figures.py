@@ -17,7 +17,9 @@ from bsdflab.util.extras import require
 # short titles over the corner plot's diagonal (the axis labels carry the full names)
 SYMBOLS = {"film_thickness_nm": "d", "film_thickness_spread_nm": "σ_d", "film_index_A": "A", "film_index_B": "B",
            "substrate_index": "n_s", "exterior_index": "n_e", "sigma_a_550": "σ_a(550)",
-           "absorption_exponent": "exponent", "slab_thickness_um": "h", "base_albedo": "ρ", "noise_scale": "s"}
+           "absorption_exponent": "exponent", "slab_thickness_um": "h", "base_albedo": "ρ", "noise_scale": "s",
+           "roughness": "α", "sigma_s": "σ_s", "hg_g": "g", "platelet_nm": "d_p", "gap_nm": "d_gap",
+           "gap_index": "n_gap"}
 
 
 def _plt():
@@ -42,7 +44,9 @@ def corner_plot(draws: np.ndarray, names, path: str, truths=None) -> None:
     fig = corner.corner(draws, fig=plt.figure(figsize=(side, side)), labels=[_label(n) for n in names],
                         quantiles=[0.05, 0.5, 0.95], show_titles=True, title_fmt=".4g", title_kwargs={"fontsize": 7},
                         titles=[SYMBOLS.get(n, n) for n in names],
-                        label_kwargs={"fontsize": 8}, truths=truths, truth_color="tab:red")
+                        label_kwargs={"fontsize": 8}, truths=truths if k > 1 else None, truth_color="tab:red")
+    if k == 1 and truths is not None and truths[0] is not None:
+        fig.axes[0].axvline(truths[0], color="tab:red")   # corner's truth lines index a 2-D axes grid
     fig.suptitle("posterior (lines: 5 %, 50 %, 95 %" + ("; red: truth)" if truths is not None else ")"),
                  fontsize=9, y=1.0)
     save_figure(fig, path)
@@ -124,10 +128,14 @@ def appearance_plot(app: AppearancePosterior, path: str) -> float:
               extent=(a[0] - step / 2, a[-1] + step / 2, len(app.rgb) + 0.5, -0.5))
     a0.axhline(0.5, color="w", lw=1.0)
     a0.set_ylabel("row 0: posterior mean; 1..: draws", fontsize=8)
-    a0.set_title(f"specular colour vs angle (sRGB, D65; display exposure +{exposure:.1f} stops)", fontsize=9)
+    what = "specular" if app.body_delta_e is None else "gloss"
+    a0.set_title(f"{what} colour vs angle (sRGB, D65; display exposure {exposure:+.1f} stops)", fontsize=9)
     a1.fill_between(a, iv["low"], iv["high"], color="tab:purple", alpha=0.3, lw=0, label="5-95 %")
     a1.plot(a, iv["median"], color="tab:purple", label="median")
     a1.plot(a, iv["bound"], "k--", lw=0.9, label="90 % of draws below")
+    if app.body_delta_e is not None:
+        a1.axhline(float(np.quantile(app.body_delta_e, 0.9)), color="tab:brown", lw=0.9,
+                   label="body colour 45°:0°, 90 % below")
     a1.set_xlabel("angle of incidence = viewing angle [deg]", fontsize=8)
     a1.set_ylabel("ΔE00 to posterior mean", fontsize=8)
     a1.legend(fontsize=7)
@@ -138,3 +146,64 @@ def appearance_plot(app: AppearancePosterior, path: str) -> float:
     save_figure(fig, path)
     plt.close(fig)
     return exposure
+
+
+def residual_plot(dataset: Dataset, residuals: np.ndarray, checks, path: str) -> None:
+    """Normalised residuals (y - model) / (s sigma) per measured curve, with the +-2 and +-3
+    lines and each curve's predictive p-value (bsdflab.fit.checks). More than 12 curves (gonio
+    rows, one wavelength each) are drawn one panel per geometry against the row number."""
+    plt = _plt()
+    p_of = {c.series: c for c in checks}
+    groups = dataset.groups()
+    if len(groups) > 12:
+        from bsdflab.fit.data import GEOMETRIES
+
+        groups = [(GEOMETRIES[g], np.flatnonzero(dataset.geometry == g)) for g in np.unique(dataset.geometry)]
+    cols = min(3, len(groups))
+    rows = math.ceil(len(groups) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 2.6 * rows), squeeze=False)
+    for ax in axes.ravel()[len(groups):]:
+        ax.axis("off")
+    for ax, (label, idx) in zip(axes.ravel(), groups):
+        per_curve = label in p_of
+        x = dataset.wavelength_nm[idx] if per_curve else np.arange(len(idx))
+        r = residuals[idx]
+        for k, style in ((2, ":"), (3, "--")):
+            ax.axhline(k, color="0.5", ls=style, lw=0.7)
+            ax.axhline(-k, color="0.5", ls=style, lw=0.7)
+        ax.axhline(0, color="k", lw=0.6)
+        ax.plot(x, r, ".-" if per_curve else ".", ms=3, lw=0.6, color="tab:red" if per_curve and p_of[label].flagged
+                else "tab:blue")
+        title = label
+        if per_curve:
+            c = p_of[label]
+            title += f"  p = {c.p_value:.2g}  χ²/n = {c.chi2_per_row:.2f}" + ("  FAILS" if c.flagged else "")
+        ax.set_title(title, fontsize=8)
+        ax.set_xlabel("wavelength [nm]" if per_curve else "row", fontsize=8)
+        ax.set_ylabel("(y − model) / (s σ)", fontsize=8)
+        ax.tick_params(labelsize=7)
+    fig.tight_layout()
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def nested_plot(res, path: str) -> None:
+    """A nested run: ln L of the dead points against the prior volume ln X, and their
+    posterior weights (the mass the run found; several peaks in the weights over ln X do
+    not mean several modes, which the corner plot shows)."""
+    plt = _plt()
+    r = res.results
+    logx = np.asarray(r.logvol)
+    w = np.exp(r.logwt - np.max(r.logwt))
+    fig, (a0, a1) = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+    a0.plot(logx, r.logl, lw=0.8, color="k")
+    a0.set_ylabel("ln L", fontsize=8)
+    a0.set_title(res.stop_reason, fontsize=7)
+    a1.plot(logx, w / np.max(w), lw=0.8, color="tab:blue")
+    a1.set_ylabel("posterior weight (max 1)", fontsize=8)
+    a1.set_xlabel("ln X (prior volume left)", fontsize=8)
+    for ax in (a0, a1):
+        ax.tick_params(labelsize=7)
+    fig.tight_layout()
+    save_figure(fig, path)
+    plt.close(fig)

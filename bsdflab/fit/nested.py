@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bsdflab.fit.posterior import LogPosterior
+from bsdflab.fit.sampling import MapResult
 from bsdflab.util.extras import require
 
 dynesty = require("dynesty", "fit")
@@ -38,13 +39,32 @@ class NestedResult:
     evaluations: int
     seconds: float
     results: object = field(repr=False)   # dynesty's Results
+    dlogz: float = 0.1
+    map: MapResult | None = None          # the draw of highest posterior density
+
+    converged = True   # dynesty stops only by its dlogz rule (no iteration cap is set)
 
     def draws(self) -> np.ndarray:
         return self.samples
 
+    @property
+    def iterations(self) -> int:
+        return int(self.results.niter)
+
+    @property
+    def ess_kish(self) -> float:
+        """Kish's effective sample size of the importance weights, (sum w)^2 / sum w^2."""
+        w = np.exp(self.results.logwt - np.max(self.results.logwt))
+        return float(np.sum(w) ** 2 / np.sum(w * w))
+
+    @property
+    def stop_reason(self) -> str:
+        return (f"nested sampling: the live points' remaining evidence changes ln Z by < dlogz = {self.dlogz:g} "
+                f"after {self.iterations} iterations (ln Z = {self.log_evidence:.3f} +- {self.log_evidence_error:.3f})")
+
 
 def run_nested(logpost: LogPosterior, live_points: int = 200, seed: int = 0, dlogz: float = 0.1,
-               sample: str = "rwalk", bound: str = "multi") -> NestedResult:
+               sample: str = "rwalk", bound: str = "multi", progress: bool = False) -> NestedResult:
     """Static nested sampling of ``logpost``'s posterior.
 
     Parameters
@@ -59,6 +79,8 @@ def run_nested(logpost: LogPosterior, live_points: int = 200, seed: int = 0, dlo
     sample, bound : str
         dynesty's proposal ("rwalk", "unif", "slice", ...) and bounding ("multi": several
         ellipsoids, which is what separates modes).
+    progress : bool
+        dynesty's progress bar (tqdm) on stderr.
     """
     ndim = logpost.ndim
     if not isinstance(live_points, (int, np.integer)) or live_points < 2 * ndim + 2:
@@ -79,8 +101,12 @@ def run_nested(logpost: LogPosterior, live_points: int = 200, seed: int = 0, dlo
     t0 = time.perf_counter()
     sampler = dynesty.NestedSampler(loglike, transform, ndim, nlive=int(live_points), bound=bound,
                                     sample=sample, rstate=np.random.default_rng(seed))
-    sampler.run_nested(dlogz=dlogz, print_progress=False)
+    sampler.run_nested(dlogz=dlogz, print_progress=progress)
     res = sampler.results
     draws = res.samples_equal(rstate=np.random.default_rng(seed + 1))
+    # the highest-posterior point among the weighted samples (ln L + ln prior)
+    lp = res.logl + logpost.log_prior(res.samples)
+    k = int(np.argmax(np.where(np.isfinite(lp), lp, -np.inf)))
+    best = MapResult(np.asarray(res.samples[k], float), float(lp[k]), 0, 0)
     return NestedResult(logpost.free, draws, float(res.logz[-1]), float(res.logzerr[-1]),
-                        logpost.evaluations - before, time.perf_counter() - t0, res)
+                        logpost.evaluations - before, time.perf_counter() - t0, res, float(dlogz), best)

@@ -23,6 +23,11 @@ def sphere_scene(values, size: int, model=None) -> Scene:
 
 
 def render_draws(values: list[np.ndarray], labels: list[str], size: int, spp: int,
-                 seed: int, model=None) -> list[tuple[str, np.ndarray]]:
+                 seed: int, model=None, progress: bool = False) -> list[tuple[str, np.ndarray]]:
+    pairs = list(zip(values, labels))
+    if progress:
+        from tqdm import tqdm
+
+        pairs = tqdm(pairs, desc="renders", unit="render", leave=False)
     return [(label, render(sphere_scene(v, size, model), spp=spp, seed=seed, progress=False).mean)
-            for v, label in zip(values, labels)]
+            for v, label in pairs]

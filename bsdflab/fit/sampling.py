@@ -30,6 +30,7 @@ class MapResult:
     log_posterior: float
     starts: int
     evaluations: int
+    optima: list[tuple[np.ndarray, float]] = field(default_factory=list)   # every start's (x, log p)
 
 
 @dataclass
@@ -68,7 +69,7 @@ class RunResult:
         return (self.steps - self.burn) * self.chain.shape[1] / self.tau
 
 
-def find_map(logpost: LogPosterior, starts: int, rng: np.random.Generator) -> MapResult:
+def find_map(logpost: LogPosterior, starts: int, rng: np.random.Generator, progress: bool = False) -> MapResult:
     """Best of ``starts`` L-BFGS-B runs from the most probable of many prior draws
     (thin-film likelihoods have a mode per interference order: one local start is not
     enough). Coordinates are scaled by the prior sd; the gradient is a central difference
@@ -96,14 +97,19 @@ def find_map(logpost: LogPosterior, starts: int, rng: np.random.Generator) -> Ma
         fm = np.where(np.isfinite(fm), fm, f0)
         return f0, (fp - fm) / (2 * FD_STEP)
 
-    best = None
+    best, optima = None, []
+    if progress:
+        from tqdm import tqdm
+
+        order = tqdm(order, desc="MAP starts", unit="start", leave=False)
     for i in order:
         res = optimize.minimize(value_and_gradient, pool[i] / scale, jac=True, method="L-BFGS-B",
                                 bounds=bounds, options={"maxiter": 500, "ftol": 1e-12, "gtol": 1e-8})
+        optima.append((res.x * scale, float(-res.fun)))
         if best is None or res.fun < best.fun:
             best = res
     x = best.x * scale
-    return MapResult(x, float(-best.fun), starts, logpost.evaluations - before)
+    return MapResult(x, float(-best.fun), starts, logpost.evaluations - before, optima)
 
 
 def initial_ball(logpost: LogPosterior, centre: np.ndarray, walkers: int,
@@ -119,10 +125,36 @@ def initial_ball(logpost: LogPosterior, centre: np.ndarray, walkers: int,
     raise ValueError("could not place the walkers around the MAP inside the prior's support")
 
 
+def stop_reason(steps: int, tau: np.ndarray, history: list[tuple[int, np.ndarray]], converged: bool,
+                settings: SamplerSettings) -> str:
+    """Which criterion ended the run, stated as it is: the rule has two parts (length and
+    stability), so a capped run may pass the length test and fail the stability one."""
+    ratio = steps / np.max(tau)
+    k = settings.tau_multiple
+    if converged:
+        return (f"converged: N / max tau = {ratio:.1f} > {k:g} (N = {steps}, max tau {np.max(tau):.1f}) "
+                f"and tau stable to {TAU_CHANGE:.0%} between checks")
+    failed = []
+    if not np.all(np.isfinite(tau)):
+        failed.append("tau undefined for some parameter")
+    elif not ratio > k:
+        failed.append(f"N / max tau = {ratio:.1f} {'<' if ratio < k else '<='} {k:g}")
+    else:
+        failed.append(f"N / max tau = {ratio:.1f} > {k:g} passed")
+    if len(history) >= 2 and np.all(np.isfinite(history[-1][1])) and np.all(np.isfinite(history[-2][1])):
+        old, new = history[-2][1], history[-1][1]
+        change = float(np.max(np.abs(old - new) / new))
+        failed.append(f"tau changed by {change:.1%} since the last check ("
+                      + ("stable" if change < TAU_CHANGE else f"not stable to {TAU_CHANGE:.0%}") + ")")
+    else:
+        failed.append("tau not yet checked twice (stability unknown)")
+    return f"step cap {settings.max_steps} reached; " + "; ".join(failed) + " (not converged)"
+
+
 def run_sampler(logpost: LogPosterior, settings: SamplerSettings, progress: bool = True) -> RunResult:
     rng = np.random.default_rng(settings.seed)
     t0 = time.perf_counter()
-    map_result = find_map(logpost, settings.map_starts, rng)
+    map_result = find_map(logpost, settings.map_starts, rng, progress)
     p0 = initial_ball(logpost, map_result.x, settings.walkers, rng)
     before = logpost.evaluations
     sampler = emcee.EnsembleSampler(settings.walkers, logpost.ndim, logpost, vectorize=True)
@@ -145,9 +177,6 @@ def run_sampler(logpost: LogPosterior, settings: SamplerSettings, progress: bool
     tau = sampler.get_autocorr_time(tol=0)
     if not history or history[-1][0] != sampler.iteration:
         history.append((sampler.iteration, tau))
-    reason = (f"converged: N = {sampler.iteration} > {settings.tau_multiple:g} tau (max tau {np.max(tau):.1f}) "
-              f"and tau stable to {TAU_CHANGE:.0%}" if converged else
-              f"step cap: stopped at max_steps = {settings.max_steps} with N / max tau = "
-              f"{sampler.iteration / np.max(tau):.1f} < {settings.tau_multiple:g} (not converged by the rule)")
+    reason = stop_reason(sampler.iteration, tau, history, converged, settings)
     return RunResult(logpost.free, sampler.get_chain(), sampler.get_log_prob(), sampler.acceptance_fraction,
                      tau, history, converged, reason, seconds, logpost.evaluations - before, map_result, sampler)

@@ -4,9 +4,10 @@ Everything is written into a temporary folder beside ``out`` and renamed into pl
 end, so an interrupted study (Ctrl-C, an error) leaves no half-written folder.
 
 Folder contents: posterior.nc (ArviZ InferenceData), parameters.md / parameters.csv,
-corner.png, predictive.png, trace.png, appearance.png + appearance.csv, renders.png,
+corner.png, predictive.png, residuals.png (normalised residuals and the posterior predictive
+check of each series, bsdflab.fit.checks), trace.png, appearance.png + appearance.csv, renders.png,
 material.json (posterior-mean model dict), sphere.json (a scene file with it, for
-``bsdflab render``), summary.json, and copies of the data and config files.
+``bsdflab render``), summary.json (with ``warnings``: bsdflab.fit.alerts), and copies of the data and config files.
 """
 from __future__ import annotations
 
@@ -22,12 +23,39 @@ from dataclasses import replace
 import numpy as np
 
 from bsdflab.bsdfs import from_dict
-from bsdflab.fit.appearance import appearance_posterior, gloss_vectors
+from bsdflab.fit.alerts import (
+    THICKNESS_NAMES,
+    Alert,
+    bound_alerts,
+    conflict_alerts,
+    draw_modes,
+    emulator_alert,
+    mode_alerts,
+    noise_alert,
+)
+from bsdflab.fit.appearance import appearance_posterior, full_appearance
+from bsdflab.fit.checks import ALPHA, normalised_residuals, predictive_checks, sidak_level
 from bsdflab.fit.config import FitConfig
 from bsdflab.fit.data import Dataset, read_csv
-from bsdflab.fit.diagnostics import inference_data, summary_rows, table_markdown
-from bsdflab.fit.figures import appearance_plot, corner_plot, predictive_plot, trace_plot
+from bsdflab.fit.diagnostics import (
+    inference_data,
+    nested_inference_data,
+    nested_summary_rows,
+    summary_rows,
+    table_markdown,
+)
+from bsdflab.fit.emulator import SHOW_PROGRESS
+from bsdflab.fit.figures import (
+    SYMBOLS,
+    appearance_plot,
+    corner_plot,
+    nested_plot,
+    predictive_plot,
+    residual_plot,
+    trace_plot,
+)
 from bsdflab.fit.material import material_dict
+from bsdflab.fit.nested import run_nested
 from bsdflab.fit.parameters import ALL_NAMES
 from bsdflab.fit.posterior import LogPosterior
 from bsdflab.fit.sampling import run_sampler
@@ -85,13 +113,23 @@ def run_study(data, config: FitConfig, out: str | os.PathLike, progress: bool = 
 
 def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, data_path: str | None) -> dict:
     t0 = time.perf_counter()
-    logpost = LogPosterior(data, config)
-    run = run_sampler(logpost, config.sampler, progress=progress)
+    token = SHOW_PROGRESS.set(progress)
+    try:
+        logpost = LogPosterior(data, config)
+    finally:
+        SHOW_PROGRESS.reset(token)
     truths = truths_from_comments(data)
-    idata = inference_data(run, logpost, data)
+    nested = config.sampler.kind == "nested"
+    if nested:
+        s = config.sampler
+        run = run_nested(logpost, s.live_points, s.seed, s.dlogz, progress=progress)
+        idata = nested_inference_data(run, logpost, data)
+        rows = nested_summary_rows(run, truths)
+    else:
+        run = run_sampler(logpost, config.sampler, progress=progress)
+        idata = inference_data(run, logpost, data)
+        rows = summary_rows(run, idata, truths)
     idata.to_netcdf(os.path.join(folder, "posterior.nc"), engine="h5netcdf")
-
-    rows = summary_rows(run, idata, truths)
     _text(os.path.join(folder, "parameters.md"), table_markdown(rows))
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
@@ -108,12 +146,19 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
     noise = logpost.full(pick)[:, ALL_NAMES.index("noise_scale")][:, None] * data.sigma[None, :]
     predictive_plot(data, model_draws, model_draws + noise * rng.standard_normal(model_draws.shape),
                     os.path.join(folder, "predictive.png"))
-    trace_plot(run, os.path.join(folder, "trace.png"), config.sampler.tau_multiple)
+    scales = logpost.full(pick)[:, ALL_NAMES.index("noise_scale")]
+    checks = predictive_checks(data, model_draws, scales)
+    residual_plot(data, normalised_residuals(data, model_draws, scales), checks, os.path.join(folder, "residuals.png"))
+    if nested:
+        nested_plot(run, os.path.join(folder, "trace.png"))
+    else:
+        trace_plot(run, os.path.join(folder, "trace.png"), config.sampler.tau_multiple)
 
-    mean_full = logpost.full(np.mean(draws, axis=0))[0]
+    main, mode_note = main_mode(draws, run.names)
+    mean_full = logpost.full(np.mean(main, axis=0))[0]
     ap = config.appearance
     app_draws = logpost.full(draws[rng.choice(len(draws), min(ap.draws, len(draws)), replace=False)])
-    appearance = _write_appearance(app_draws, mean_full, config, folder)
+    appearance = _write_appearance(app_draws, mean_full, config, folder, progress)
 
     # canonical form, as from_dict reads it
     material = from_dict(material_dict(mean_full, model=config.model)).to_dict()
@@ -121,7 +166,7 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
     _write_scene(mean_full, folder, config.model)
     if ap.renders:
         _write_renders(app_draws[:ap.renders], mean_full, ap, folder, config.sampler.seed,
-                       config.model)
+                       config.model, progress, config.free)
 
     if data_path:
         shutil.copyfile(data_path, os.path.join(folder, "data.csv"))
@@ -129,49 +174,110 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
         _text(os.path.join(folder, "data.csv"), data.to_csv_text())
     if config.source and os.path.isfile(config.source):
         shutil.copyfile(config.source, os.path.join(folder, "config.toml"))
-    ess_min = float(np.min(run.ess_tau()))
-    summary = {
-        "data": data_path, "rows": len(data), "free": list(run.names), "fixed": config.fixed,
-        "walkers": int(run.chain.shape[1]), "steps": run.steps, "converged": run.converged,
-        "stop_reason": run.stop_reason, "burn_in": run.burn, "thin": run.thin,
-        "tau": dict(zip(run.names, run.tau.tolist())),
-        "acceptance_fraction": {"mean": float(np.mean(run.acceptance)), "min": float(np.min(run.acceptance)),
-                                "max": float(np.max(run.acceptance))},
+    forward = _forward_summary(logpost)
+    alerts = study_alerts(run, draws, config, checks, forward)
+    summary = {"data": data_path, "rows": len(data), "free": list(run.names), "fixed": config.fixed,
+               "sampler": config.sampler.kind, "converged": run.converged, "stop_reason": run.stop_reason}
+    summary.update(_nested_summary(run) if nested else _emcee_summary(run))
+    summary.update({
         "map": dict(zip(run.names, run.map.x.tolist())), "map_log_posterior": run.map.log_posterior,
-        "posterior_draws": int(len(draws)), "ess_tau_min": ess_min,
-        "sampling_seconds": run.seconds, "ess_per_second": ess_min / run.seconds,
-        "forward_evaluations": run.evaluations + run.map.evaluations,
-        "appearance": appearance, "forward_model": _forward_summary(logpost),
+        "posterior_draws": int(len(draws)),
+        "appearance": appearance, "forward_model": forward,
+        "predictive_checks": {"alpha": ALPHA, "level_per_check": sidak_level(len(checks)),
+                              "draws": int(len(pick)), "series": [c.to_dict() for c in checks]},
+        "warnings": [a.to_dict() for a in alerts],
         "posterior_mean": dict(zip(ALL_NAMES, map(float, mean_full))),
         "material_note": "material.json carries the mean film thickness: the thickness spread is a spatial "
-                         "average with no counterpart in one BSDF",
+                         "average with no counterpart in one BSDF" + mode_note,
         "parameters": rows, "seconds": time.perf_counter() - t0,
-    }
+    })
     _text(os.path.join(folder, "summary.json"), json.dumps(summary, indent=1, default=float) + "\n")
     return summary
 
 
-def _write_appearance(app_draws, mean_full, config: FitConfig, folder: str) -> dict:
-    """appearance.png / .csv and the summary's statement (the smooth model's specular colour;
-    the full model's gloss colour, see ``gloss_vectors``; none for a platelet stack)."""
-    draws, mean = gloss_vectors(app_draws, config.model), gloss_vectors(mean_full, config.model)
-    if draws is None:
-        return {"statement": "not computed: the appearance posterior uses the smooth model's specular "
-                             "spectra, which have one film (not a platelet stack)"}
+def main_mode(draws: np.ndarray, names) -> tuple[np.ndarray, str]:
+    """The draws of the heaviest thickness mode (all draws when there is one): the mean of a
+    multi-modal posterior lies between interference orders, a thickness no draw has."""
+    for name in THICKNESS_NAMES:
+        if name in names:
+            x = draws[:, list(names).index(name)]
+            modes = draw_modes(x)
+            if len(modes) > 1:
+                centres = np.array([m for m, _ in modes])
+                heaviest = int(np.argmax([w for _, w in modes]))
+                keep = np.argmin(np.abs(x[:, None] - centres[None, :]), axis=1) == heaviest
+                return draws[keep], (f"; the posterior has {len(modes)} {name} modes: the posterior-mean material "
+                                     f"and renders use the heaviest ({modes[heaviest][1]:.0%} of the draws)")
+    return draws, ""
+
+
+def _emcee_summary(run) -> dict:
+    ess_min = float(np.min(run.ess_tau()))
+    return {"walkers": int(run.chain.shape[1]), "steps": run.steps, "burn_in": run.burn, "thin": run.thin,
+            "tau": dict(zip(run.names, run.tau.tolist())),
+            "acceptance_fraction": {"mean": float(np.mean(run.acceptance)), "min": float(np.min(run.acceptance)),
+                                    "max": float(np.max(run.acceptance))},
+            "ess_tau_min": ess_min, "sampling_seconds": run.seconds, "ess_per_second": ess_min / run.seconds,
+            "forward_evaluations": run.evaluations + run.map.evaluations}
+
+
+def _nested_summary(run) -> dict:
+    return {"log_evidence": run.log_evidence, "log_evidence_error": run.log_evidence_error,
+            "evidence_note": "ln Z = ln of the integral of likelihood x prior; the Bayes factor of two models "
+                             "fitted to the same data is exp(ln Z1 - ln Z2)",
+            "iterations": run.iterations, "ess_kish": run.ess_kish, "sampling_seconds": run.seconds,
+            "forward_evaluations": run.evaluations}
+
+
+def study_alerts(run, draws: np.ndarray, config: FitConfig, checks, forward: dict) -> list[Alert]:
+    """Every warning of the study, in the order a reader should act on them."""
+    alerts = []
+    if not run.converged:
+        alerts.append(Alert("NOT_CONVERGED", run.stop_reason))
+    alerts += bound_alerts(run.names, draws, config.priors)
+    alerts += conflict_alerts(run.names, draws, config.priors)
+    alerts += noise_alert(run.names, draws)
+    failed = [c for c in checks if c.flagged]
+    if failed:
+        alerts.append(Alert("PREDICTIVE_CHECK", f"{len(failed)} of {len(checks)} posterior predictive checks fail "
+                            f"(family-wise alpha {ALPHA:g}): " + "; ".join(
+                                f"{c.series}: p = {c.p_value:.2g}, chi2/n = {c.chi2_per_row:.2f}" for c in failed[:6])
+                            + ("; ..." if len(failed) > 6 else "") + " -- the model does not describe these data "
+                            "(see residuals.png)"))
+    alerts += mode_alerts(run.names, draws, run.map.optima)
+    alerts += emulator_alert(forward)
+    return alerts
+
+
+def _write_appearance(app_draws, mean_full, config: FitConfig, folder: str, progress: bool = False) -> dict:
+    """appearance.png / .csv and the summary's statement: the smooth model's specular colour;
+    the full model's gloss colour and 45°:0° body colour from the solver (what roughness,
+    sigma_s and the slab change, bsdflab.fit.appearance.full_appearance)."""
     ap = config.appearance
-    app = appearance_posterior(draws, mean, ap.angles_deg, config.model.thickness_nodes, config.model.angle_nodes)
+    if config.model.kind == "smooth":
+        app = appearance_posterior(app_draws, mean_full, ap.angles_deg, config.model.thickness_nodes,
+                                   config.model.angle_nodes)
+    else:
+        app = full_appearance(app_draws, mean_full, config.free, ap.angles_deg, config.model, progress)
     exposure = appearance_plot(app, os.path.join(folder, "appearance.png"))
     iv = app.interval(0.9)
     lines = ["angle_deg,delta_e00_median,delta_e00_p05,delta_e00_p95,delta_e00_p90"]
     lines += [f"{a:g},{m:.4f},{lo:.4f},{hi:.4f},{b:.4f}"
               for a, m, lo, hi, b in zip(app.angles_deg, iv["median"], iv["low"], iv["high"], iv["bound"])]
-    _text(os.path.join(folder, "appearance.csv"), "\n".join(lines) + "\n")
     k = int(np.argmin(np.abs(app.angles_deg - 30.0)))
     what = "specular" if config.model.kind == "smooth" else "gloss"
-    return {"angle_deg": float(app.angles_deg[k]), "delta_e00_p90": float(iv["bound"][k]),
-            "statement": f"the {what} colour at {app.angles_deg[k]:g} deg is known to within "
-                         f"dE00 <= {iv['bound'][k]:.2f} (90 % of posterior draws)",
-            "display_exposure_stops": exposure}
+    out = {"angle_deg": float(app.angles_deg[k]), "delta_e00_p90": float(iv["bound"][k]),
+           "statement": f"the {what} colour at {app.angles_deg[k]:g} deg is known to within "
+                        f"dE00 <= {iv['bound'][k]:.2f} (90 % of posterior draws)",
+           "display_exposure_stops": exposure}
+    if app.body_delta_e is not None:
+        q = np.quantile(app.body_delta_e, [0.5, 0.05, 0.95, 0.9])
+        lines.append("body_45_0," + ",".join(f"{x:.4f}" for x in q))
+        out["body_delta_e00_p90"] = float(q[3])
+        out["statement"] += (f"; the body colour (45°:0°) to within dE00 <= {q[3]:.2f} (solver at the posterior "
+                             "mean, expanded to second order over the draws)")
+    _text(os.path.join(folder, "appearance.csv"), "\n".join(lines) + "\n")
+    return out
 
 
 def _forward_summary(logpost: LogPosterior) -> dict:
@@ -195,13 +301,27 @@ def _write_scene(values, folder: str, model) -> None:
     save_scene(full, os.path.join(folder, "sphere.json"))
 
 
-def _write_renders(draws_full, mean_full, ap, folder: str, seed: int, model) -> None:
+def render_label(name: str, v: np.ndarray, model, free=()) -> str:
+    """A render's caption with the thickness it was rendered with (film or platelets) and the
+    values of up to three other free parameters (what differs between the draws)."""
+    parts = []
+    if model.kind == "full" and model.film == "stack":
+        parts.append(f"{model.platelets} x {v[ALL_NAMES.index('platelet_nm')]:.1f} nm")
+    elif not (model.kind == "full" and model.film == "none"):
+        parts.append(f"d = {v[ALL_NAMES.index('film_thickness_nm')]:.1f} nm")
+    others = [n for n in free if n not in ("film_thickness_nm", "platelet_nm", "noise_scale")][:3]
+    parts += [f"{SYMBOLS.get(n, n)} {v[ALL_NAMES.index(n)]:.3g}" for n in others]
+    return f"{name}: " + ", ".join(parts) if parts else name
+
+
+def _write_renders(draws_full, mean_full, ap, folder: str, seed: int, model, progress: bool = False,
+                   free=()) -> None:
     from bsdflab.fit.renders import render_draws
     from bsdflab.plots.contact_sheet import contact_sheet
 
     values = [mean_full, *draws_full]
-    labels = ["posterior mean"] + [f"draw {i + 1}" + (f": d = {v[0]:.1f} nm" if np.isfinite(v[0]) else "")
-                                   for i, v in enumerate(draws_full)]
-    items = render_draws(values, labels, ap.render_size, ap.render_spp, seed, model)
+    labels = [render_label(name, v, model, free) for name, v in
+              zip(["posterior mean"] + [f"draw {i + 1}" for i in range(len(draws_full))], values)]
+    items = render_draws(values, labels, ap.render_size, ap.render_spp, seed, model, progress)
     contact_sheet(items, os.path.join(folder, "renders.png"), title="sphere renders of posterior draws",
                   columns=min(len(items), 5))

@@ -16,7 +16,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from bsdflab import __version__
+from bsdflab._version import __version__
 from bsdflab.render import render, write_exr, write_png
 from bsdflab.render.render import MAX_SPP
 from bsdflab.scenes import SCENES, scene

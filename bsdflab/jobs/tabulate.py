@@ -1,18 +1,19 @@
 """Job kind "tabulate": measure a model into a table file in the table cache.
 
-Request (normalised)::
+Request: a ``TableRequest`` dict (bsdflab.tables.request), normalised to ``TableRequest.to_dict``::
 
     {"model": <BSDF dict>, "grid": {"n_theta_i", "n_theta_o", "n_phi", "thickness_nm"},
-     "rel_error": 0.01, "wavelengths": null | [nm, ...], "min_samples": 512,
-     "max_samples": 65536, "seed": 0, "method": "pfmc" | "adding-doubling"}
+     "rel_error": 0.01, "wavelengths": null | [nm, ...], "method": "pfmc" | "adding-doubling",
+     "min_samples": 512, "max_samples": 65536, "seed": 0[, "nodes": ..., "orders": ...]}
 
-``method`` "adding-doubling" (a reflecting ``Layered`` model) solves the table
-deterministically (bsdflab.tables.adding_doubling); the walk settings do not apply to it
-and its cache key holds the method and the solver's settings instead.
+A request may give ``preset`` and ``overrides`` instead of ``model``, and ``method``
+"auto" (the default): adding-doubling wherever the solver covers the model, else PFMC;
+the normalised request holds the method chosen, and the result says why
+(``method_note``).
 
 ``out_dir`` is a table cache folder (``bsdflab.tables.cache``): the table is
-``out_dir/<key>.exr`` with the cache's own key, so the same table asked for by a render's
-``"tabulated"`` material (with that folder as its cache) is the same file.
+``out_dir/<key>.exr`` with the request's own key, so the same table asked for by a
+render's ``"tabulated"`` material (with that folder as its cache) is the same file.
 """
 from __future__ import annotations
 
@@ -22,50 +23,31 @@ from typing import Any
 
 import numpy as np
 
-from bsdflab.bsdfs import from_dict
 from bsdflab.requests import model_from_spec
-from bsdflab.tables import TableGrid, cache_key, cached_table, read_attributes, read_table, tabulate
-from bsdflab.tables.adding_doubling import check_adding_doubling
-from bsdflab.tables.channels import table_channels
+from bsdflab.tables import TableRequest, get, read_attributes, read_table
 from bsdflab.tables.file_format import HASH_ATTRIBUTE
-from bsdflab.tables.summary import relative_error_summary
-from bsdflab.tables.tabulate import DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES, METHODS
-from bsdflab.util import args as check
+from bsdflab.tables.summary import accuracy
+from bsdflab.tables.tabulate import make_table
 from bsdflab.util.progress import monitored
 
-FIELDS = {"model", "preset", "overrides", "grid", "rel_error", "wavelengths", "min_samples",
-          "max_samples", "seed", "method"}
+SPEC = ("model", "preset", "overrides")  # the model's request form (bsdflab.requests)
 
 
 def normalise(request: dict[str, Any]) -> dict[str, Any]:
-    unknown = set(request) - FIELDS
-    if unknown:
-        raise ValueError(f"unknown tabulate request fields: {', '.join(sorted(unknown))}")
-    model = model_from_spec(request)
-    grid_spec = request.get("grid") or {}
-    if not isinstance(grid_spec, dict):
-        raise ValueError("grid must be a dict with n_theta_i, n_theta_o, n_phi, thickness_nm")
-    defaults = TableGrid().to_dict()
-    unknown = set(grid_spec) - set(defaults)
-    if unknown:
-        raise ValueError(f"unknown grid fields: {', '.join(sorted(unknown))}")
-    grid = TableGrid.from_dict({**defaults, **grid_spec})
-    wavelengths = request.get("wavelengths")
-    if wavelengths is not None:
-        wavelengths = [float(w) for w in table_channels(wavelengths)[1]]
-    min_samples = check.count("min_samples", request.get("min_samples", DEFAULT_MIN_SAMPLES))
-    max_samples = check.count("max_samples", request.get("max_samples", DEFAULT_MAX_SAMPLES))
-    if max_samples < min_samples:
-        raise ValueError(f"max_samples ({max_samples}) must be >= min_samples ({min_samples})")
-    method = request.get("method", "pfmc")
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {check.brief(method)}")
-    if method == "adding-doubling":
-        check_adding_doubling(model)   # refused at submission, not when the job runs
-    return {"model": model.to_dict(), "grid": grid.to_dict(), "method": method,
-            "rel_error": check.real_scalar("rel_error", request.get("rel_error", 0.01), 0.0, 1.0, lo_open=True),
-            "wavelengths": wavelengths, "min_samples": min_samples, "max_samples": max_samples,
-            "seed": check.seed(request.get("seed", 0))}
+    """The request validated (ValueError naming the field) with its method chosen."""
+    if not isinstance(request, dict):
+        raise ValueError(f"a tabulate request must be a dict, got {type(request).__name__}")
+    rest = {k: v for k, v in request.items() if k not in SPEC}
+    model = model_from_spec({k: v for k, v in request.items() if k in SPEC})
+    return _normalised(TableRequest.from_dict(rest, model=model))
+
+
+def _normalised(request: TableRequest) -> dict[str, Any]:
+    return {**request.to_dict(), "method_note": request.method_note}
+
+
+def _request(normalised: dict[str, Any]) -> TableRequest:
+    return TableRequest.from_dict({k: v for k, v in normalised.items() if k != "method_note"})
 
 
 def cells(request: dict[str, Any]) -> int:
@@ -74,19 +56,9 @@ def cells(request: dict[str, Any]) -> int:
     return 2 * max(1, len(g["thickness_nm"])) * g["n_theta_i"] * g["n_theta_o"] * g["n_phi"]
 
 
-def _key_arguments(request: dict[str, Any]):
-    """(model, grid, rel_error, channels) and the effort and seed, as the cache keys them
-    (defaults spelled out share the entry of requests that leave them out)."""
-    names = table_channels(request["wavelengths"])[0]
-    effort = {"min_samples": request["min_samples"], "max_samples": request["max_samples"],
-              "seed": request["seed"], "method": request.get("method", "pfmc")}
-    return request["model"], TableGrid.from_dict(request["grid"]), request["rel_error"], names, effort
-
-
 def key(request: dict[str, Any]) -> str:
-    """The table cache's key (``bsdflab.tables.cache_key``) of this request."""
-    model, grid, rel_error, names, effort = _key_arguments(request)
-    return cache_key(model, grid, rel_error, names, **effort)
+    """The table cache's key (``TableRequest.key``) of this normalised request."""
+    return _request(request).key()
 
 
 def existing(request: dict[str, Any], out_dir: Path) -> dict[str, Any] | None:
@@ -94,35 +66,38 @@ def existing(request: dict[str, Any], out_dir: Path) -> dict[str, Any] | None:
     if not path.is_file():
         return None
     try:
-        return {"hash": path.stem, "files": {"exr": path.name}, "from_cache": True, **describe(path)}
-    except ValueError:   # damaged: the job rebuilds it (cached_table does)
+        return {"hash": path.stem, "files": {"exr": path.name}, "from_cache": True,
+                "method_note": request.get("method_note"), **describe(path)}
+    except ValueError:   # damaged: the job rebuilds it (the cache does)
         return None
 
 
 def run(request: dict[str, Any], out_dir: Path, progress, cancelled, runner=None) -> dict[str, Any]:
-    model_dict, grid, rel_error, names, effort = _key_arguments(request)
-    model = from_dict(model_dict)
+    req = _request(request)
 
     def make():
         with monitored(lambda stage, fraction: progress(fraction), cancelled):
-            return tabulate(model, grid, rel_error=rel_error, wavelengths=request["wavelengths"],
-                            min_samples=request["min_samples"], max_samples=request["max_samples"],
-                            seed=request["seed"], progress=False, runner=runner, method=effort["method"])
+            return make_table(req, progress=False, runner=runner)
 
-    table, path, hit = cached_table(model_dict, grid, rel_error, names, make, directory=out_dir, **effort)
+    table, path, hit = get(req, cache=out_dir, make=make)
     if path is None:
         raise OSError(f"could not write the table into {out_dir}")
-    return {"hash": path.stem, "files": {"exr": path.name}, "from_cache": hit, **describe(path, table)}
+    return {"hash": path.stem, "files": {"exr": path.name}, "from_cache": hit,
+            "method_note": request.get("method_note"), **describe(path, table)}
 
 
 def describe(path: str | os.PathLike, table=None) -> dict[str, Any]:
-    """What a table file holds: model, grid, lobes, channels, effort and error statistics."""
+    """What a table file holds: model, grid, lobes, channels, effort and error statistics
+    (``error``: the figures "target met" is decided by, bsdflab.tables.summary)."""
     table = read_table(path) if table is None else table
     samples = np.asarray(table.samples)
+    a = accuracy(table)
     return {"model": table.model, "grid": table.grid.to_dict(), "lobes": list(table.lobes),
             "channels": list(table.channels), "split_direct": bool(table.split_direct),
             "rel_error_target": float(table.rel_error_target), "meta": table.meta,
-            "error": relative_error_summary(table),
+            "method": table.meta.get("method", "pfmc"),
+            "error": {k: a[k] for k in ("rms", "p95", "max", "cells")},
+            "error_kind": a["kind"], "target_met": a["target_met"],
             "samples": {"total": int(samples.sum()), "min": int(samples.min()),
                         "max": int(samples.max()), "mean": float(samples.mean())},
             "content_hash": read_attributes(path).get(HASH_ATTRIBUTE, ""),

@@ -147,11 +147,13 @@ class Layered(BSDF):
     def _build(self, wavelengths: np.ndarray, nee: bool = True):
         wl = np.asarray(wavelengths, dtype=np.float64)
         boundaries = [m._core(wl) for m in (*self.interfaces, self.base)]
+        options = _core.LayeredOptions(samples=self.samples, seed=self.seed, max_depth=self.max_depth, nee=nee,
+                                       pdf_samples=self.pdf_samples, estimator=ESTIMATORS[self.estimator])
         return _core.LayeredBSDF(
-            list(wl), boundaries, [s.thickness_um for s in self.slabs],
-            [list(s.sigma_a_at(wl)) for s in self.slabs], [s.sigma_s for s in self.slabs],
-            [s.phase.core_kind for s in self.slabs], [s.phase.core_parameter for s in self.slabs],
-            self.samples, self.seed, self.max_depth, nee, self.pdf_samples, ESTIMATORS[self.estimator])
+            list(wl), boundaries, thickness=[s.thickness_um for s in self.slabs],
+            sigma_a=[list(s.sigma_a_at(wl)) for s in self.slabs], sigma_s=[s.sigma_s for s in self.slabs],
+            phase_kind=[s.phase.core_kind for s in self.slabs],
+            phase_param=[s.phase.core_parameter for s in self.slabs], options=options)
 
     def naive(self, wavelengths) -> Any:
         """The core estimator without next-event connections (for benchmarks only)."""

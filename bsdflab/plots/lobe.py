@@ -36,40 +36,8 @@ def lobe_figure(bsdf: BSDF, theta_i: float, path: str, samples: int = 200_000,
 
     wi = _in_plane(np.array([-theta_i]))[0]  # light from the -x side
     fig = plt.figure(figsize=(15, 4.6), constrained_layout=True)
-    ax = fig.add_subplot(1, 3, 1, projection="polar")
-    ax.set_theta_zero_location("N")
-    ax.set_theta_direction(-1)
-    ax.set_thetamin(-180)
-    ax.set_thetamax(180)
-
+    lobe_panel(fig.add_subplot(1, 3, 1, projection="polar"), bsdf, wi, samples, seed)
     summary = {}
-    smooth = bsdf.lobes & Lobe.SMOOTH
-    if smooth:
-        t = np.linspace(-np.pi, np.pi, 721)
-        wo = _in_plane(t)
-        f = bsdf.eval(wi, wo) / np.maximum(np.abs(wo[:, 2]), 1e-9)[:, None]  # BSDF value
-        for c, colour_name in enumerate(("tab:red", "tab:green", "tab:blue")):
-            ax.plot(t, f[:, c], color=colour_name, lw=1.2, label="RGB"[c])
-        ax.set_title("f(wi, wo) in the plane of incidence [1/sr]", fontsize=10)
-    if bsdf.lobes & Lobe.DELTA:
-        s = bsdf.sample(np.repeat(wi[None], samples, axis=0), seed=seed)
-        for lobe, label in ((Lobe.DELTA_REFLECTION, "reflection"), (Lobe.DELTA_TRANSMISSION, "transmission")):
-            hit = s.lobe == int(lobe)
-            if not np.any(hit):
-                continue
-            energy = s.weight[hit].sum(axis=0) / samples  # (3,) the lobe's share of the albedo
-            wo = s.wo[hit][0]
-            angle = np.arctan2(wo[0], wo[2])
-            ax.annotate("", xy=(angle, float(energy.mean())), xytext=(0, 0),
-                        arrowprops=dict(arrowstyle="->", lw=2.5, color=_display(energy)))
-            ax.text(angle, float(energy.mean()) * 1.05, f"delta {label}\nRGB {np.round(energy, 3)}",
-                    fontsize=8, ha="center")
-        ax.set_title("delta lobes: arrow length = energy fraction", fontsize=10)
-    ax.annotate("", xy=(0, 0), xytext=(-theta_i, ax.get_rmax() * 0.9),
-                arrowprops=dict(arrowstyle="->", lw=1.5, color="0.4"))
-    ax.text(-theta_i, ax.get_rmax() * 0.95, "incident", fontsize=8, color="0.4", ha="center")
-    if smooth:
-        ax.legend(loc="lower left", fontsize=8)
 
     _hemisphere_panel(fig.add_subplot(1, 3, 2), bsdf, wi)
 
@@ -99,6 +67,61 @@ def lobe_figure(bsdf: BSDF, theta_i: float, path: str, samples: int = 200_000,
     save_figure(fig, path)
     plt.close(fig)
     return summary
+
+
+LOG_DECADES = 4  # dynamic range of the polar plot: a glossy peak and a body lobe 10^3 below it both show
+
+
+def log_radius(values: np.ndarray, peak: float) -> np.ndarray:
+    """Radius of the polar lobe plot: decades above peak * 10^-LOG_DECADES (0 below it).
+    A linear radius shrinks the body lobe of a glossy material to a dot beside its peak."""
+    floor = peak * 10.0**-LOG_DECADES
+    return np.log10(np.maximum(values, floor) / floor)
+
+
+def lobe_panel(ax, bsdf: BSDF, wi: np.ndarray, samples: int = 200_000, seed: int = 0) -> None:
+    """The in-plane lobe on polar axes, radius logarithmic in f (LOG_DECADES decades), delta
+    lobes as arrows, the legend outside the axes (it covered the angle labels inside)."""
+    ax.set_theta_zero_location("N")
+    ax.set_theta_direction(-1)
+    ax.set_thetamin(-180)
+    ax.set_thetamax(180)
+    smooth = bsdf.lobes & Lobe.SMOOTH
+    delta = []
+    if bsdf.lobes & Lobe.DELTA:
+        s = bsdf.sample(np.repeat(wi[None], samples, axis=0), seed=seed)
+        for lobe, label in ((Lobe.DELTA_REFLECTION, "reflection"), (Lobe.DELTA_TRANSMISSION, "transmission")):
+            hit = s.lobe == int(lobe)
+            if np.any(hit):
+                wo = s.wo[hit][0]
+                delta.append((label, np.arctan2(wo[0], wo[2]), s.weight[hit].sum(axis=0) / samples))
+    t = np.linspace(-np.pi, np.pi, 721)
+    f = np.zeros((len(t), 3))
+    if smooth:
+        wo = _in_plane(t)
+        f = bsdf.eval(wi, wo) / np.maximum(np.abs(wo[:, 2]), 1e-9)[:, None]  # BSDF value
+    peak = max([float(f.max())] + [float(e.mean()) for _, _, e in delta] + [1e-12])
+    if smooth:
+        for c, colour_name in enumerate(("tab:red", "tab:green", "tab:blue")):
+            ax.plot(t, log_radius(f[:, c], peak), color=colour_name, lw=1.2, label="RGB"[c])
+    for label, angle, energy in delta:
+        r = float(log_radius(np.array([energy.mean()]), peak)[0])
+        ax.annotate("", xy=(angle, r), xytext=(0, 0),
+                    arrowprops=dict(arrowstyle="->", lw=2.5, color=_display(energy)))
+        ax.text(angle, r * 1.05, f"delta {label}\nRGB {np.round(energy, 3)}", fontsize=8, ha="center")
+    ax.set_rlim(0, LOG_DECADES * 1.08)
+    ticks = np.arange(LOG_DECADES + 1)
+    ax.set_rticks(ticks)
+    ax.set_yticklabels([f"{peak * 10.0**(k - LOG_DECADES):.2g}" for k in ticks], fontsize=7)
+    what = "f(wi, wo) [1/sr]" if smooth else ""
+    what += (" and " if smooth and delta else "") + ("delta lobes: arrow = energy fraction" if delta else "")
+    ax.set_title(f"in the plane of incidence, log radius: {what}", fontsize=10)
+    top = LOG_DECADES * 0.9
+    ax.annotate("", xy=(0, 0), xytext=(np.arctan2(wi[0], wi[2]), top),
+                arrowprops=dict(arrowstyle="->", lw=1.5, color="0.4"))
+    ax.text(np.arctan2(wi[0], wi[2]), top * 1.06, "incident", fontsize=8, color="0.4", ha="center")
+    if smooth:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.05, 1.0), fontsize=8, borderaxespad=0)
 
 
 HEMISPHERE_RES = 48

@@ -5,7 +5,7 @@ import numpy as np
 
 from bsdflab.plots.lobe import save_figure
 from bsdflab.tables.data import TableData
-from bsdflab.tables.summary import SIGNIFICANT
+from bsdflab.tables.summary import BOUND, EXACT, SIGNIFICANT, error_kind
 
 MAX_CHANNEL_PANELS = 4  # spectral tables: a few wavelengths spread over the range
 MAX_INCIDENCES = 4
@@ -30,13 +30,16 @@ def _channel_label(table: TableData, c: int) -> str:
     return f"channel {name}" if not table.spectral else f"lambda = {name} nm"
 
 
-def table_figure(table: TableData, path: str, thickness_index: int = 0, source: str = "") -> None:
-    """Write the figure for one film thickness of `table` to `path` (PNG, atomically).
+def table_figure(table: TableData, path: str, thickness_index: int = 0, source: str = "") -> str:
+    """Write the figure for one film thickness of `table` to `path` (PNG, atomically);
+    returns what its bands and curves show (the title's words).
 
     One row per lobe: per shown channel, f(theta_o) in the plane of incidence at a few
-    theta_i with +-2 standard-error bands; last, the relative standard error over
-    theta_o x phi at the middle theta_i node (cells under 1 % of the table's maximum
-    left blank).
+    theta_i with error bands (PFMC: +-2 standard errors; adding-doubling: +- the solver's
+    deterministic bound); last, that relative error over theta_o x phi at the middle
+    theta_i node (cells under 1 % of the table's maximum left blank). A split table
+    (layered models) holds the scattered part only: the title says that the top's own
+    reflection, its specular peak included, is added at lookup.
     """
     import matplotlib
 
@@ -53,6 +56,9 @@ def table_figure(table: TableData, path: str, thickness_index: int = 0, source: 
     n_cols = len(shown) + 1
     fig, axes = plt.subplots(len(table.lobes), n_cols, figsize=(4.2 * n_cols, 3.6 * len(table.lobes)),
                              squeeze=False, constrained_layout=True)
+    kind = error_kind(table)
+    width, band = {BOUND: (1, "bands = +- the solver's deterministic bound"),
+                   EXACT: (0, "exact cells (no error)")}.get(kind, (2, "bands = +-2 standard errors"))
     for row, lobe in enumerate(table.lobes):
         values = table.values[row, thickness_index]   # (n_ti, n_to, n_phi, C)
         errors = table.stderr[row, thickness_index]
@@ -62,7 +68,7 @@ def table_figure(table: TableData, path: str, thickness_index: int = 0, source: 
                 x, f = in_plane(values[i, :, :, c], deg_o)
                 _, e = in_plane(errors[i, :, :, c], deg_o)
                 ax.plot(x, f, color=colour, lw=1.2, label=f"theta_i {deg_i[i]:.1f} deg")
-                ax.fill_between(x, f - 2 * e, f + 2 * e, color=colour, alpha=0.25, lw=0)
+                ax.fill_between(x, f - width * e, f + width * e, color=colour, alpha=0.25, lw=0)
             ax.axvline(0, color="0.6", lw=0.6)
             ax.set_xlim(-90, 90)
             ax.set_xlabel("theta_o [deg]  (< 0: phi = 0, back;  > 0: phi = 180, mirror side)", fontsize=8)
@@ -71,16 +77,20 @@ def table_figure(table: TableData, path: str, thickness_index: int = 0, source: 
             ax.grid(alpha=0.3)
             if col == 0:
                 ax.legend(fontsize=7)
-        _error_map(fig, axes[row, -1], table, values, errors, lobe, deg_i, deg_o, deg_phi)
+        _error_map(fig, axes[row, -1], table, values, errors, lobe, deg_i, deg_o, deg_phi, kind)
     thickness = (f", film {g.thickness_nm[thickness_index]:g} nm" if g.thickness_nm else "")
     model = table.model.get("type", "model")
-    fig.suptitle(f"{source}{model} table{thickness}: bands = +-2 standard errors", fontsize=11)
+    part = ("\nthe scattered part only: the top interface's own reflection (its specular peak included) is "
+            "added exactly at lookup" if table.split_direct else "")
+    fig.suptitle(f"{source}{model} table{thickness}: {band}{part}", fontsize=11)
     save_figure(fig, path)
     plt.close(fig)
+    return f"{band}{part}".replace("\n", "; ")
 
 
-def _error_map(fig, ax, table, values, errors, lobe, deg_i, deg_o, deg_phi) -> None:
-    """Worst channel's relative standard error over theta_o x phi at the middle theta_i."""
+def _error_map(fig, ax, table, values, errors, lobe, deg_i, deg_o, deg_phi, kind) -> None:
+    """Worst channel's relative error (``kind``: standard error or bound) over theta_o x phi
+    at the middle theta_i."""
     i = len(deg_i) // 2
     floor = SIGNIFICANT * max(float(table.values.max(initial=0.0)), 1e-300)
     f, e = values[i].astype(np.float64), errors[i].astype(np.float64)
@@ -90,7 +100,7 @@ def _error_map(fig, ax, table, values, errors, lobe, deg_i, deg_o, deg_phi) -> N
     half_step = 0.5 * (deg_phi[1] - deg_phi[0])  # phi nodes include both ends; theta_o are cell centres
     image = ax.imshow(100 * rel, origin="lower", aspect="auto", cmap="magma",
                       extent=(deg_phi[0] - half_step, deg_phi[-1] + half_step, 0, 90))
-    fig.colorbar(image, ax=ax, label="relative standard error [%]")
+    fig.colorbar(image, ax=ax, label=f"relative {'error bound' if kind == BOUND else 'standard error'} [%]")
     ax.set_xticks([0, 45, 90, 135, 180])
     ax.set_xlabel("phi = |phi_o - phi_i| [deg]")
     ax.set_ylabel("theta_o [deg]")

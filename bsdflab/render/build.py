@@ -15,51 +15,37 @@ from bsdflab.render.geometry import build_mesh
 from bsdflab.render.scene import Material, Scene
 from bsdflab.render.textures import ScaleTexture
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, rgb_to_spectrum, srgb_weights
-from bsdflab.tables.cache import cached_table
-from bsdflab.tables.channels import table_channels
-from bsdflab.tables.data import TableGrid
+from bsdflab.tables.cache import get
+from bsdflab.tables.request import TABULATED, TableRequest
 from bsdflab.tables.table_bsdf import TableBSDF, default_film_thickness
-from bsdflab.tables.tabulate import tabulate
-from bsdflab.util import args as check
 from bsdflab.util import limits
 
 log = logging.getLogger(__name__)
-TABULATED = "tabulated"
-EFFORT = ("min_samples", "max_samples", "seed")
 
 
 def resolve_bsdf(d: dict[str, Any], progress: bool = False, cache_dir=None, spectral: bool = False) -> BSDF:
-    """A BSDF from its dict; ``{"type": "tabulated", "model", "grid", "rel_error"}`` (and
-    optionally ``min_samples``, ``max_samples``, ``seed``) gives the table of ``model`` from
-    the cache, tabulating it first when it is not there.
+    """A BSDF from its dict; ``{"type": "tabulated", "model": ..., ...}`` (a table request,
+    bsdflab.tables.request: ``grid``, ``rel_error``, ``method`` (default "auto":
+    adding-doubling wherever it covers the model), PFMC's ``min_samples``, ``max_samples``,
+    ``seed``, the solver's ``nodes``, ``orders``) gives the table of ``model`` from the
+    cache, tabulating it first when it is not there.
 
     ``spectral``: for a spectral render, a table of a spectral model stores the 81 bins of
     the default grid (its own cache entry), so iridescent spectra multiply bin by bin along
     a path; an RGB render keeps the RGB table (3 channels: 27x less work per lookup)."""
     if d.get("type") != TABULATED:
         return from_dict(d)
-
-    unknown = set(d) - {"type", "model", "grid", "rel_error", *EFFORT}
-    if unknown or "model" not in d:
-        raise ValueError("a tabulated BSDF needs 'model' and may have 'grid', 'rel_error', "
-                         f"{', '.join(repr(k) for k in EFFORT)}"
-                         + (f"; unknown keys: {', '.join(sorted(map(str, unknown)))}" if unknown else ""))
-    model = from_dict(d["model"])
-    grid = TableGrid.from_dict(d["grid"]) if "grid" in d else TableGrid()
-    rel_error = check.real_scalar("rel_error", d.get("rel_error", 0.02), 0.0, 1.0, lo_open=True)
-    effort = {k: d[k] for k in EFFORT if d.get(k) is not None}  # part of the cache key
-
-    wavelengths = DEFAULT_WAVELENGTHS if spectral and not _spectrally_flat(model) else None
-
-    def make():
-        return tabulate(model, grid, rel_error=rel_error, progress=progress, wavelengths=wavelengths, **effort)
-
-    table, path, hit = cached_table(model.to_dict(), grid, rel_error, table_channels(wavelengths)[0], make,
-                                    directory=cache_dir, **effort)
-    if not table.accuracy()["target_met"]:
-        log.warning("table %s does not reach its target error %g everywhere (cells stopped at "
-                    "max_samples)", path, rel_error)
-    log.info("table %s %s", path, "reused from the cache" if hit else "tabulated")
+    if "wavelengths" in d:
+        raise ValueError("a tabulated BSDF's channels follow the render (RGB or spectral): drop 'wavelengths'")
+    model = from_dict(d["model"]) if isinstance(d.get("model"), dict) else None
+    wavelengths = DEFAULT_WAVELENGTHS if spectral and model is not None and not _spectrally_flat(model) else None
+    request = TableRequest.from_dict(d, wavelengths=wavelengths)
+    table, path, hit = get(request, cache=cache_dir, progress=progress)
+    accuracy = table.accuracy()
+    if not accuracy["target_met"]:
+        log.warning("table %s: %s", path, accuracy["advice"])
+    log.info("table %s %s by %s (%s)", path, "reused from the cache" if hit else "tabulated", request.method,
+             request.method_note)
     return TableBSDF(table, path=None if path is None else str(path))  # the file: what Dask ships
 
 

@@ -13,11 +13,13 @@ a single-scattering layer with a Richardson-corrected start; the adding equation
 everything from the base up, one independent task per (wavelength, Fourier order) on all
 cores with the GIL released.
 
-What it computes: reflection from above, f |cos theta_o| exactly as ``Layered.eval``
-(without the top's delta lobe). A rough top's own reflection is evaluated directly; the
-light that entered the stack is solved. Transmission through the stack and reflection
-from below are not solved: pairs asking for them raise ValueError on a transmissive
-stack (an opaque one's are zero, its value).
+What it computes: f |cos theta_o| exactly as ``Layered.eval`` (without delta lobes):
+reflection from above for every stack, a rough top's own reflection evaluated directly
+and the light that entered the stack solved; for a transmissive stack with a smooth top
+and a smooth dielectric base (``Solution.two_sided``) also transmission both ways and
+reflection from below (the stack's four operators by the adding equations). A rough top
+or rough base of a transmissive stack: pairs with wi.z < 0 or wo.z < 0 raise ValueError
+naming it (an opaque stack's are zero, its value).
 
 Validated range (tests/solvers, docs/solvers.md): alpha in [1e-3, 1] for rough
 interfaces and bases (ValueError outside); Henyey-Greenstein |g| <= 0.95 (ValueError
@@ -139,18 +141,27 @@ class Solution:
         """Half-period azimuth samples of the cosine transforms used."""
         return int(self._core.azimuth_samples)
 
+    @property
+    def two_sided(self) -> bool:
+        """Whether every pair is solved: transmission both ways and reflection from below
+        (a transmissive stack with a smooth top and a smooth dielectric base)."""
+        return bool(self._core.two_sided)
+
     def _pairs(self, wi, wo) -> tuple[np.ndarray, np.ndarray]:
         a, b = check.direction_pair(wi, wo)
-        if self._transmits and np.any((a[:, 2] < 0) | (b[:, 2] < 0)):
-            raise ValueError("adding-doubling solves reflection from above only: this stack transmits, and "
-                             "transmission through it and reflection from below are not solved (use the "
-                             "model's own eval, PFMC, for pairs with wi.z < 0 or wo.z < 0)")
+        if self._transmits and not self.two_sided and np.any((a[:, 2] < 0) | (b[:, 2] < 0)):
+            raise ValueError(f"adding-doubling solves transmission and reflection from below only for a "
+                             f"smooth top and a smooth dielectric base; this stack transmits through "
+                             f"{one_sided_reason(self.model)}, so for pairs with wi.z < 0 or wo.z < 0 "
+                             f"use the model's own eval (PFMC)")
         return a, b
 
     def eval(self, wi, wo, scattered_only: bool = False) -> np.ndarray:
-        """f(wi, wo) |cos theta_o| of reflection from above, (N, C); 0 for the other pairs
-        of an opaque stack (its value). A transmissive stack raises ValueError for pairs
-        with wi.z < 0 or wo.z < 0 (transmission and reflection from below are not solved).
+        """f(wi, wo) |cos theta_o|, (N, C), light arriving from wo and leaving toward wi:
+        reflection from above; for a ``two_sided`` stack every pair (transmission both
+        ways, reflection from below); 0 for the other pairs of an opaque stack (its
+        value). A transmissive stack with a rough top or base raises ValueError for pairs
+        with wi.z < 0 or wo.z < 0.
         ``scattered_only`` leaves out a rough top's own reflection (what a table stores;
         ``Layered.exact_part`` re-adds it)."""
         a, b = self._pairs(wi, wo)
@@ -218,26 +229,14 @@ def solve(model: Layered, wavelengths=None, nodes: int = DEFAULT_NODES, orders: 
         Rough top: fine sub-panels of ``fine_step`` x alpha radians (clamped to [0.004,
         0.05]) for the product integration of its lobes.
     """
-    if not isinstance(model, Layered):
-        raise ValueError(f"model must be a Layered stack, got {type(model).__name__}")
+    check_model(model)
     nodes = check.integer("nodes", nodes, 4, 256)
     if orders is not None:
         orders = check.integer("orders", orders, 1, 4096)
     thin_depth = check.real_scalar("thin_depth", thin_depth, 0.0, 1.0, lo_open=True)
     order_tolerance = check.real_scalar("order_tolerance", order_tolerance, 0.0, 0.1, lo_open=True)
-    for name, part in [(f"interfaces[{i}]", m) for i, m in enumerate(model.interfaces)] + [("base", model.base)]:
-        alpha = getattr(part, "alpha", None)
-        if alpha is not None and not ALPHA_RANGE[0] <= alpha <= ALPHA_RANGE[1]:
-            raise ValueError(f"{name}.alpha must be in [{ALPHA_RANGE[0]}, {ALPHA_RANGE[1]}] for the "
-                             f"adding-doubling solver (its validated range), got {alpha}")
     for i, s in enumerate(model.slabs):
-        if s.phase.type not in PHASES:
-            raise ValueError(f"slabs[{i}].phase must be one of {', '.join(PHASES)} for the "
-                             f"adding-doubling solver, got {s.phase.type!r}")
         g = s.phase.g if s.phase.type == "hg" else 0.0
-        if abs(g) > MAX_G:
-            raise ValueError(f"slabs[{i}].phase.g must be in [-{MAX_G}, {MAX_G}] for the "
-                             f"adding-doubling solver (its validated range), got {g}")
         if s.sigma_s > 0 and nodes < nodes_for_g(g):
             warnings.warn(f"adding-doubling: nodes raised from {nodes} to {nodes_for_g(g)} to "
                           f"resolve slabs[{i}]'s Henyey-Greenstein g = {g}", stacklevel=2)
@@ -250,6 +249,49 @@ def solve(model: Layered, wavelengths=None, nodes: int = DEFAULT_NODES, orders: 
     fine_step = check.real_scalar("fine_step", fine_step, 0.05, 2.0)
     return Solution(model, wavelengths, Settings(nodes, orders, thin_depth, order_tolerance, bool(film_lookup),
                                                  azimuth_samples, spectral_stride, fine_step))
+
+
+def check_model(model) -> None:
+    """ValueError naming why ``model`` is outside what this solver solves (its validated
+    range): not a ``Layered`` stack, a roughness outside ALPHA_RANGE, a phase function
+    other than isotropic or Henyey-Greenstein with |g| <= MAX_G, or a smooth interior
+    interface between unequal indices. (Transmissive stacks are solved for reflection
+    from above only: ``Solution.eval`` refuses their other pairs.)"""
+    if not isinstance(model, Layered):
+        raise ValueError(f"model must be a Layered stack, got {type(model).__name__}")
+    for name, part in [(f"interfaces[{i}]", m) for i, m in enumerate(model.interfaces)] + [("base", model.base)]:
+        alpha = getattr(part, "alpha", None)
+        if alpha is not None and not ALPHA_RANGE[0] <= alpha <= ALPHA_RANGE[1]:
+            raise ValueError(f"{name}.alpha must be in [{ALPHA_RANGE[0]}, {ALPHA_RANGE[1]}] for the "
+                             f"adding-doubling solver (its validated range), got {alpha}")
+    for i, part in enumerate(model.interfaces[1:], start=1):
+        ext, inside = (getattr(part, k, None) for k in ("ext_ior", "int_ior"))
+        if (getattr(part, "alpha", None) is None and isinstance(ext, (int, float))
+                and isinstance(inside, (int, float)) and abs(ext - inside) > 1e-9 * max(ext, inside)):
+            raise ValueError(f"interfaces[{i}] is a smooth interior interface between different indices "
+                             f"({ext} above, {inside} below): the adding-doubling solver needs smooth "
+                             f"interior interfaces index-matched (rough or film-coated matched ones are solved)")
+    for i, s in enumerate(model.slabs):
+        if s.phase.type not in PHASES:
+            raise ValueError(f"slabs[{i}].phase must be one of {', '.join(PHASES)} for the "
+                             f"adding-doubling solver, got {s.phase.type!r}")
+        g = s.phase.g if s.phase.type == "hg" else 0.0
+        if abs(g) > MAX_G:
+            raise ValueError(f"slabs[{i}].phase.g must be in [-{MAX_G}, {MAX_G}] for the "
+                             f"adding-doubling solver (its validated range), got {g}")
+    media = media_indices(model)
+    for j, part in enumerate(model.interfaces[1:], start=1):  # the core's rule (adding_doubling.cpp)
+        if not part.lobes & Lobe.SMOOTH and abs(media[j] - media[j + 1]) > 1e-9 * media[j]:
+            raise ValueError(f"interfaces[{j}] is smooth between unequal indices ({media[j]} and "
+                             f"{media[j + 1]}): the adding-doubling solver needs it index-matched")
+
+
+def one_sided_reason(model: Layered) -> str:
+    """Why a transmissive stack is solved for reflection from above only (its rough top or
+    base would need product integration at the exit, which is not implemented)."""
+    parts = [name for name, part in (("a rough top", model.interfaces[0]), ("a rough base", model.base))
+             if getattr(part, "alpha", None) is not None]
+    return " and ".join(parts) or "its boundaries"
 
 
 def media_indices(model: Layered) -> list[float]:

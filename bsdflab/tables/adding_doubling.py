@@ -17,13 +17,14 @@ import time
 
 import numpy as np
 
-from bsdflab import __version__, _core
+from bsdflab import _core
+from bsdflab._version import __version__
 from bsdflab.bsdfs.base import from_dict
 from bsdflab.layered import Layered
 from bsdflab.solvers import solve
-from bsdflab.solvers.adding_doubling import Settings
+from bsdflab.solvers.adding_doubling import Settings, check_model
 from bsdflab.tables.channels import table_channels
-from bsdflab.tables.data import LOBES, TableData, TableGrid
+from bsdflab.tables.data import DEFAULT_REL_ERROR, LOBES, TableData, TableGrid
 
 METHOD = "adding-doubling"
 TABLE_NODES = 16    # Gauss-Legendre nodes per cosine panel of a table's solve
@@ -63,28 +64,44 @@ def with_film_thickness(model: Layered, thickness_nm: float) -> Layered:
     return from_dict(d)
 
 
-def check_adding_doubling(model) -> None:
-    """ValueError unless ``model`` is a stack this method tabulates (a reflecting ``Layered``)."""
+def adding_doubling_gap(model) -> str | None:
+    """Why this method cannot tabulate ``model`` (None: it can): it tabulates reflecting
+    ``Layered`` stacks within the solver's validated range (bsdflab.solvers.adding_doubling
+    ``check_model``)."""
     if not isinstance(model, Layered):
-        raise ValueError(f"method 'adding-doubling' tabulates Layered models, got {type(model).__name__}")
+        return f"it tabulates Layered models, not {type(model).__name__}"
     if _transmits(model):
-        raise ValueError("method 'adding-doubling' tabulates reflection only; this stack transmits "
-                         "(use method 'pfmc')")
+        return "the stack transmits and the solver solves reflection from above only"
+    try:
+        check_model(model)
+    except ValueError as e:
+        return str(e)
+    return None
 
 
-def solver_settings() -> dict:
+def check_adding_doubling(model) -> None:
+    """ValueError unless ``model`` is a stack this method tabulates (``adding_doubling_gap``)."""
+    gap = adding_doubling_gap(model)
+    if gap is not None:
+        raise ValueError(f"method 'adding-doubling' cannot tabulate this model: {gap} (use method 'pfmc')")
+
+
+def solver_settings(nodes: int | None = None, orders: int | None = None) -> dict:
     """The solver settings a table is requested with (part of its cache key: a change of
-    the defaults makes new tables). The solve may raise the nodes (``nodes_for_g``);
-    ``meta["solver"]`` records what it used."""
-    return {**Settings(nodes=TABLE_NODES, film_lookup=True).to_dict(), "table_settings": TABLE_RULES}
+    the defaults makes new tables): ``TABLE_NODES`` and automatic orders unless given.
+    The solve may raise the nodes (``nodes_for_g``); ``meta["solver"]`` records what it used."""
+    settings = Settings(nodes=TABLE_NODES if nodes is None else nodes, orders=orders, film_lookup=True)
+    return {**settings.to_dict(), "table_settings": TABLE_RULES}
 
 
-def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = 0.01, wavelengths=None,
-                             nodes: int = TABLE_NODES, solver: dict | None = None) -> TableData:
+def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = DEFAULT_REL_ERROR, wavelengths=None,
+                             nodes: int | None = None, orders: int | None = None,
+                             solver: dict | None = None) -> TableData:
     """The table of a ``Layered`` reflector on ``grid`` by adding-doubling (module
     docstring). ``rel_error`` sets the solver's truncations (``table_settings``) and is
     recorded as the target; ``meta["error_bound_max_rel"]`` is what the solver's bound
-    achieved over the significant cells. ``solver``: keyword arguments of
+    achieved over the significant cells. ``nodes`` (default ``TABLE_NODES``) and ``orders``
+    (default automatic): the solver's accuracy settings. ``solver``: keyword arguments of
     ``bsdflab.solvers.solve`` that replace ``table_settings``'s (e.g. a reference table)."""
     check_adding_doubling(model)
     names, model_wl, P, lum_w = table_channels(wavelengths)
@@ -93,18 +110,19 @@ def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = 0.01, wa
     wi = np.stack([np.sin(ti), np.zeros_like(ti), np.cos(ti)], axis=-1).reshape(-1, 3)
     wo = np.stack([np.sin(to) * np.cos(ph), np.sin(to) * np.sin(ph), np.cos(to)], axis=-1).reshape(-1, 3)
     thicknesses = list(grid.thickness_nm) or [-1.0]
-    values, bounds, lookup_error, orders, first = [], [], None, 0, None
+    values, bounds, lookup_error, orders_used, first = [], [], None, 0, None
     for t in thicknesses:
         model_t = with_film_thickness(model, t)
         if first is not None and hasattr(model.interfaces[0], "alpha"):  # rough top: reuse the rest
             sol = first.with_model(model_t)
         else:
-            sol = first = solve(model_t, model_wl, nodes=nodes, film_lookup=True,
+            sol = first = solve(model_t, model_wl, nodes=TABLE_NODES if nodes is None else nodes,
+                                orders=orders, film_lookup=True,
                                 **{**table_settings(rel_error, len(model_wl)), **(solver or {})})
         v, e = sol.eval_with_error(wi, wo, scattered_only=True)
         values.append(v / wo[:, 2:] @ P.T)
         bounds.append(e / wo[:, 2:] @ np.abs(P).T)
-        orders = max(orders, sol.orders)
+        orders_used = max(orders_used, sol.orders)
         if sol.film_lookup_error is not None:
             lookup_error = max(lookup_error or 0.0, sol.film_lookup_error)
     shape = (1, len(thicknesses), grid.n_theta_i, grid.n_theta_o, grid.n_phi, len(names))
@@ -113,10 +131,10 @@ def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = 0.01, wa
     vals = np.stack(values).reshape(shape).astype(np.float32)
     errs = np.stack(bounds).reshape(shape).astype(np.float32)
     meta = {"bsdflab_version": __version__, "method": METHOD,
-            "solver": {**sol.settings.to_dict(), "orders": orders},
+            "solver": {**sol.settings.to_dict(), "orders": orders_used},
             "seconds": round(time.perf_counter() - start, 3), "threads": _core.worker_count(),
             "error_kind": "deterministic bound (adding-doubling, Solution.eval_with_error)",
-            "film_lookup_error": lookup_error, "max_samples": 1 << 24, "min_samples": 1,
+            "film_lookup_error": lookup_error,
             **bound_statistics(vals.astype(np.float64), errs.astype(np.float64), lum_w)}
     table = TableData(model=model.to_dict(), grid=grid, lobes=LOBES[:1], channels=names, split_direct=True,
                       values=vals, stderr=errs,

@@ -1,7 +1,9 @@
 """A folder of table files keyed by what was tabulated, so a repeated request is a file read.
 
-Each table lives at ``<cache_dir>/<key>.exr`` where the key hashes everything that can
-change a table's content: the model, the grid, the target relative error, the channels,
+``get(request, cache=..., runner=...)`` is the one way a table is asked for (the CLI, jobs,
+renders and the service call it with a ``TableRequest``, bsdflab.tables.request). Each
+table lives at ``<cache_dir>/<key>.exr`` where the key (``TableRequest.key``) hashes
+everything that can change a table's content: the model, the grid, the target relative error, the channels,
 the effort (``min_samples``, ``max_samples``), the seed, the table format version, the
 tabulator's error floor and the core's estimator version; for a table by adding-doubling
 (``method="adding-doubling"``, deterministic) the method and the solver's settings instead
@@ -13,35 +15,26 @@ verification is logged and rebuilt.
 """
 from __future__ import annotations
 
-import hashlib
-import inspect
 import logging
 import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
-from bsdflab import _core
-from bsdflab.tables.data import FORMAT_VERSION, TableData, TableGrid, check_table_memory
+from bsdflab.bsdfs.base import from_dict
+from bsdflab.tables.channels import channel_wavelengths
+from bsdflab.tables.data import TableData, TableGrid, check_table_memory
 from bsdflab.tables.file_format import canonical_json, read_table, write_table
-from bsdflab.tables.tabulate import ERROR_FLOOR, METHODS, tabulate
+from bsdflab.tables.request import TableRequest
+from bsdflab.tables.tabulate import make_table
 from bsdflab.util import args as check
+from bsdflab.util.runners import Runner
 from bsdflab.util.settings import library_settings
 
 ENV_VAR = "BSDFLAB_CACHE_DIR"
 RGB = ("R", "G", "B")
 
 log = logging.getLogger(__name__)
-
-
-def _tabulate_defaults() -> dict[str, Any]:
-    params = inspect.signature(tabulate).parameters
-    return {name: params[name].default for name in ("min_samples", "max_samples", "seed")}
-
-
-def estimator_version() -> int:
-    """The core's estimator version (changes whenever the same request gives other walks)."""
-    return int(getattr(_core, "estimator_version", 1))
 
 
 def cache_dir(directory: str | os.PathLike | None = None) -> Path:
@@ -77,61 +70,39 @@ def channel_names(channels: str | Sequence[Any]) -> tuple[str, ...]:
     return tuple(f"{w:g}" for w in check.wavelengths_nm("channels", [float(c) for c in items]))
 
 
-def request_dict(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], rel_error: float,
-                 channels: str | Sequence[Any], min_samples: int | None = None,
-                 max_samples: int | None = None, seed: int | None = None,
-                 method: str = "pfmc") -> dict[str, Any]:
-    """Everything that determines a table's content, with defaults resolved (the key's input).
-
-    A PFMC request has no ``method`` entry, so the keys of tables cached before methods
-    existed still match; an adding-doubling request records the method and the solver's
-    settings, and no walk effort or seed (they do not apply to it)."""
-    defaults = _tabulate_defaults()
-    grid_obj = grid if isinstance(grid, TableGrid) else TableGrid.from_dict(dict(grid))
-    common = {
-        "channels": list(channel_names(channels)),
-        "format_version": FORMAT_VERSION,
-        "grid": grid_obj.to_dict(),
-        "model": model_dict,
-        "rel_error": check.real_scalar("rel_error", rel_error, 0.0, 1.0, lo_open=True),
-    }
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {check.brief(method)}")
-    if method != "pfmc":
-        from bsdflab.tables.adding_doubling import solver_settings
-
-        return {**common, "method": method, "solver": solver_settings()}
-    return {
-        **common,
-        "min_samples": check.count("min_samples", defaults["min_samples"] if min_samples is None else min_samples),
-        "max_samples": check.count("max_samples", defaults["max_samples"] if max_samples is None else max_samples),
-        "seed": check.seed(defaults["seed"] if seed is None else seed),
-        "error_floor": ERROR_FLOOR,
-        "estimator_version": estimator_version(),
-    }
+def legacy_request(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], rel_error: float,
+                   channels: str | Sequence[Any], min_samples: int | None = None,
+                   max_samples: int | None = None, seed: int | None = None,
+                   method: str = "pfmc") -> TableRequest:
+    """The TableRequest of the positional (model dict, grid, target, channels, ...) form
+    (omitted effort and seed: the defaults, so a request that spells them out shares the
+    entry of one that does not)."""
+    names = channel_names(channels)
+    effort = {k: v for k, v in (("min_samples", min_samples), ("max_samples", max_samples), ("seed", seed))
+              if v is not None}
+    return TableRequest.make(from_dict(model_dict), grid, rel_error, channel_wavelengths(names), method, **effort)
 
 
-def cache_key(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], rel_error: float,
-              channels: str | Sequence[Any], min_samples: int | None = None,
-              max_samples: int | None = None, seed: int | None = None, method: str = "pfmc") -> str:
-    """SHA-256 (hex) of the canonical JSON (sorted keys) of ``request_dict(...)``: the
-    channels, format version, grid, model, target error, effort, seed, error floor and
-    estimator version (for adding-doubling: the method and solver settings). Omitted effort
-    and seed take ``tabulate``'s defaults, so a request that spells them out shares the
-    entry of one that does not."""
-    request = request_dict(model_dict, grid, rel_error, channels, min_samples, max_samples, seed, method)
-    try:
-        text = canonical_json(request)
-    except (TypeError, ValueError) as e:
-        raise ValueError(f"cannot build a cache key: {e}") from None
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+def request_dict(*args, **kwargs) -> dict[str, Any]:
+    """Everything that determines a table's content (``TableRequest.content`` of
+    ``legacy_request(...)``): a PFMC request has no ``method`` entry, so the keys of tables
+    cached before methods existed still match; an adding-doubling request records the
+    method and the solver's settings, and no walk effort or seed."""
+    return legacy_request(*args, **kwargs).content()
+
+
+def cache_key(*args, **kwargs) -> str:
+    """``TableRequest.key`` of ``legacy_request(...)``: SHA-256 (hex) of the canonical JSON
+    of the channels, format version, grid, model, target error, effort, seed, error floor
+    and estimator version (for adding-doubling: the method and solver settings)."""
+    return legacy_request(*args, **kwargs).key()
 
 
 def mismatch(table: TableData, request: dict[str, Any]) -> str | None:
     """Why ``table`` is not the table ``request`` (a ``request_dict``) asks for, or None."""
     meta = table.meta
     found = {
-        "model": canonical_json(table.model) == canonical_json(request["model"]),
+        "model": _canonical_model(table.model) == canonical_json(request["model"]),
         "grid": table.grid.to_dict() == request["grid"],
         "rel_error": table.rel_error_target == request["rel_error"],
         "channels": list(table.channels) == request["channels"],
@@ -143,49 +114,84 @@ def mismatch(table: TableData, request: dict[str, Any]) -> str | None:
     return f"it holds a different {', '.join(wrong)}" if wrong else None
 
 
+def _canonical_model(d: dict[str, Any]) -> str:
+    """A model dict in the form requests key it (``from_dict(d).to_dict()``)."""
+    try:
+        return canonical_json(from_dict(d).to_dict())
+    except ValueError:
+        return canonical_json(d)
+
+
+class Fetched(NamedTuple):
+    """A table from ``get``: the table, its cache file (None: not cached) and whether it
+    was read from the cache (``make`` not called)."""
+
+    table: TableData
+    path: Path | None
+    from_cache: bool
+
+
+def get(request: TableRequest, cache: str | os.PathLike | bool | None = None, runner: Runner | None = None,
+        progress: bool = False, make: Callable[[], TableData] | None = None) -> Fetched:
+    """The table ``request`` asks for: read from the cache, or tabulated (once) and cached.
+
+    Parameters
+    ----------
+    request : TableRequest
+        What to tabulate and how (bsdflab.tables.request; its ``method`` already resolved).
+    cache : folder, None or False
+        The cache folder (None: ``cache_dir()``); False: tabulate, neither read nor write.
+    runner : bsdflab.util.runners.Runner, optional
+        Tabulate on this runner (a Dask cluster; bsdflab.tables.units) instead of this process.
+    progress : bool
+        A progress bar on stderr while tabulating.
+    make : callable, optional
+        Builds the table instead of ``make_table(request, ...)`` (it must honour the request;
+        e.g. a job's progress reporting around it).
+
+    Check ``table.accuracy()["target_met"]``: a table that misses its target is returned,
+    and says so.
+    """
+    if not isinstance(request, TableRequest):
+        raise ValueError(f"request must be a TableRequest, got {type(request).__name__}")
+    if make is None:
+        def make():
+            return make_table(request, progress=progress, runner=runner)
+    if cache is False:
+        return Fetched(make(), None, False)
+    return Fetched(*_cached(request, make, None if cache is True else cache))
+
+
 def cached_table(model_dict: dict[str, Any], grid: TableGrid | dict[str, Any], rel_error: float,
                  channels: str | Sequence[Any], make: Callable[[], TableData],
                  directory: str | os.PathLike | None = None, min_samples: int | None = None,
                  max_samples: int | None = None, seed: int | None = None, method: str = "pfmc",
                  ) -> tuple[TableData, Path | None, bool]:
-    """The cached table for this request, tabulating it with `make()` only when needed.
+    """``get`` in the positional form (``legacy_request``), with the table made by ``make``:
+    (table, cache file or None when the folder was not writable, read from the cache)."""
+    request = legacy_request(model_dict, grid, rel_error, channels, min_samples, max_samples, seed, method)
+    return _cached(request, make, directory)
 
-    Parameters
-    ----------
-    model_dict, grid, rel_error, channels, min_samples, max_samples, seed, method
-        What the table holds and how it was measured; together they form the key
-        (`cache_key`). `make` must build the table with these same settings.
-    make : callable
-        Builds the table when there is no valid cached file.
-    directory : str or path-like, optional
-        Cache folder (default `cache_dir()`).
 
-    Returns
-    -------
-    table : TableData
-        Check ``table.accuracy()["target_met"]``: a table whose cells hit ``max_samples``
-        before reaching the target is returned, but says so.
-    path : Path or None
-        The cache file; None when the table was built but the folder was not writable
-        (a warning is logged: the table is still returned).
-    hit : bool
-        True when the table was read from the cache and `make` was not called.
-    """
-    request = request_dict(model_dict, grid, rel_error, channels, min_samples, max_samples, seed, method)
-    check_table_memory(TableGrid.from_dict(request["grid"]), len(request["channels"]))
-    key = cache_key(model_dict, grid, rel_error, channels, min_samples, max_samples, seed, method)
-    path = cache_dir(directory) / f"{key}.exr"
+def _cached(request: TableRequest, make: Callable[[], TableData],
+            directory: str | os.PathLike | None) -> tuple[TableData, Path | None, bool]:
+    """The cached table for ``request``, tabulating it with ``make()`` only when needed;
+    path None when the table was built but the folder was not writable (a warning is
+    logged: the table is still returned)."""
+    content = request.content()
+    check_table_memory(request.grid, len(request.channels))
+    path = cache_dir(directory) / f"{request.key()}.exr"
     if path.exists():
         try:
             table = read_table(path)
-            why = mismatch(table, request)
+            why = mismatch(table, content)
             if why is None:
                 return table, path, True
             log.warning("cached table %s is not the one requested (%s); rebuilding it", path, why)
         except ValueError as e:
             log.warning("cached table is unusable, rebuilding it: %s", e)
     table = make()
-    why = mismatch(table, request)
+    why = mismatch(table, content)
     if why is not None:
         raise ValueError(f"the table made for this cache request does not match it: {why}")
     try:

@@ -43,6 +43,9 @@ def node_centres(n: int) -> np.ndarray:
     return (np.arange(n) + 0.5) * (0.5 * np.pi / n)
 
 
+DEFAULT_REL_ERROR = 0.01  # the one default target of a table (docs/table_format.md, "Target met")
+
+
 def check_table_memory(grid: TableGrid, n_channels: int, n_lobes: int = 2) -> None:
     """Refuse a table on ``grid`` whose estimated memory exceeds ``BSDFLAB_MAX_BYTES``
     (call before tabulating; ``n_lobes`` 2 covers transmissive models)."""
@@ -169,25 +172,17 @@ class TableData:
             raise ValueError(f"table luminance must be >= 0 (a BSDF is never negative), found {lum.min():g}")
 
     def accuracy(self) -> dict[str, Any]:
-        """Whether the tabulator reached its target: ``target_met`` is False when any cell
-        of a stochastic (layered) table stopped at ``max_samples`` (its refinement was cut
-        by the cap, not by the error), or when the table does not record its effort; for a
-        table by adding-doubling, when its error bound exceeds the target somewhere.
+        """Whether the table meets its target, and the figures that decide it: the one
+        definition of "target met" is in bsdflab.tables.summary (the 95th percentile of the
+        cells' relative error of luminance at most ``rel_error_target``; the max beside it).
         ``coverage`` (PFMC tables): how often cell errors were exceeded by k sigma in the
         coverage study of the table's estimator version (bsdflab.tables.coverage,
-        docs/coverage.md), None where that version was not measured."""
-        if self.meta.get("method") == "adding-doubling":  # deterministic: its error bound decides
-            bound = self.meta.get("error_bound_max_rel")
-            met = isinstance(bound, float) and bound <= self.rel_error_target
-            return {"target_met": met, "capped_cells": 0, "max_samples": None}
-        if not self.split_direct:  # deterministic models: one exact evaluation per cell
-            return {"target_met": True, "capped_cells": 0, "max_samples": self.meta.get("max_samples")}
-        cap = self.meta.get("max_samples")
-        if isinstance(cap, bool) or not isinstance(cap, int):
-            return {"target_met": False, "capped_cells": int(self.samples.size), "max_samples": None}
-        capped = int(np.count_nonzero(self.samples >= cap))
-        return {"target_met": capped == 0, "capped_cells": capped, "max_samples": cap,
-                "coverage": coverage_record(self.meta.get("estimator_version"))}
+        docs/coverage.md), None where that version was not measured or the table is not PFMC."""
+        from bsdflab.tables.summary import STDERR, accuracy
+
+        a = accuracy(self)
+        a["coverage"] = coverage_record(self.meta.get("estimator_version")) if a["kind"] == STDERR else None
+        return a
 
     def check_model(self):
         """The table's model rebuilt through ``from_dict`` (ValueError when it is not a

@@ -55,7 +55,7 @@ from typing import Any
 
 import numpy as np
 
-from bsdflab import __version__
+from bsdflab._version import __version__
 from bsdflab.tables import signing
 from bsdflab.tables.data import FORMAT_VERSION, TableData, TableGrid
 from bsdflab.util import limits

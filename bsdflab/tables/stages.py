@@ -36,17 +36,20 @@ thread counts change any bit of values, errors or sample counts.
 """
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from bsdflab import __version__, _core
+from bsdflab import _core
+from bsdflab._version import __version__
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.lobes import Lobe
 from bsdflab.tables.channels import table_channels
 from bsdflab.tables.data import LOBES, TableData, TableGrid
+from bsdflab.tables.file_format import canonical_json
 from bsdflab.util import args as check
 from bsdflab.util.progress import run_with_progress
 
@@ -98,7 +101,8 @@ def pilot_cells(model: BSDF, grid: TableGrid, cells, *, wavelengths=None,
     Each cell's result depends only on (model, grid, cell, wavelengths, min_samples, seed).
     Runs on all cores with the GIL released; Ctrl-C cancels. ``film_lookup``: as
     :func:`tabulate`'s."""
-    tab = _tabulator(model, grid, wavelengths, min_samples, min_samples, seed, 0.01, film_lookup)
+    tab = _tabulator(model, grid, wavelengths, min_samples=min_samples, max_samples=min_samples, seed=seed,
+                     rel_error=0.01, film_lookup=film_lookup)
     idx = _cells(cells, tab.cells)
     job = tab.pilot_job(idx.tolist())
     start = time.perf_counter()
@@ -127,7 +131,8 @@ def floor_scale(model: BSDF, grid: TableGrid, pilot: PilotBlock, *, wavelengths=
     """The per-lobe error floor scale (mean |pilot luminance| of the lobe's cells, summed
     in cell order by the core): the one cross-cell input of the finish stage. ``pilot``
     must cover every cell (see :func:`merge_pilots`)."""
-    tab = _tabulator(model, grid, wavelengths, min_samples, min_samples, seed, 0.01, film_lookup=False)  # no walks
+    tab = _tabulator(model, grid, wavelengths, min_samples=min_samples, max_samples=min_samples, seed=seed,
+                     rel_error=0.01)  # no walks: any film_lookup (True shares the pilot's)
     _full(pilot, tab.cells)
     return np.asarray(tab.floor_scale(pilot.lum.tolist()))
 
@@ -140,7 +145,8 @@ def finish_cells(model: BSDF, grid: TableGrid, cells, pilot: PilotBlock, scale, 
     values from fresh walks. ``pilot`` must cover every cell (:func:`merge_pilots`);
     ``scale`` is :func:`floor_scale`'s result. Runs on all cores, GIL released."""
     rel_error = check.real_scalar("rel_error", rel_error, 0.0, 1.0, lo_open=True)
-    tab = _tabulator(model, grid, wavelengths, max_samples, min_samples, seed, rel_error, film_lookup)
+    tab = _tabulator(model, grid, wavelengths, min_samples=min_samples, max_samples=max_samples, seed=seed,
+                     rel_error=rel_error, film_lookup=film_lookup)
     idx = _cells(cells, tab.cells)
     _full(pilot, tab.cells)
     scale = np.asarray(scale, dtype=np.float64).ravel()
@@ -231,7 +237,14 @@ def _core_model(model: BSDF, wavelengths: np.ndarray):
     return core.scattered_part() if _splits(model) else core
 
 
-def _tabulator(model, grid, wavelengths, max_samples, min_samples, seed, rel_error, film_lookup=True):
+_built_lock = threading.Lock()
+_built: dict = {}  # the last table's core tabulator, by (model, grid, channels, film_lookup)
+
+
+def _tabulator(model, grid, wavelengths, *, min_samples, max_samples, seed, rel_error, film_lookup=True):
+    """The core tabulator with these settings. Its model, grid and film lookups are built
+    once per table (the last one is kept): the stages differ only in their settings,
+    which ``with_settings`` swaps without rebuilding anything."""
     _check_model(model)
     if not isinstance(grid, TableGrid):
         raise ValueError(f"grid must be a TableGrid, got {type(grid).__name__}")
@@ -239,20 +252,32 @@ def _tabulator(model, grid, wavelengths, max_samples, min_samples, seed, rel_err
     max_samples = check.count("max_samples", max_samples)
     if max_samples < min_samples:
         raise ValueError(f"max_samples ({max_samples}) must be >= min_samples ({min_samples})")
-    seed = check.seed(seed)
+    settings = _core.TabulationSettings(rel_error=rel_error, floor=ERROR_FLOOR, min_samples=min_samples,
+                                        max_samples=max_samples, seed=check.seed(seed),
+                                        film_lookup=check.flag("film_lookup", film_lookup))
+    wl = None if wavelengths is None else tuple(np.asarray(wavelengths, dtype=np.float64).ravel().tolist())
+    key = (id(model), canonical_json(grid.to_dict()), wl, settings.film_lookup)
+    with _built_lock:
+        held = _built.get(key)
+        if held is None or held[0] is not model:  # id() reused by another object
+            _built.clear()
+            held = _built[key] = (model, _build_tabulator(model, grid, wavelengths, settings))
+    return held[1].with_settings(settings)
+
+
+def _build_tabulator(model, grid, wavelengths, settings):
     _, model_wl, P, lum = table_channels(wavelengths)
     rows = np.vstack([P, lum @ P])
-    return _core.Tabulator(_core_model(model, model_wl), len(lobes_of(model)), grid.n_theta_i,
-                           grid.n_theta_o, grid.n_phi, list(grid.thickness_nm), list(rows.ravel()),
-                           rows.shape[0], rel_error, ERROR_FLOOR, min_samples, max_samples, seed,
-                           check.flag("film_lookup", film_lookup))
+    return _core.Tabulator(_core_model(model, model_wl), n_lobes=len(lobes_of(model)), n_theta_i=grid.n_theta_i,
+                           n_theta_o=grid.n_theta_o, n_phi=grid.n_phi, thickness=list(grid.thickness_nm),
+                           P=list(rows.ravel()), rows=rows.shape[0], settings=settings)
 
 
 def _film_lookup_error(model, grid, wavelengths) -> float | None:
     """The largest measured error of the film lookups the walks used (None: none used)."""
     if not _is_stochastic(model):
         return None
-    err = _tabulator(model, grid, wavelengths, 1, 1, 0, 0.01).film_lookup_error
+    err = _tabulator(model, grid, wavelengths, min_samples=1, max_samples=1, seed=0, rel_error=0.01).film_lookup_error
     return float(err) if err >= 0 else None
 
 

@@ -8,8 +8,8 @@ that split a table over a runner are in bsdflab.tables.units.
 from __future__ import annotations
 
 from bsdflab.bsdfs.base import BSDF
-from bsdflab.tables.channels import table_channels
 from bsdflab.tables.data import TableData, TableGrid, check_table_memory
+from bsdflab.tables.request import DEFAULT_REL_ERROR, METHODS, TableRequest
 from bsdflab.tables.stages import (
     DEFAULT_MAX_SAMPLES,
     DEFAULT_MIN_SAMPLES,
@@ -26,16 +26,16 @@ from bsdflab.util import args as check
 from bsdflab.util import runners
 from bsdflab.util.runners import Runner
 
-__all__ = ["DEFAULT_MAX_SAMPLES", "DEFAULT_MIN_SAMPLES", "ERROR_FLOOR", "METHODS", "tabulate"]
+__all__ = ["DEFAULT_MAX_SAMPLES", "DEFAULT_MIN_SAMPLES", "DEFAULT_REL_ERROR", "ERROR_FLOOR", "METHODS",
+           "make_table", "tabulate"]
 
-METHODS = ("pfmc", "adding-doubling")
 
-
-def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = 0.01,
+def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = DEFAULT_REL_ERROR,
              wavelengths=None, min_samples: int = DEFAULT_MIN_SAMPLES,
              max_samples: int = DEFAULT_MAX_SAMPLES, seed: int = 0,
              progress: bool = True, client=None, film_lookup: bool = True,
-             runner: Runner | None = None, method: str = "pfmc") -> TableData:
+             runner: Runner | None = None, method: str = "pfmc", nodes: int | None = None,
+             orders: int | None = None) -> TableData:
     """Tabulate ``model`` on ``grid``; returns the table (write it with ``write_table``).
 
     Parameters
@@ -67,41 +67,50 @@ def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = 0.01
         when it is built, is <= 1e-7 absolute, meta["film_lookup_error"]) instead of the
         Airy sum per wavelength: ~3x fewer CPU-seconds per walk for the snake. False
         evaluates every film exactly (the reference; not available with a runner).
-    method : 'pfmc' (default) or 'adding-doubling'
+    method : 'pfmc' (default), 'adding-doubling' or 'auto'
         'adding-doubling' tabulates a reflecting ``Layered`` model deterministically
         (bsdflab.tables.adding_doubling: one solve per thickness node, the solver's error
         bound stored as each cell's error, method and settings in ``meta``); the walk
-        settings (samples, seed, film_lookup, runner, client) do not apply to it.
+        settings (samples, seed, film_lookup) do not apply to it. 'auto' (the default of a
+        ``TableRequest``, hence of the CLI, jobs and renders) picks adding-doubling wherever
+        it covers the model and PFMC otherwise (bsdflab.tables.request).
+    nodes, orders : int, optional
+        The adding-doubling solver's Gauss-Legendre nodes per panel and Fourier orders
+        (default: the table settings of bsdflab.tables.adding_doubling).
 
-    Runs :func:`pilot_cells`, :func:`floor_scale`, :func:`finish_cells` and
+    Validates everything through ``TableRequest.make`` and runs :func:`make_table`, which
+    runs :func:`pilot_cells`, :func:`floor_scale`, :func:`finish_cells` and
     :func:`assemble` over every cell (bsdflab.tables.stages).
     """
-    grid = grid or TableGrid()
-    check.real_scalar("rel_error", rel_error, 0.0, 1.0, lo_open=True)
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {check.brief(method)}")
-    if method == "adding-doubling":
-        from bsdflab.tables.adding_doubling import tabulate_adding_doubling
+    request = TableRequest.make(model, grid, rel_error, wavelengths, method, min_samples, max_samples, seed,
+                                nodes, orders)
+    return make_table(request, progress=progress, runner=runners.resolve(runner, client),
+                      film_lookup=check.flag("film_lookup", film_lookup))
 
-        check_table_memory(grid, len(table_channels(wavelengths)[0]), 1)
-        runner = runners.resolve(runner, client)
+
+def make_table(request: TableRequest, progress: bool = True, runner: Runner | None = None,
+               film_lookup: bool = True) -> TableData:
+    """The table ``request`` asks for, tabulated by its method (on ``runner`` when given)."""
+    model, grid, rel_error, wavelengths = request.model, request.grid, request.rel_error, request.wavelengths
+    if request.method == "adding-doubling":
+        from bsdflab.tables.adding_doubling import check_adding_doubling, tabulate_adding_doubling
+
+        check_adding_doubling(model)
+        check_table_memory(grid, len(request.channels), 1)
+        solver = {"nodes": request.nodes, "orders": request.orders}
         if runner is not None:
             return tabulate_adding_doubling_units(runner, model, grid, rel_error=rel_error,
-                                                  wavelengths=wavelengths, progress=progress)
-        return tabulate_adding_doubling(model, grid, rel_error=rel_error, wavelengths=wavelengths)
-    if check.count("max_samples", max_samples) < check.count("min_samples", min_samples):
-        raise ValueError(f"max_samples ({max_samples}) must be >= min_samples ({min_samples})")
+                                                  wavelengths=wavelengths, progress=progress, **solver)
+        return tabulate_adding_doubling(model, grid, rel_error=rel_error, wavelengths=wavelengths, **solver)
     n = cell_count(model, grid)
     # Before the core allocates (docs/limits.md).
-    check_table_memory(grid, len(table_channels(wavelengths)[0]), len(lobes_of(model)))
-    film_lookup = check.flag("film_lookup", film_lookup)
-    runner = runners.resolve(runner, client)
+    check_table_memory(grid, len(request.channels), len(lobes_of(model)))
+    min_samples, max_samples, seed = request.min_samples, request.max_samples, request.seed
     if runner is not None:
         if not film_lookup:
             raise ValueError("film_lookup=False is not available with a runner (the units use the lookup)")
         return tabulate_units(runner, model, grid, rel_error=rel_error, wavelengths=wavelengths,
-                              min_samples=min_samples, max_samples=max_samples,
-                              seed=check.seed(seed), progress=progress)
+                              min_samples=min_samples, max_samples=max_samples, seed=seed, progress=progress)
     kw = dict(wavelengths=wavelengths, min_samples=min_samples, seed=seed)
     pilot = pilot_cells(model, grid, range(n), progress=progress, film_lookup=film_lookup, **kw)
     scale = floor_scale(model, grid, pilot, **kw)

@@ -83,7 +83,7 @@ def adding_doubling_unit(model_dict, grid_dict, kw: dict[str, Any], nodes: np.nd
 
 # -- the driver -------------------------------------------------------------------------------
 def tabulate_adding_doubling_units(runner: Runner, model, grid, *, rel_error: float, wavelengths,
-                                   progress: bool = True):
+                                   progress: bool = True, nodes: int | None = None, orders: int | None = None):
     """``tabulate(model, grid, method="adding-doubling")`` with the film-thickness nodes
     split over ``runner``'s workers (a unit solves the layers below a rough top once and
     redoes the top per node, so a unit holds a run of nodes, not one); the same values and
@@ -97,7 +97,7 @@ def tabulate_adding_doubling_units(runner: Runner, model, grid, *, rel_error: fl
     groups = np.array_split(np.arange(n_nodes, dtype=np.int64), units)  # one empty group: no nodes
     model_dict, grid_dict = model.to_dict(), grid.to_dict()
     wl = None if wavelengths is None else [float(w) for w in np.asarray(wavelengths, float).ravel()]
-    kw = {"rel_error": rel_error, "wavelengths": wl}
+    kw = {"rel_error": rel_error, "wavelengths": wl, "nodes": nodes, "orders": orders}
     key = f"bsdflab-tabulate-ad-{unit_key(model_dict, grid_dict, kw, units)}"
     parts: dict[int, Any] = {}
     runner.run(adding_doubling_unit, [model_dict, grid_dict, kw], groups,

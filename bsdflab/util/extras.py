@@ -8,7 +8,8 @@ extra       what it installs                                 what needs it
 ==========  ===============================================  ==============================
 service     fastapi, uvicorn, pydantic(-settings), plotly    ``bsdflab serve``, bsdflab.service
 dask        distributed                                      bsdflab.distributed, ``--cluster``
-fit         emcee, dynesty, arviz, corner, h5netcdf          bsdflab.fit, ``bsdflab fit``
+fit         emcee, dynesty, arviz, corner, h5netcdf,         bsdflab.fit, ``bsdflab fit``
+            jcamp, avaread                                   (``fit import`` readers)
 mitsuba     mitsuba, drjit, flip-evaluator                   bsdflab.reference, renderer checks
 export      (the exporters' tools)                           bsdflab.export
 denoise     pyoidn                                           ``bsdflab render --denoise``

@@ -38,6 +38,7 @@ void bind_adding_doubling(py::module_ &m) {
         .def_property_readonly("azimuth_samples", &AddingDoubling::azimuth_samples)
         .def_property_readonly("nodes", &AddingDoubling::nodes)
         .def_property_readonly("weights", &AddingDoubling::weights)
+        .def_property_readonly("two_sided", &AddingDoubling::two_sided)
         .def_property_readonly("film_lookup_error", &AddingDoubling::film_lookup_error)
         .def(
             "eval",
@@ -56,7 +57,7 @@ void bind_adding_doubling(py::module_ &m) {
                 return out;
             },
             py::arg("wi"), py::arg("wo"), py::arg("scattered_only") = false,
-            "f |cos theta_o| (N, C): reflection from above, no delta lobe")
+            "f |cos theta_o| (N, C), no delta lobe: reflection from above; every pair when two_sided")
         .def(
             "with_top",
             [](const AddingDoubling &s, std::shared_ptr<BSDF> top) {

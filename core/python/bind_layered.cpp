@@ -69,12 +69,31 @@ static py::array_t<double> delta_reflectance_many(const LayeredBSDF &b, const Da
 
 void bind_layered(py::module_ &m) {
     m.attr("estimator_version") = kEstimatorVersion;
+    // Keyword-only: the walk options by name, never by position.
+    py::class_<LayeredOptions>(m, "LayeredOptions")
+        .def(
+            py::init([](int samples, uint64_t seed, int max_depth, bool nee, int pdf_samples, int estimator) {
+                if (samples < 1 || max_depth < 1)
+                    throw std::invalid_argument("samples and max_depth must be >= 1");
+                if (pdf_samples < 0) throw std::invalid_argument("pdf_samples must be >= 0");
+                if (estimator != kEstimatorPfmc && estimator != kEstimatorPfmc2)
+                    throw std::invalid_argument("unknown estimator");
+                return LayeredOptions{samples, seed, max_depth, nee, pdf_samples, estimator};
+            }),
+            py::kw_only(), py::arg("samples"), py::arg("seed"), py::arg("max_depth"), py::arg("nee") = true,
+            py::arg("pdf_samples") = 1, py::arg("estimator") = kEstimatorPfmc2)
+        .def_readonly("samples", &LayeredOptions::samples)
+        .def_readonly("seed", &LayeredOptions::seed)
+        .def_readonly("max_depth", &LayeredOptions::max_depth)
+        .def_readonly("nee", &LayeredOptions::nee)
+        .def_readonly("pdf_samples", &LayeredOptions::pdf_samples)
+        .def_readonly("estimator", &LayeredOptions::estimator);
+
     py::class_<LayeredBSDF, BSDF, std::shared_ptr<LayeredBSDF>>(m, "LayeredBSDF")
         .def(py::init([](std::vector<double> wavelengths, std::vector<std::shared_ptr<BSDF>> boundaries,
                          std::vector<double> thickness, std::vector<std::vector<double>> sigma_a,
                          std::vector<double> sigma_s, std::vector<int> phase_kind,
-                         std::vector<double> phase_param, int samples, uint64_t seed, int max_depth, bool nee,
-                         int pdf_samples, int estimator) {
+                         std::vector<double> phase_param, const LayeredOptions &options) {
                  std::size_t K = thickness.size();
                  if (sigma_a.size() != K || sigma_s.size() != K || phase_kind.size() != K ||
                      phase_param.size() != K)
@@ -87,15 +106,12 @@ void bind_layered(py::module_ &m) {
                                      PhaseFunction(PhaseFunction::Kind(phase_kind[j]), phase_param[j])};
                  }
                  std::vector<std::shared_ptr<const BSDF>> b(boundaries.begin(), boundaries.end());
-                 if (pdf_samples < 0) throw std::invalid_argument("pdf_samples must be >= 0");
-                 LayeredOptions opt{samples, seed, max_depth, nee, pdf_samples, estimator};
                  return std::make_shared<LayeredBSDF>(std::move(wavelengths), std::move(b), std::move(slabs),
-                                                      opt);
+                                                      options);
              }),
-             py::arg("wavelengths"), py::arg("boundaries"), py::arg("thickness"), py::arg("sigma_a"),
-             py::arg("sigma_s"), py::arg("phase_kind"), py::arg("phase_param"), py::arg("samples"),
-             py::arg("seed"), py::arg("max_depth"), py::arg("nee"), py::arg("pdf_samples") = 1,
-             py::arg("estimator") = kEstimatorPfmc2)
+             py::arg("wavelengths"), py::arg("boundaries"), py::kw_only(), py::arg("thickness"),
+             py::arg("sigma_a"), py::arg("sigma_s"), py::arg("phase_kind"), py::arg("phase_param"),
+             py::arg("options"))
         .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"), py::arg("thickness"),
              py::arg("samples"), py::arg("seed"),
              "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed")

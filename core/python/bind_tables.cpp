@@ -25,19 +25,36 @@ static TableGrid make_grid(int n_lobes, int n_theta_i, int n_theta_o, int n_phi,
 }
 
 void bind_tables(py::module_ &m) {
+    // Keyword-only structs: the settings by name, never by position.
+    py::class_<TabulationSettings>(m, "TabulationSettings")
+        .def(py::init([](double rel_error, double floor, int min_samples, int max_samples, uint64_t seed,
+                         bool film_lookup) {
+                 if (min_samples < 1 || max_samples < min_samples)
+                     throw std::invalid_argument("need 1 <= min_samples <= max_samples");
+                 return TabulationSettings{rel_error, floor, min_samples, max_samples, seed, film_lookup};
+             }),
+             py::kw_only(), py::arg("rel_error"), py::arg("floor"), py::arg("min_samples"),
+             py::arg("max_samples"), py::arg("seed"), py::arg("film_lookup") = true)
+        .def_readonly("rel_error", &TabulationSettings::rel_error)
+        .def_readonly("floor", &TabulationSettings::floor)
+        .def_readonly("min_samples", &TabulationSettings::min_samples)
+        .def_readonly("max_samples", &TabulationSettings::max_samples)
+        .def_readonly("seed", &TabulationSettings::seed)
+        .def_readonly("film_lookup", &TabulationSettings::film_lookup);
+
     py::class_<Tabulator, std::shared_ptr<Tabulator>>(m, "Tabulator")
         .def(py::init([](std::shared_ptr<BSDF> model, int n_lobes, int n_theta_i, int n_theta_o, int n_phi,
-                         std::vector<double> thickness, std::vector<double> P, int rows, double rel_error,
-                         double floor, int min_samples, int max_samples, uint64_t seed, bool film_lookup) {
-                 TabulationSettings s{rel_error, floor, min_samples, max_samples, seed, film_lookup};
+                         std::vector<double> thickness, std::vector<double> P, int rows,
+                         const TabulationSettings &settings) {
                  return std::make_shared<Tabulator>(
                      model, make_grid(n_lobes, n_theta_i, n_theta_o, n_phi, std::move(thickness)),
-                     std::move(P), rows, s);
+                     std::move(P), rows, settings);
              }),
-             py::arg("model"), py::arg("n_lobes"), py::arg("n_theta_i"), py::arg("n_theta_o"),
-             py::arg("n_phi"), py::arg("thickness"), py::arg("P"), py::arg("rows"), py::arg("rel_error"),
-             py::arg("floor"), py::arg("min_samples"), py::arg("max_samples"), py::arg("seed"),
-             py::arg("film_lookup") = true)
+             py::arg("model"), py::kw_only(), py::arg("n_lobes"), py::arg("n_theta_i"), py::arg("n_theta_o"),
+             py::arg("n_phi"), py::arg("thickness"), py::arg("P"), py::arg("rows"), py::arg("settings"))
+        .def("with_settings", &Tabulator::with_settings, py::arg("settings"),
+             "the same model, grid and film lookups (shared) with other settings")
+        .def_property_readonly("settings", &Tabulator::settings)
         .def_property_readonly("cells", &Tabulator::cells)
         .def_property_readonly("film_lookup_error", &Tabulator::film_lookup_error,
                                "largest measured error of the film lookups in use (-1: none)")

@@ -147,6 +147,7 @@ AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
         film_lookup_error_ = stats.max_error;
     }
     smooth_top_ = is_delta(*boundaries_[0]);
+    two_sided_ = smooth_top_ && K >= 1 && is_delta(*boundaries_[K]) && media_[K + 1] > 0;
     inner_ = std::make_shared<Inner>();
     for (std::size_t j = 0; j + 1 < media_.size(); ++j) {  // critical cosines of every index step
         double a = media_[j], b = media_[j + 1];
@@ -179,14 +180,16 @@ AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
 }
 
 void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector<double> &in_cos,
-                           std::vector<double> &values) const {
+                           std::vector<double> &values, const Queries *two_sided) const {
     const int C = channels(), M = orders_, H = half_samples_;
     const int n = static_cast<int>(mu_.size());
     const std::size_t Qo = out_cos.size(), Qi = in_cos.size(), K = slabs_.size();
     // The grid: nodes, then (smooth top) the query cosines inside the first slab.
     std::vector<double> grid(mu_), extras;
     std::vector<int> xo(Qo), xi(Qi);
-    if (smooth_top_) {
+    if (two_sided) {
+        grid.insert(grid.end(), two_sided->cosines.begin(), two_sided->cosines.end());
+    } else if (smooth_top_) {
         std::vector<double> all(out_cos);
         all.insert(all.end(), in_cos.begin(), in_cos.end());
         std::vector<int> index;
@@ -281,6 +284,11 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
         for (int i = 0; i < n; ++i) g.W[i] = (m == 0 ? 2.0 : 1.0) * kPi * mu_[i] * w_[i];
         return g;
     };
+    auto identity = [&]() {
+        Op o;
+        o.D.assign(N, 1.0);
+        return o;
+    };
     auto exp_tau = [&](double tau) {
         Op o;
         o.D.resize(N);
@@ -306,13 +314,13 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
         T.D = exp_tau(delta).D;
         R.D.clear();
     };
-    auto slab = [&](std::size_t j, int c, int m, const Grid &g, const Op &R) -> Op {
+    // Slab j as a layer (all four operators; it is up-down symmetric).
+    auto slab_layer = [&](std::size_t j, int c, int m, const Grid &g) -> Layer {
         const ADSlab &s = slabs_[j];
         double sigma_t = s.sigma_a[c] + s.sigma_s, tau = sigma_t * s.thickness;
-        if (!(tau > 0)) return R;
+        if (!(tau > 0)) return Layer{Op(), identity(), Op(), identity()};
         double omega = sigma_t > 0 ? s.sigma_s / sigma_t : 0.0;
-        Op D = exp_tau(tau);
-        if (!(omega > 0) || m >= slab_orders[j]) return ad::mul(D, ad::mul(R, D, g), g);
+        if (!(omega > 0) || m >= slab_orders[j]) return Layer{Op(), exp_tau(tau), Op(), exp_tau(tau)};
         int k = std::max(0, static_cast<int>(std::ceil(std::log2(tau / settings_.thin_depth))));
         double delta = tau / std::ldexp(1.0, k);
         // Richardson start: 2 (doubled half layer) - (single layer) cancels the O(delta^2)
@@ -331,7 +339,14 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
             ad::double_symmetric(Rs, Ts, g);
             Ts.D = exp_tau(delta * std::ldexp(1.0, d)).D;  // the unscattered beam exactly
         }
-        Layer L{Rs, Ts, Rs, Ts};
+        return Layer{Rs, Ts, Rs, Ts};
+    };
+    auto slab = [&](std::size_t j, int c, int m, const Grid &g, const Op &R) -> Op {
+        const ADSlab &s = slabs_[j];
+        double tau = (s.sigma_a[c] + s.sigma_s) * s.thickness;
+        if (!(tau > 0)) return R;
+        Layer L = slab_layer(j, c, m, g);
+        if (L.Rt.K.empty()) return ad::mul(L.Td, ad::mul(R, L.Td, g), g);  // no scattering
         return ad::reflect_over(L, R, g);
     };
     // Reflection of everything below the top (seen from the first slab), from the base up.
@@ -381,6 +396,35 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
         inner_->ready = true;
     }
 
+    if (two_sided) {
+        // The whole stack as one layer, top down: the top's internal reflection, then slab,
+        // boundary, ..., slab, and the base's internal reflection (their transmissions to the
+        // outside are applied by the caller).
+        const std::size_t P = two_sided->op.size();
+        values.assign(static_cast<std::size_t>(C) * M * P, 0.0);
+        parallel_for_each(static_cast<std::size_t>(C) * M, [&](std::size_t task) {
+            const int c = static_cast<int>(task / M), m = static_cast<int>(task % M);
+            const Grid g = make_grid(m);
+            Layer S{Op(), identity(), Op(), identity()};
+            S.Rb.D.assign(topRb.begin() + c * N, topRb.begin() + (c + 1) * N);
+            for (std::size_t j = 0; j < K; ++j) {
+                S = ad::add_layers(S, slab_layer(j, c, m, g), g);
+                const Boundary &B = below[j + 1];
+                Op rt = B.op(B.Rt, N, C, M, c, m);
+                Layer L = j + 1 < K ? Layer{rt, B.op(B.Td, N, C, M, c, m), B.op(B.Rb, N, C, M, c, m),
+                                            B.op(B.Tu, N, C, M, c, m)}
+                                    : Layer{rt, identity(), Op(), identity()};
+                S = ad::add_layers(S, L, g);
+            }
+            const Op *ops[4] = {&S.Rt, &S.Td, &S.Rb, &S.Tu};
+            double *V = &values[task * P];
+            for (std::size_t p = 0; p < P; ++p) {
+                const Op &o = *ops[two_sided->op[p]];
+                if (!o.K.empty()) V[p] = o.K[(n + two_sided->row[p]) * N + n + two_sided->col[p]];
+            }
+        });
+        return;
+    }
     values.assign(static_cast<std::size_t>(C) * M * Qo * Qi, 0.0);
     parallel_for_each(static_cast<std::size_t>(C) * M, [&](std::size_t task) {
         const int c = static_cast<int>(task / M), m = static_cast<int>(task % M);
@@ -422,10 +466,66 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
     });
 }
 
+void AddingDoubling::eval_two_sided(const double *wi_, const double *wo_, std::size_t count,
+                                    double *out) const {
+    const int C = channels(), M = orders_;
+    const std::size_t K = slabs_.size();
+    const BSDF &top = *boundaries_[0], &base = *boundaries_[K];
+    std::vector<std::size_t> active;
+    std::vector<double> cosines, scale;  // per active pair: (viewer, light) inside cosines
+    std::vector<int> op;
+    std::vector<double> tv(C), tl(C);
+    for (std::size_t p = 0; p < count; ++p) {
+        Vec3 wi{wi_[3 * p], wi_[3 * p + 1], wi_[3 * p + 2]}, wo{wo_[3 * p], wo_[3 * p + 1], wo_[3 * p + 2]};
+        if (!usable_direction(wi) || !usable_direction(wo) || wi.z == 0 || wo.z == 0) continue;
+        const bool view_up = wi.z > 0, light_up = wo.z > 0;
+        double mu_v = 0, mu_l = 0;
+        ad::delta_weight(view_up ? top : base, wi.z, kDeltaTransmission, tv.data(), &mu_v);
+        ad::delta_weight(light_up ? top : base, wo.z, kDeltaTransmission, tl.data(), &mu_l);
+        if (!(mu_v > 0) || !(mu_l > 0)) continue;
+        // The delta weights carry the radiance scaling of both crossings; the light's
+        // solid angle inside is (n_out / n_in)^2 times its own outside.
+        double r = light_up ? media_[1] / media_[0] : media_[K] / media_[K + 1];
+        for (int c = 0; c < C; ++c) scale.push_back(tv[c] * tl[c] * r * r * std::abs(wo.z));
+        op.push_back(view_up ? (light_up ? 0 : 3) : (light_up ? 1 : 2));
+        cosines.push_back(mu_v);
+        cosines.push_back(mu_l);
+        active.push_back(p);
+    }
+    if (active.empty()) return;
+    Queries q;
+    std::vector<int> index;
+    q.cosines = distinct(cosines, index);
+    q.op = op;
+    for (std::size_t a = 0; a < active.size(); ++a) {
+        q.row.push_back(index[2 * a]);
+        q.col.push_back(index[2 * a + 1]);
+    }
+    std::vector<double> V;
+    solve({}, {}, V, &q);
+    const std::size_t P = active.size();
+    parallel_for(P, 256, [&](std::size_t begin, std::size_t end) {
+        std::vector<double> cm(M);
+        for (std::size_t a = begin; a < end; ++a) {
+            std::size_t p = active[a];
+            double dphi =
+                std::atan2(wi_[3 * p + 1], wi_[3 * p]) - std::atan2(wo_[3 * p + 1], wo_[3 * p]) - kPi;
+            for (int m = 0; m < M; ++m) cm[m] = std::cos(m * dphi);
+            for (int c = 0; c < C; ++c) {
+                double s = 0.0;
+                for (int m = 0; m < M; ++m) s += V[(static_cast<std::size_t>(c) * M + m) * P + a] * cm[m];
+                double v = s * scale[a * C + c];
+                out[p * C + c] = std::isfinite(v) ? v : 0.0;
+            }
+        }
+    });
+}
+
 void AddingDoubling::eval(const double *wi_, const double *wo_, std::size_t count, double *out,
                           bool scattered_only) const {
     const int C = channels(), M = orders_;
     std::fill(out, out + count * C, 0.0);
+    if (two_sided_) return eval_two_sided(wi_, wo_, count, out);
     std::vector<std::size_t> active;
     std::vector<double> cos_out, cos_in, scale;  // scale: per active pair and channel
     const BSDF &top = *boundaries_[0];

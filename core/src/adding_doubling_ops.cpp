@@ -140,6 +140,19 @@ Op reflect_over(const Layer &top, const Op &R, const Grid &g) {
     return add(top.Rt, path);
 }
 
+Layer add_layers(const Layer &a, const Layer &b, const Grid &g) {
+    // Downward radiance between the two per unit incident from above: (I - a.Rb b.Rt)^-1 a.Td;
+    // upward radiance there per unit incident from below: (I - b.Rt a.Rb)^-1 b.Tu.
+    Op down = mul(inverse_one_minus(mul(a.Rb, b.Rt, g), g), a.Td, g);
+    Op up = mul(inverse_one_minus(mul(b.Rt, a.Rb, g), g), b.Tu, g);
+    Layer r;
+    r.Rt = add(a.Rt, mul(a.Tu, mul(b.Rt, down, g), g));
+    r.Td = mul(b.Td, down, g);
+    r.Rb = add(b.Rb, mul(b.Td, mul(a.Rb, up, g), g));
+    r.Tu = mul(a.Tu, up, g);
+    return r;
+}
+
 void double_symmetric(Op &R, Op &T, const Grid &g) {
     Op S = inverse_one_minus(mul(R, R, g), g);
     Op ST = mul(S, T, g);

@@ -36,7 +36,8 @@ RenderJob::RenderJob(std::shared_ptr<const RenderScene> scene, const RenderSetti
 }
 
 std::size_t RenderJob::render_rect(int x0, int y0, int x1, int y1, int pass, int spp, double *out_sum,
-                                   double *out_sq, std::size_t stride, RayLog &log) const {
+                                   double *out_sq, std::size_t stride, RayLog &log,
+                                   const std::atomic<bool> *stop) const {
     const int W = width();
     std::size_t bad = 0;
     for (int y = y0; y < y1; ++y)
@@ -45,6 +46,8 @@ std::size_t RenderJob::render_rect(int x0, int y0, int x1, int y1, int pass, int
             PCG32 pixel_rng(mix64(mix64(s_.seed) ^ pixel) ^ mix64(uint64_t(pass) + 0x51ed2705ULL));
             double sum[3] = {0, 0, 0}, sq[3] = {0, 0, 0};
             for (int k = 0; k < spp; ++k) {
+                // a cancelled pass is dropped whole (run()), so a partial rect is never used
+                if (stop && stop->load(std::memory_order_relaxed)) return bad;
                 const uint64_t hi = pixel_rng.next(), lo = pixel_rng.next(); // in this order
                 const uint64_t sample_seed = (hi << 32) | lo;
                 const double jx = pixel_rng.uniform(), jy = pixel_rng.uniform(); // in this order
@@ -74,8 +77,8 @@ void RenderJob::render_tile(std::size_t tile, int pass, int spp) {
     const int x1 = std::min(x0 + s_.tile, W), y1 = std::min(y0 + s_.tile, H);
     const std::size_t first = (std::size_t(y0) * W + x0) * 3;
     RayLog log;
-    invalid_ +=
-        render_rect(x0, y0, x1, y1, pass, spp, pass_sum_.data() + first, pass_sq_.data() + first, W, log);
+    invalid_ += render_rect(x0, y0, x1, y1, pass, spp, pass_sum_.data() + first, pass_sq_.data() + first, W,
+                            log, &cancelled_);
     rays_ += log.rays;
 }
 

@@ -38,6 +38,16 @@ Tabulator::Tabulator(std::shared_ptr<const BSDF> model, TableGrid grid, std::vec
     }
 }
 
+std::shared_ptr<Tabulator> Tabulator::with_settings(const TabulationSettings &settings) const {
+    if (settings.film_lookup != settings_.film_lookup)
+        throw std::invalid_argument("with_settings cannot change film_lookup (the lookups are shared)");
+    if (settings.min_samples < 1 || settings.max_samples < settings.min_samples)
+        throw std::invalid_argument("need 1 <= min_samples <= max_samples");
+    auto copy = std::make_shared<Tabulator>(*this);
+    copy->settings_ = settings;
+    return copy;
+}
+
 uint64_t Tabulator::cell_seed(std::size_t cell, uint64_t stage) const {
     return mix64(settings_.seed ^ mix64(cell * 8 + stage));
 }

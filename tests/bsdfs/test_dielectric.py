@@ -103,3 +103,11 @@ def test_06_grazing_and_degenerate_inputs_stay_finite():
     wi /= np.linalg.norm(wi, axis=1, keepdims=True)
     s = g.sample(np.repeat(wi, 1000, axis=0), seed=6)
     assert np.all(np.isfinite(s.weight)) and np.all(np.isfinite(s.wo))
+    # Grazing from outside, R -> 1; grazing from inside, beyond the critical angle (TIR):
+    # every sample is the mirror reflection with weight 1. Mutations caught: a degenerate
+    # direction answered with a failed sample (lobe 0, weight 0) instead of its limit, or
+    # a transmission chosen where none exists.
+    assert np.all(s.lobe == int(bl.Lobe.DELTA_REFLECTION))
+    assert np.allclose(s.weight, 1.0, rtol=0, atol=1e-9)
+    mirror = np.repeat(wi * [-1.0, -1.0, 1.0], 1000, axis=0)
+    assert np.allclose(s.wo, mirror, rtol=0, atol=1e-12)

@@ -8,7 +8,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
@@ -124,11 +123,11 @@ render_spp = 2
 """
 
 
-def write_inputs(tmp_path, steps=200):
+def write_inputs(tmp_path, steps=200, sampler_extra=""):
     data_path = tmp_path / "data.csv"
     simulated(seed=4, step=40).write_csv(data_path)
     cfg_path = tmp_path / "fit.toml"
-    cfg_path.write_text(FIT_TOML.format(walkers=8, steps=steps, seed=1) + STUDY_EXTRA)
+    cfg_path.write_text(FIT_TOML.format(walkers=8, steps=steps, seed=1) + sampler_extra + STUDY_EXTRA)
     return data_path, cfg_path
 
 
@@ -183,15 +182,22 @@ def test_cli_simulate_and_errors(tmp_path):
 
 
 def test_ctrl_c_leaves_no_half_written_study(tmp_path):
-    data_path, cfg_path = write_inputs(tmp_path, steps=1_000_000)
+    """No race: the signal goes only after the study reports sampling (emcee's bar), and the
+    run cannot end first: tau_multiple 1e9 never declares convergence and 10^6 steps take
+    about 25 minutes (700 steps/s measured), so the study is always mid-sampling when
+    SIGINT arrives, at any load (before, the autocorrelation stop sometimes finished the
+    study first). Mutation: an interrupt
+    that skips the cleanup leaves `.study.tmp-*` behind."""
+    data_path, cfg_path = write_inputs(tmp_path, steps=1_000_000, sampler_extra="tau_multiple = 1e9\n")
     out = tmp_path / "study"
     p = subprocess.Popen([sys.executable, "-m", "bsdflab.cli.main", "fit", str(data_path), "--config", str(cfg_path),
                           "--out", str(out)], stderr=subprocess.PIPE, text=True)
     # wait until sampling has started (emcee's progress bar) and the temporary folder exists
     seen = ""
-    deadline = time.time() + 120
-    while "it/s" not in seen and time.time() < deadline:
-        seen += p.stderr.read(64)
+    while "it/s" not in seen:
+        chunk = p.stderr.read(64)
+        assert chunk, f"the fit ended before sampling: {seen[-2000:]}"
+        seen += chunk
     assert [q for q in os.listdir(tmp_path) if q.startswith(".study.tmp-")], "no temporary folder while running"
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=60)

@@ -18,7 +18,7 @@ from bsdflab.tables import TableGrid, cache_key, read_table, tabulate
 
 register_kind("test-steps", "support.job_kinds")
 SMALL = {"preset": "xenopeltis-thin-film", "grid": {"n_theta_i": 2, "n_theta_o": 3, "n_phi": 3},
-         "rel_error": 0.2, "min_samples": 64, "max_samples": 64, "seed": 7}
+         "rel_error": 0.2, "min_samples": 64, "max_samples": 64, "seed": 7, "method": "pfmc"}
 
 
 def wait_for(predicate, timeout=60.0):
@@ -56,11 +56,17 @@ def test_requests_are_normalised_and_bad_ones_named():
     assert a == b and kind.key(a) == kind.key(b)
     with pytest.raises(ValueError, match="rel_error"):
         kind.normalise({**SMALL, "rel_error": 0})
-    with pytest.raises(ValueError, match="unknown tabulate request fields: colour"):
+    with pytest.raises(ValueError, match="unknown table request fields: colour"):
         kind.normalise({**SMALL, "colour": 1})
     with pytest.raises(ValueError, match="unknown scene"):
         get_kind("render").normalise({"scene": "nowhere"})
     assert tabulate_kind.cells(a) == 2 * 2 * 3 * 3
+    # "auto" (the default): adding-doubling where it covers the model, said in the request
+    auto = kind.normalise({k: v for k, v in SMALL.items() if k != "method"})
+    assert auto["method"] == "adding-doubling" and auto["method_note"].startswith("automatic")
+    assert kind.key(auto) != kind.key(a)
+    diffuse = kind.normalise({"model": {"type": "diffuse", "reflectance": 0.5}})
+    assert diffuse["method"] == "pfmc" and "Layered" in diffuse["method_note"]
 
 
 def test_thread_executor_progress_and_cancel(tmp_path):

@@ -18,10 +18,10 @@ the pairs plus the pooled mean z.
    (-13.6 %, cap bias included). A fix: choose the hero channel once per walk and weight
    the path by the balance heuristic over the channels' path densities (Wilkie et al.
    2014, hero wavelength sampling), which bounds the weights by the channel count.
-   Fixed by estimator="pfmc2" (issue 21): in a slab this bright every flight is drawn
-   with the smallest extinction, so each channel's weight is <= 1 per flight and the
-   product never grows (docs/estimators.md). The default estimator="pfmc" still reads low
-   here (the test's power: with it the check fails, pooled z -6.2).
+   Fixed by estimator="pfmc2" (issue 21; the default since estimator version 6): in a
+   slab this bright every flight is drawn with the smallest extinction, so each channel's
+   weight is <= 1 per flight and the product never grows (docs/estimators.md). The
+   reference estimator="pfmc" still reads low here (the test's power: with it the check fails, pooled z -6.2).
 """
 import numpy as np
 

@@ -55,8 +55,19 @@ def test_04_energy_conservation_lossless():
 
 
 def test_05_broadcasting_and_shapes():
-    r = fresnel_reflectance(np.linspace(0.1, 1, 5)[:, None], 1.0, np.array([1.3, 1.5, 2.0]))
-    assert r.unpolarised.shape == (5, 3)
+    """A (5, 1) cosine column against a (3,) index row gives the (5, 3) table whose every
+    entry is the textbook s / p reflectance of that cosine and index (Born & Wolf, written
+    out here). Mutations caught: indices taken along the cosine axis (a transposed or
+    reversed broadcast), R_s and R_p swapped, the unpolarised mean weighted wrongly."""
+    cos_i = np.linspace(0.1, 1, 5)[:, None]
+    n = np.array([1.3, 1.5, 2.0])
+    r = fresnel_reflectance(cos_i, 1.0, n)
+    cos_t = np.sqrt(1 - (1 - cos_i**2) / n**2)
+    R_s = ((cos_i - n * cos_t) / (cos_i + n * cos_t)) ** 2
+    R_p = ((n * cos_i - cos_t) / (n * cos_i + cos_t)) ** 2
+    assert r.unpolarised.shape == r.s.shape == r.p.shape == (5, 3)
+    assert np.allclose(r.s, R_s, rtol=0, atol=1e-14) and np.allclose(r.p, R_p, rtol=0, atol=1e-14)
+    assert np.allclose(r.unpolarised, (R_s + R_p) / 2, rtol=0, atol=1e-14)
 
 
 @pytest.mark.parametrize("kwargs, match", [

@@ -32,6 +32,14 @@ def test_optics_refuse_what_would_be_nan(call, name):
 def test_film_at_the_ends_of_the_documented_ranges_is_finite():
     r = optics.film_reflectance((1e-3, 1e3, 1e9, 1e3 + 1e3j), [1.0, 1e12], cos_theta=[0.0, 1.0])
     assert np.all(np.isfinite(r)) and np.all((r >= 0) & (r <= 1))
+    # a lossless film at the ends of the ranges conserves energy: R + T = 1 (grazing: R = 1,
+    # T = 0). Mutation caught: a clamp or underflow guard that zeroes R or T at the extremes
+    # (R + T < 1), or one that returns 1 for both.
+    lossless = (1e-3, 1e3, 1e9, 1e3)
+    for cos in ([0.0, 1.0], [1e-6, 0.5]):
+        R = optics.film_reflectance(lossless, [1.0, 1e12], cos_theta=cos)
+        T = optics.film_transmittance(lossless, [1.0, 1e12], cos_theta=cos)
+        assert np.allclose(R + T, 1.0, rtol=0, atol=1e-9), (cos, R, T)
 
 
 def test_index_matched_and_absent_films_at_grazing_are_finite():

@@ -9,6 +9,7 @@ import pytest
 from bsdflab.cli.main import main
 from bsdflab.render import read_exr, render
 from bsdflab.scenes import scene
+from support.png_check import assert_png_shows_exr
 
 ARGS = ["render", "basic-materials", "--width", "48", "--height", "36", "--spp", "4", "--quiet"]
 
@@ -18,11 +19,13 @@ def test_01_preview_only_on_request_and_exr_unchanged(tmp_path):
     assert main([*ARGS, "--out", str(plain)]) == 0
     assert not (tmp_path / "plain.denoised.exr").exists() and not (tmp_path / "plain.denoised.png").exists()
     assert main([*ARGS, "--out", str(denoised), "--denoise"]) == 0
-    assert (tmp_path / "den.denoised.png").stat().st_size > 0
     a, b = read_exr(plain), read_exr(denoised)
     assert a.tobytes() == b.tobytes()  # bit-identical pixels
     preview = read_exr(tmp_path / "den.denoised.exr")
     assert preview.shape == a.shape and np.all(np.isfinite(preview))
+    # the preview PNG shows the denoised EXR, not the noisy one (mutation: PNG from `image`)
+    assert_png_shows_exr(tmp_path / "den.denoised.png", preview)
+    assert_png_shows_exr(tmp_path / "den.png", b)
     assert not np.array_equal(preview, a)
 
 

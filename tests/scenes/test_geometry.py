@@ -252,7 +252,44 @@ def test_validate_mesh_catches_broken_meshes():
             validate_mesh(mesh)
 
 
+def _signed_volume(mesh: Mesh) -> float:
+    """Divergence theorem over the triangles: positive when a closed surface is wound
+    outward (counter-clockwise seen from outside)."""
+    p = mesh.positions[mesh.indices]
+    return float(np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6)
+
+
 def test_every_type_builds_with_defaults():
+    """Each type's defaults are the documented ones (bsdflab/render/geometry.py's docstring)
+    and build a valid, outward-wound mesh: sphere radius 1 at the origin (every vertex at
+    distance 1; 64 x 32 segments: inscribed volume within 1 % of 4 pi / 3), torus 1 / 0.25
+    about +Y (every vertex on the tube; volume within 3 % of 2 pi^2 R r^2), rectangle 1 x 1
+    facing +Y, disk radius 1 as a 64-fan (area exactly 32 sin(pi / 32)), the snake on the
+    ground, swaying by its amplitude plus at most its radius to each side.
+    Mutations caught: a default changed (torus minor_radius 0.3, sphere subdivisions 32),
+    a closed mesh wound inward (negative volume), the disk fan one triangle short."""
     for kind in GEOMETRY_TYPES:
         if kind != "mesh":
             validate_mesh(build_mesh({"type": kind}))
+    sphere = build_mesh({"type": "sphere"})
+    assert np.abs(np.linalg.norm(sphere.positions, axis=1) - 1).max() < 1e-12
+    assert len(sphere.indices) == 2 * 64 * 32 - 2 * 64  # the pole rows are one triangle per segment
+    assert 0.99 * 4 * math.pi / 3 < _signed_volume(sphere) < 4 * math.pi / 3
+    torus = build_mesh({"type": "torus"})
+    x, y, z = torus.positions.T
+    assert np.abs(np.hypot(np.hypot(x, z) - 1.0, y) - 0.25).max() < 1e-12
+    exact = 2 * math.pi**2 * 1.0 * 0.25**2
+    assert 0.97 * exact < _signed_volume(torus) < exact
+    rect = build_mesh({"type": "rectangle"})
+    assert mesh_area(rect) == pytest.approx(1.0, abs=1e-14)
+    assert np.allclose(triangle_normals(rect) / np.linalg.norm(triangle_normals(rect), axis=1)[:, None],
+                       [0, 1, 0], atol=1e-14, rtol=0)
+    assert np.allclose(np.ptp(rect.positions, axis=0), [1, 0, 1], atol=1e-14, rtol=0)
+    disk = build_mesh({"type": "disk"})
+    assert mesh_area(disk) == pytest.approx(32 * math.sin(math.pi / 32), abs=1e-12)
+    assert np.all(triangle_normals(disk)[:, 1] > 0)
+    body = build_mesh({"type": "snake_body"})
+    assert body.positions[:, 1].min() == pytest.approx(0.0, abs=1e-9)
+    amplitude, radius = SNAKE_DEFAULTS["amplitude"], SNAKE_DEFAULTS["radius"]
+    assert amplitude < np.abs(body.positions[:, 2]).max() < amplitude + radius
+    assert _signed_volume(body) > 0 and _signed_volume(build_mesh({"type": "snake_head"})) > 0

@@ -62,9 +62,10 @@ def test_02_spectral_stride_interpolates_smooth_stacks():
 
 
 def test_03_transmissive_stack_raises_for_unsolved_pairs():
-    """Transmission through a stack and reflection from below are not solved: a
-    transmissive stack raises ValueError for them (instead of returning 0), and still
-    solves reflection from above; an opaque stack returns its value, 0, below."""
+    """Transmission through a stack with a rough top and reflection from below it are not
+    solved: the stack raises ValueError for them (instead of returning 0), and still
+    solves reflection from above; an opaque stack returns its value, 0, below
+    (test_solver_two_sided.py covers the solved smooth-top, smooth-base stacks)."""
     model = bl.Layered([bl.RoughDielectric(0.2, 1.5, 1.0)],
                        [bl.Slab(1.0, sigma_a=0.1, sigma_s=0.5, phase={"type": "hg", "g": 0.6})],
                        bl.Dielectric(1.0, 1.5))
@@ -73,9 +74,9 @@ def test_03_transmissive_stack_raises_for_unsolved_pairs():
     down = -spherical_directions(np.radians([40.0]), [1.0])
     assert sol.eval(up, up)[0, 0] > 0
     for wi, wo in ((down, up), (up, down), (down, down)):
-        with pytest.raises(ValueError, match="transmission through it and reflection from below are not solved"):
+        with pytest.raises(ValueError, match="transmits through a rough top"):
             sol.eval(wi, wo)
-        with pytest.raises(ValueError, match="not solved"):
+        with pytest.raises(ValueError, match="only for a smooth top and a smooth dielectric base"):
             sol.eval_with_error(wi, wo)
     opaque = solve(preset("xenopeltis"), [550.0])
     assert opaque.eval(down, up)[0, 0] == 0.0

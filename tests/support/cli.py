@@ -21,3 +21,22 @@ def one_line_error(result, *words) -> None:
     assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr[-2000:]
     for word in words:
         assert word in lines[0], (word, lines[0])
+
+
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of a process so far (/proc/PID/stat fields 14 and 15)."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def wait_for_cpu(proc: subprocess.Popen, seconds: float, what: str = "") -> None:
+    """Wait until the process has spent `seconds` more CPU time than now: proof that its
+    work is under way whatever the machine's load (a wall-clock sleep proves nothing)."""
+    import threading
+
+    target = cpu_seconds(proc.pid) + seconds
+    pause = threading.Event()
+    while cpu_seconds(proc.pid) < target:
+        assert proc.poll() is None, f"the process ended first {what}"
+        pause.wait(0.05)  # polling the condition, not a synchronisation

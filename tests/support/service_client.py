@@ -13,7 +13,7 @@ DIFFUSE = {"type": "diffuse", "reflectance": 0.5}
 TINY_TABLE = {"model": DIFFUSE, "grid": {"n_theta_i": 2, "n_theta_o": 4, "n_phi": 3}}
 # a layered table long enough to still be running when the test looks (many cells, cancelled)
 LONG_TABLE = {"preset": "xenopeltis-thin-film", "grid": {"n_theta_i": 12, "n_theta_o": 24, "n_phi": 13},
-              "min_samples": 4096, "max_samples": 4096}
+              "min_samples": 4096, "max_samples": 4096, "method": "pfmc"}
 
 
 def make_client(tmp_path, **settings) -> TestClient:

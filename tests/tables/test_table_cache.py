@@ -18,7 +18,7 @@ def test_cache_key_holds_effort_seed_and_estimator(monkeypatch):
     base = cache_key(MODEL, GRID, 0.01, "rgb")
     assert base == cache_key(MODEL, GRID, 0.01, ("R", "G", "B"), 512, 65536, 0)  # defaults spelled out
     others = {cache_key(MODEL, GRID, 0.01, "rgb", min_samples=16),
-              cache_key(MODEL, GRID, 0.01, "rgb", max_samples=16),
+              cache_key(MODEL, GRID, 0.01, "rgb", max_samples=1024),
               cache_key(MODEL, GRID, 0.01, "rgb", seed=7)}
     assert base not in others and len(others) == 3
     from bsdflab import _core
@@ -61,7 +61,8 @@ def test_tabulate_says_when_the_target_is_not_met(tmp_path):
     model = json.dumps(bl.Layered([bl.RoughDielectric(0.2, 1.5, 1.0)], [bl.Slab(1.0, sigma_s=2.0)],
                                   bl.Diffuse(0.8), samples=8).to_dict())
     out = cli("tabulate", "--json", model, "--theta-i", "2", "--theta-o", "2", "--phi", "2", "--rel-error",
-              "0.0001", "--min-samples", "16", "--max-samples", "16", "--quiet", "--cache-dir", str(tmp_path))
+              "0.0001", "--min-samples", "16", "--max-samples", "16", "--quiet", "--cache-dir", str(tmp_path),
+              "--method", "pfmc")
     assert out.returncode == 0, out.stderr
-    assert "target met    NO" in out.stdout and "does not reach the target" in out.stderr
+    assert "target met    NO" in out.stdout and "exceeds the target 0.0001: raise --max-samples" in out.stderr
 

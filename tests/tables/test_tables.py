@@ -457,7 +457,7 @@ def test_11_interrupted_tabulation_leaves_nothing(tmp_path):
     out_dir.mkdir()
     out = out_dir / "x.exr"
     env = dict(os.environ, BSDFLAB_CACHE_DIR=str(cache), BSDFLAB_THREADS="2")
-    proc = subprocess.Popen([*BSDFLAB, "tabulate", "--preset", "xenopeltis", "--out", str(out)],
+    proc = subprocess.Popen([*BSDFLAB, "tabulate", "--preset", "xenopeltis", "--method", "pfmc", "--out", str(out)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             # a runner started with SIGINT ignored (a shell background job)
                             # would pass that on: the child must get the default handler

@@ -152,7 +152,16 @@ def test_05_bad_stage_input(call, match):
 
 
 def test_06_estimator_version_is_exported():
-    assert isinstance(_core.estimator_version, int) and _core.estimator_version >= 2
+    """The core's estimator version is the one docs/estimators.md states (and that every
+    table key records). Mutation caught: the core's version bumped without the docs (or
+    the reverse), which is how the page once kept saying 5 under version 6."""
+    import re
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "estimators.md").read_text()
+    stated = re.search(r"Estimator version \(`bsdflab._core.estimator_version`\): \*\*(\d+)\*\*", page)
+    assert stated, "docs/estimators.md no longer states the estimator version"
+    assert isinstance(_core.estimator_version, int) and _core.estimator_version == int(stated.group(1))
 
 
 def test_07_a_cells_value_depends_on_its_pilot_only_through_the_effort(small_setup):

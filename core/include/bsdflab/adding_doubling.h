@@ -27,7 +27,10 @@
 // adding-doubling, the query directions entering through the top's transmission
 // kernels; for a smooth top the query cosines are zero-weight extra nodes inside the
 // first slab (Nystrom extension) and the top's transmittances are applied at the ends.
-// Transmission through the stack and reflection from below are not solved (0).
+// Transmission through the stack (both ways) and reflection from below are solved for a
+// transmissive stack with smooth top and base (two_sided()): the stack's four operators
+// from the adding equations, every query cosine a zero-weight extra node inside the first
+// or last slab, the Fresnel transmittances at the ends; other stacks return 0 there.
 #pragma once
 #include <memory>
 #include <mutex>
@@ -67,6 +70,9 @@ class AddingDoubling {
     int azimuth_samples() const { return half_samples_; }
     const std::vector<double> &nodes() const { return mu_; }
     const std::vector<double> &weights() const { return w_; }
+    // A transmissive stack whose every pair is solved (transmission both ways, reflection
+    // from below): a smooth top and a smooth dielectric base around at least one slab.
+    bool two_sided() const { return two_sided_; }
     // Largest measured error of the film lookups used (-1: none).
     double film_lookup_error() const { return film_lookup_error_; }
     // f |cos theta_o| for n direction pairs (rows of 3), written to out (n x channels);
@@ -81,8 +87,16 @@ class AddingDoubling {
   private:
     struct Boundary;
     struct Inner;  // the reflection of everything below a rough top, per (channel, order)
+    // Two-sided queries (two_sided()): zero-weight extra cosines (inside the first slab for
+    // directions above the stack, inside the last for directions below) and, per pair, the
+    // stack operator it reads (0 Rt, 1 Td, 2 Rb, 3 Tu) at (row, col) among the extras.
+    struct Queries {
+        std::vector<double> cosines;
+        std::vector<int> op, row, col;
+    };
     void solve(const std::vector<double> &out_cos, const std::vector<double> &in_cos,
-               std::vector<double> &values) const;
+               std::vector<double> &values, const Queries *two_sided = nullptr) const;
+    void eval_two_sided(const double *wi, const double *wo, std::size_t n, double *out) const;
 
     std::vector<double> wavelengths_;
     std::vector<std::shared_ptr<const BSDF>> boundaries_;
@@ -94,6 +108,7 @@ class AddingDoubling {
     int orders_ = 1;
     int half_samples_ = 64;
     bool smooth_top_ = false;
+    bool two_sided_ = false;
     double film_lookup_error_ = -1.0;
     std::shared_ptr<Inner> inner_;
 };

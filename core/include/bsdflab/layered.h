@@ -34,8 +34,8 @@
 // Paths whose every vertex is a delta event (e.g. a smooth coat over a smooth mirror) form
 // a delta lobe of the stack and are not part of eval.
 //
-// LayeredOptions::estimator selects the walk: 0 "pfmc" (the above, the default) or 1
-// "pfmc2" (groups of kWalksPerChain walks share a chain; bright slabs fly by their smallest
+// LayeredOptions::estimator selects the walk: 0 "pfmc" (the above; the reference) or 1
+// "pfmc2" (the default: groups of kWalksPerChain walks share a chain; bright slabs fly by their smallest
 // extinction so spectral weights stay <= 1); docs/estimators.md derives both.
 //
 // Random numbers are drawn into named locals, in program order, so that the streams (and

@@ -92,6 +92,10 @@ class Tabulator {
     // P: (rows x model channels) row-major; rows - 1 output channels plus luminance last.
     Tabulator(std::shared_ptr<const BSDF> model, TableGrid grid, std::vector<double> P, int rows,
               TabulationSettings settings);
+    // The same model, grid and film lookups (shared, not rebuilt) with other settings:
+    // the stages of one table differ only in effort and target. `settings.film_lookup`
+    // must equal this one's (the lookups are what is shared).
+    std::shared_ptr<Tabulator> with_settings(const TabulationSettings &settings) const;
     std::size_t cells() const { return grid_.cells(); }
     int out_channels() const { return rows_ - 1; }
     bool stochastic() const { return estimator_ != nullptr; }

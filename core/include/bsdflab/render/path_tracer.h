@@ -101,9 +101,12 @@ class RenderJob {
                        double L[3], PCG32 &rng, double *buf, RayLog &log) const;
     void render_tile(std::size_t tile, int pass, int spp);
     // Pixels [x0, x1) x [y0, y1) of one pass; out_sum/out_sq point at pixel (x0, y0) of
-    // row-major buffers whose rows are `stride` pixels long.
+    // row-major buffers whose rows are `stride` pixels long. With `stop`, the rect is
+    // abandoned (its sums incomplete) as soon as *stop reads true, checked before every camera
+    // sample: cancel latency is one path per thread, whatever the tile size or pass_spp.
     std::size_t render_rect(int x0, int y0, int x1, int y1, int pass, int spp, double *out_sum,
-                            double *out_sq, std::size_t stride, RayLog &log) const;
+                            double *out_sq, std::size_t stride, RayLog &log,
+                            const std::atomic<bool> *stop = nullptr) const;
 
     std::shared_ptr<const RenderScene> scene_;
     RenderSettings s_;

@@ -1,0 +1,75 @@
+"""Ocean Optics SpectraSuite .ProcSpec: a zip archive holding one XML document ``ps_<n>.xml``
+(and ``OOISignatures.xml``).
+
+The document (an XStream serialisation of OmniDriver's spectrum object) holds the
+wavelengths as ``<channelWavelengths><double>...</double>...</channelWavelengths>`` and the
+processed spectrum (reflectance or transmittance, in percent as SpectraSuite shows it) as
+``<processedPixels><double>...</double>...</processedPixels>``; beside them the raw sample,
+dark and reference pixels (``pixelValues``, ``darkSpectrum``, ``referenceSpectrum``) and the
+acquisition settings. SpectraSuite writes some bytes outside ASCII into the document; they
+are dropped before parsing (as pavo/lightr do).
+"""
+from __future__ import annotations
+
+import re
+import zipfile
+import zlib
+from xml.etree import ElementTree
+
+import numpy as np
+
+from bsdflab.fit.readers.base import Reader, Spectrum
+
+_MEMBER = re.compile(r"(^|/)ps_\d+\.xml$")
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f]")
+
+
+def _doubles(root, tag: str, where: str) -> np.ndarray:
+    node = root.find(f".//{tag}")
+    if node is None:
+        raise ValueError(f"{where}: no <{tag}> element")
+    values = []
+    for k, el in enumerate(node.iter("double")):
+        try:
+            values.append(float(el.text or ""))
+        except ValueError:
+            raise ValueError(f"{where}: <{tag}> value {k + 1} is not a number: {el.text!r}") from None
+    if not values:
+        raise ValueError(f"{where}: <{tag}> holds no <double> values")
+    v = np.array(values)
+    if not np.all(np.isfinite(v)):
+        k = int(np.flatnonzero(~np.isfinite(v))[0])
+        raise ValueError(f"{where}: <{tag}> value {k + 1} is not finite: {values[k]!r}")
+    return v
+
+
+class ProcSpec(Reader):
+    name = "procspec"
+    suffixes = (".procspec",)
+    description = "Ocean Optics SpectraSuite .ProcSpec (a zip with an XML spectrum)"
+
+    def read(self, path: str, spec) -> list[Spectrum]:
+        try:
+            with zipfile.ZipFile(path) as z:
+                members = [m for m in z.namelist() if _MEMBER.search(m)]
+                if len(members) != 1:
+                    raise ValueError(f"{path}: expected one ps_<n>.xml document in the archive, found "
+                                     f"{members or 'none'} (members: {', '.join(z.namelist()) or 'none'})")
+                member = members[0]
+                raw = z.read(member)
+        except (zipfile.BadZipFile, zlib.error, EOFError) as e:
+            raise ValueError(f"{path}: not a readable ProcSpec (zip) archive: {e}") from None
+        except OSError as e:
+            raise ValueError(f"cannot read {path}: {e}") from None
+        where = f"{path}: {member}"
+        text = _CONTROL.sub("", raw.decode("ascii", errors="ignore"))
+        try:
+            root = ElementTree.fromstring(text)
+        except ElementTree.ParseError as e:
+            line, column = e.position
+            raise ValueError(f"{where}: line {line}, column {column + 1}: bad XML: {str(e).split(':')[0]}") from None
+        wl = _doubles(root, "channelWavelengths", where)
+        value = _doubles(root, "processedPixels", where)
+        if len(wl) != len(value):
+            raise ValueError(f"{where}: {len(wl)} channelWavelengths but {len(value)} processedPixels")
+        return [Spectrum(wl, value, path, "", f"{where} <processedPixels>", np.zeros(0, int))]
