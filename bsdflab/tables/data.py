@@ -177,11 +177,13 @@ class TableData:
         cells' relative error of luminance at most ``rel_error_target``; the max beside it).
         ``coverage`` (PFMC tables): how often cell errors were exceeded by k sigma in the
         coverage study of the table's estimator version (bsdflab.tables.coverage,
-        docs/coverage.md), None where that version was not measured or the table is not PFMC."""
+        docs/coverage.md), None where that version was not measured or the table is not PFMC;
+        its ``applies`` is False, with a ``warning``, for a pilot shorter than the measured one."""
         from bsdflab.tables.summary import STDERR, accuracy
 
         a = accuracy(self)
-        a["coverage"] = coverage_record(self.meta.get("estimator_version")) if a["kind"] == STDERR else None
+        a["coverage"] = (coverage_record(self.meta.get("estimator_version"), self.meta.get("min_samples"))
+                         if a["kind"] == STDERR else None)
         return a
 
     def check_model(self):

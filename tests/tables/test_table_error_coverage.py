@@ -88,14 +88,26 @@ def test_01_pooled_error_covers_a_tail_heavy_stack():
 
 
 def test_02_accuracy_reports_the_measured_coverage():
+    """The measured shares are claimed only at the measured pilot effort (min_samples 512);
+    a shorter pilot, where the study found the errors too small, gets ``applies`` False and
+    a warning, on the command line too. Mutation caught: the record ignoring min_samples
+    (before this test, a 64-walk table claimed the 512-walk coverage)."""
     from bsdflab import _core
+    from bsdflab.tables.summary import describe_accuracy
 
     table = tabulate(plastic(), TableGrid(2, 2, 2), rel_error=0.2, wavelengths=WL, progress=False,
-                     min_samples=64)
+                     min_samples=N0)
     cov = table.accuracy()["coverage"]
     assert table.meta["estimator_version"] == _core.estimator_version == 7
     assert cov["command"].startswith("python bench/coverage_tables.py") and cov["cells"] == 14400
     assert set(cov["normal"]) == {"2", "3", "4"}
+    assert cov["applies"] and cov["warning"] is None and cov["min_samples"] == N0
+    assert "error coverage" not in dict(describe_accuracy(table)[1])
+    for short in (64, 511, None):
+        table.meta["min_samples"] = short
+        cov = table.accuracy()["coverage"]
+        assert not cov["applies"] and "min-samples 512" in cov["warning"], cov
+        assert dict(describe_accuracy(table)[1])["error coverage"] == cov["warning"]
     table.meta["estimator_version"] = 6  # not measured: no claim
     assert table.accuracy()["coverage"] is None
 
