@@ -29,7 +29,8 @@ def register(sub) -> None:
     p.add_argument("--wavelengths", type=float, nargs="*", default=None, metavar="NM",
                    help="store these wavelengths instead of linear sRGB")
     p.add_argument("--min-samples", type=int, default=DEFAULT_MIN_SAMPLES,
-                   help=f"pfmc: walks per cell in the first pass (default {DEFAULT_MIN_SAMPLES})")
+                   help=f"pfmc: walks per cell in the first pass (default {DEFAULT_MIN_SAMPLES}; fewer leave "
+                        "the stated errors too small for tail-heavy stacks, docs/coverage.md)")
     p.add_argument("--max-samples", type=int, default=DEFAULT_MAX_SAMPLES,
                    help=f"pfmc: cap on walks per cell (default {DEFAULT_MAX_SAMPLES})")
     p.add_argument("--seed", type=int, default=0, help="pfmc: random seed (default 0)")

@@ -25,6 +25,7 @@ import numpy as np
 from bsdflab.bsdfs.base import from_dict
 from bsdflab.lobes import Lobe
 from bsdflab.tables.channels import LUMINANCE_RGB
+from bsdflab.tables.coverage import coverage_record
 from bsdflab.util import args as check
 from bsdflab.util import limits
 
@@ -173,10 +174,17 @@ class TableData:
     def accuracy(self) -> dict[str, Any]:
         """Whether the table meets its target, and the figures that decide it: the one
         definition of "target met" is in bsdflab.tables.summary (the 95th percentile of the
-        cells' relative error of luminance at most ``rel_error_target``; the max beside it)."""
-        from bsdflab.tables.summary import accuracy
+        cells' relative error of luminance at most ``rel_error_target``; the max beside it).
+        ``coverage`` (PFMC tables): how often cell errors were exceeded by k sigma in the
+        coverage study of the table's estimator version (bsdflab.tables.coverage,
+        docs/coverage.md), None where that version was not measured or the table is not PFMC;
+        its ``applies`` is False, with a ``warning``, for a pilot shorter than the measured one."""
+        from bsdflab.tables.summary import STDERR, accuracy
 
-        return accuracy(self)
+        a = accuracy(self)
+        a["coverage"] = (coverage_record(self.meta.get("estimator_version"), self.meta.get("min_samples"))
+                         if a["kind"] == STDERR else None)
+        return a
 
     def check_model(self):
         """The table's model rebuilt through ``from_dict`` (ValueError when it is not a

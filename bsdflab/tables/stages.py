@@ -14,7 +14,9 @@ Effort adapts per cell in two stages (core/include/bsdflab/tabulation.h has the 
    max_samples)`` walks with ``target = rel_error x max(|pilot luminance|, 5 % of the
    lobe's mean pilot luminance)``, from a fresh seed stream. The stored value is the mean of
    those fresh walks only, so it is unbiased: the pilot decides the effort, never the value
-   (given n, the fresh walks are independent of the pilot).
+   (given n, the fresh walks are independent of the pilot). Its standard error pools the
+   per-walk spread of the pilot's and the fresh walks (estimator version 7; the fresh
+   spread alone under-covered heavy-tailed cells: docs/coverage.md).
 
 Any split of the cells into blocks reproduces ``tabulate`` bit for bit (it is written with
 exactly these calls)::
@@ -67,6 +69,8 @@ class PilotBlock:
     nonfinite: int         # walks whose contribution was not finite (0 for a sound model)
     seconds: float = 0.0
     capped: int = 0        # walks cut by the model's max_depth (biased low; 0 for a sound model)
+    error: np.ndarray | None = None  # (n, channels) each channel's standard error (None: not kept)
+    min_samples: int | None = None   # the pilot's walks per cell (None: not recorded)
 
 
 @dataclass(frozen=True)
@@ -105,7 +109,8 @@ def pilot_cells(model: BSDF, grid: TableGrid, cells, *, wavelengths=None,
     start = time.perf_counter()
     run_with_progress(job, progress, unit="cell", desc="tabulating (pilot)")
     return PilotBlock(idx, np.asarray(job.pilot_lum), np.asarray(job.pilot_error),
-                      int(job.pilot_nonfinite), time.perf_counter() - start, int(job.pilot_capped))
+                      int(job.pilot_nonfinite), time.perf_counter() - start, int(job.pilot_capped),
+                      np.asarray(job.pilot_channel_error).reshape(len(idx), tab.out_channels), int(min_samples))
 
 
 def merge_pilots(blocks: Sequence[PilotBlock], n_cells: int) -> PilotBlock:
@@ -115,9 +120,15 @@ def merge_pilots(blocks: Sequence[PilotBlock], n_cells: int) -> PilotBlock:
     order = _cover(cells, n_cells, "pilot blocks")
     lum = np.concatenate([b.lum for b in blocks])[order]
     err = np.concatenate([b.lum_error for b in blocks])[order]
+    channel_err = (np.concatenate([b.error for b in blocks])[order]
+                   if blocks and all(b.error is not None for b in blocks) else None)
+    efforts = {b.min_samples for b in blocks}
+    if len(efforts) > 1:
+        raise ValueError(f"pilot blocks ran different min_samples ({sorted(efforts, key=str)}): "
+                         "one table, one pilot effort")
     return PilotBlock(np.arange(n_cells, dtype=np.int64), lum, err,
                       sum(b.nonfinite for b in blocks), sum(b.seconds for b in blocks),
-                      sum(b.capped for b in blocks))
+                      sum(b.capped for b in blocks), channel_err, efforts.pop() if efforts else None)
 
 
 def floor_scale(model: BSDF, grid: TableGrid, pilot: PilotBlock, *, wavelengths=None,
@@ -143,10 +154,19 @@ def finish_cells(model: BSDF, grid: TableGrid, cells, pilot: PilotBlock, scale, 
                      rel_error=rel_error, film_lookup=film_lookup)
     idx = _cells(cells, tab.cells)
     _full(pilot, tab.cells)
+    # the finish reads min_samples as the pilot's walk count (its effort rule and the pooled
+    # errors' pilot weight): a pilot of another effort would give every cell a wrong error
+    if pilot.min_samples is not None and pilot.min_samples != tab.settings.min_samples:
+        raise ValueError(f"min_samples ({tab.settings.min_samples}) must be the pilot's "
+                         f"({pilot.min_samples}): the finish pools the pilot's walks by that count")
     scale = np.asarray(scale, dtype=np.float64).ravel()
     if scale.shape != (len(lobes_of(model)),) or not np.all(np.isfinite(scale)):
         raise ValueError(f"scale must hold one finite value per lobe ({len(lobes_of(model))}), got {scale!r}")
-    job = tab.finish_job(idx.tolist(), pilot.lum[idx].tolist(), pilot.lum_error[idx].tolist(), scale.tolist())
+    # the pilot's channel errors pool into the cells' errors (estimator version 7; without
+    # them each channel takes the luminance's pooled/fresh ratio)
+    channel_err = [] if pilot.error is None else np.asarray(pilot.error, np.float64)[idx].ravel().tolist()
+    job = tab.finish_job(idx.tolist(), pilot.lum[idx].tolist(), pilot.lum_error[idx].tolist(), scale.tolist(),
+                         pilot_channel_error=channel_err)
     start = time.perf_counter()
     run_with_progress(job, progress, unit="cell", desc="tabulating")
     C = tab.out_channels

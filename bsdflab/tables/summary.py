@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from bsdflab.tables.channels import LUMINANCE_RGB
+from bsdflab.tables.coverage import coverage_record
 
 SIGNIFICANT = 0.01  # cells below 1 % of the table's maximum are left out of error statistics
 TARGET_PERCENTILE = 95
@@ -116,4 +117,7 @@ def describe_accuracy(table) -> tuple[dict[str, Any], list[tuple[str, str]]]:
     if a["kind"] == STDERR:
         lines.append(("capped cells", f"{a['capped_cells']} of {table.samples.size} stopped at max_samples "
                                       f"{a['max_samples']}"))
+        cov = coverage_record(table.meta.get("estimator_version"), table.meta.get("min_samples"))
+        if cov is not None and not cov["applies"]:
+            lines.append(("error coverage", cov["warning"]))
     return a, lines

@@ -71,12 +71,15 @@ void bind_tables(py::module_ &m) {
         .def(
             "finish_job",
             [](const std::shared_ptr<Tabulator> &t, std::vector<std::size_t> cells,
-               std::vector<double> pilot_lum, std::vector<double> pilot_error, std::vector<double> scale) {
+               std::vector<double> pilot_lum, std::vector<double> pilot_error, std::vector<double> scale,
+               std::vector<double> pilot_channel_error) {
                 return std::make_shared<TabulationStageJob>(t, TabulationStageJob::kFinish, std::move(cells),
                                                             std::move(pilot_lum), std::move(pilot_error),
-                                                            std::move(scale));
+                                                            std::move(scale), std::move(pilot_channel_error));
             },
-            py::arg("cells"), py::arg("pilot_lum"), py::arg("pilot_error"), py::arg("scale"));
+            py::arg("cells"), py::arg("pilot_lum"), py::arg("pilot_error"), py::arg("scale"),
+            py::arg("pilot_channel_error") = std::vector<double>{},
+            "pilot_channel_error: the pilot job's pilot_channel_error (pooled per-channel errors)");
 
     auto doubles = [](const std::vector<double> &v) { return py::array_t<double>(v.size(), v.data()); };
     py::class_<TabulationStageJob, std::shared_ptr<TabulationStageJob>>(m, "TabulationStageJob")
@@ -89,6 +92,8 @@ void bind_tables(py::module_ &m) {
         .def_property_readonly("pilot_lum", [=](const TabulationStageJob &j) { return doubles(j.pilot.lum); })
         .def_property_readonly("pilot_error",
                                [=](const TabulationStageJob &j) { return doubles(j.pilot.lum_error); })
+        .def_property_readonly("pilot_channel_error",
+                               [=](const TabulationStageJob &j) { return doubles(j.pilot.error); })
         .def_property_readonly("pilot_nonfinite",
                                [](const TabulationStageJob &j) { return j.pilot.nonfinite; })
         .def_property_readonly("value",

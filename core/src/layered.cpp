@@ -645,7 +645,8 @@ void LayeredBSDF::delta_reflectance(const Vec3 &wi, const Query &q, double *out)
 //    roulette); every time it arrives at X heading out it adds X's density of
 //    transmitting toward wo, then continues as sample() does (the arrival ends the walk if
 //    X transmits). The expected sum over arrivals is the exit density at wo, so the
-//    estimate is unbiased; it is seeded from (seed, wi, wo), so pdf() is a fixed function
+//    estimate is unbiased but for one defensive pseudo-walk (below: O(1/n) of the mass)
+//    that keeps it positive; it is seeded from (seed, wi, wo), so pdf() is a fixed function
 //    of the pair, which multiple importance sampling needs for its weights to sum to 1.
 //  - a delta X (smooth top): the exits' density is that of the last non-delta vertex's
 //    sample refracted through X; not estimated here: the share of draws that leave
@@ -679,7 +680,13 @@ double LayeredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Qu
         BSDFSample out = walk(wi, s, q, rng, buf, &density);
         if (out.lobe && !(out.lobe & kDelta) && (out.wo.z > 0) == (wo.z > 0)) ++left_through_x;
     }
-    if (density.rough) return p + density.sum / n;
+    // Rough X: the arrivals' density, with one defensive pseudo-walk whose exit density is
+    // a cosine lobe carrying the smoothed share of draws that left through X. Without it the
+    // estimate was 0 wherever none of the n walks arrived (36 % of a rough transmissive
+    // stack's own samples at n = 1), and MIS then gave the sample no weight. Its mass bias,
+    // ((k + 1) / (n + 2) - k / n) / (n + 1) of the share, vanishes as 1 / n.
+    const double share = (left_through_x + 1.0) / (n + 2.0);
+    if (density.rough) return p + (density.sum + share * std::abs(wo.z) * kInvPi) / (n + 1.0);
     // Delta X: the share of draws leaving through X spread as a cosine lobe over the
     // directions X can refract into. The share is smoothed, (k + 1) / (n + 2), so that a
     // direction sample() returns never reads pdf 0 (with n = 1 the raw k / n was 0 for
@@ -694,7 +701,6 @@ double LayeredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Qu
         X.sample(Vec3{0.0, 0.0, wo.z > 0 ? 1.0 : -1.0}, 0.5, 0.5, 0.5, kDeltaTransmission, q, t);
     // sin^2 of the critical angle on wo's side (1: no critical angle)
     const double cone = normal.lobe ? std::min(1.0, normal.eta * normal.eta) : 1.0;
-    const double share = (left_through_x + 1.0) / (n + 2.0);
     return p + share * std::abs(wo.z) * kInvPi / cone;
 }
 

@@ -79,6 +79,13 @@ std::uint64_t Tabulator::estimate(std::size_t cell, int n, uint64_t seed, double
     return nonfinite;
 }
 
+double pooled_error(double fresh, int n, double pilot, int n0) {
+    if (n < 2 || n0 < 2 || !std::isfinite(pilot)) return fresh;
+    const double var0 = double(n0) * pilot * pilot, var1 = double(n) * fresh * fresh; // per walk
+    const double pooled = ((n0 - 1) * var0 + (n - 1) * var1) / double(n0 + n - 2);
+    return std::sqrt(pooled / n);
+}
+
 namespace {
 void check_cells(const std::vector<std::size_t> &cells, std::size_t count) {
     for (std::size_t c : cells)
@@ -91,6 +98,7 @@ PilotCells Tabulator::pilot(const std::vector<std::size_t> &cells, const Tabulat
     PilotCells out;
     out.lum.assign(cells.size(), 0.0);
     out.lum_error.assign(cells.size(), 0.0);
+    out.error.assign(cells.size() * out_channels(), 0.0);
     std::atomic<std::uint64_t> nonfinite{0}, capped{0};
     const int n = estimator_ ? settings_.min_samples : 1;
     parallel_for_each(cells.size(), [&](std::size_t i) {
@@ -101,6 +109,7 @@ PilotCells Tabulator::pilot(const std::vector<std::size_t> &cells, const Tabulat
         capped += cut;
         out.lum[i] = m[rows_ - 1];
         out.lum_error[i] = e[rows_ - 1];
+        std::copy(e.begin(), e.begin() + (rows_ - 1), out.error.begin() + i * (rows_ - 1));
         ctl.tick();
     });
     out.nonfinite = nonfinite;
@@ -133,10 +142,13 @@ int Tabulator::effort(std::size_t cell, double pilot_lum, double pilot_error,
 
 FinishedCells Tabulator::finish(const std::vector<std::size_t> &cells, const std::vector<double> &pilot_lum,
                                 const std::vector<double> &pilot_error, const std::vector<double> &scale,
-                                const TabulationControl &ctl) const {
+                                const TabulationControl &ctl,
+                                const std::vector<double> &pilot_channel_error) const {
     check_cells(cells, grid_.cells());
     if (pilot_lum.size() != cells.size() || pilot_error.size() != cells.size())
         throw std::invalid_argument("pilot luminance and error must have one entry per cell");
+    if (!pilot_channel_error.empty() && pilot_channel_error.size() != cells.size() * out_channels())
+        throw std::invalid_argument("pilot channel errors must have out_channels entries per cell");
     if (scale.size() != std::size_t(grid_.n_lobes))
         throw std::invalid_argument("floor scale must have one entry per lobe");
     const int C = out_channels();
@@ -165,6 +177,20 @@ FinishedCells Tabulator::finish(const std::vector<std::size_t> &cells, const std
         std::uint64_t cut = 0;
         nonfinite += estimate(cell, n, cell_seed(cell, 1), m.data(), e.data(), &cut);
         capped += cut;
+        if (estimator_) {
+            // Each channel pools with its own pilot error; without them (a caller of the
+            // version-6 interface) every channel takes the luminance's pooled/fresh ratio
+            // (one walk's channels rise and fall together) or, where the fresh luminance had
+            // no spread at all, the pooled luminance error.
+            const int n0 = settings_.min_samples;
+            const double lum_pooled = pooled_error(e[C], n, pilot_error[i], n0);
+            for (int r = 0; r < C; ++r) {
+                if (!pilot_channel_error.empty())
+                    e[r] = pooled_error(e[r], n, pilot_channel_error[i * C + r], n0);
+                else e[r] = e[C] > 0 ? e[r] * (lum_pooled / e[C]) : std::max(e[r], lum_pooled);
+            }
+            e[C] = lum_pooled;
+        }
         std::copy(m.begin(), m.begin() + C, out.value.begin() + i * C);
         std::copy(e.begin(), e.begin() + C, out.error.begin() + i * C);
         out.lum[i] = m[C];
@@ -179,16 +205,18 @@ FinishedCells Tabulator::finish(const std::vector<std::size_t> &cells, const std
 
 TabulationStageJob::TabulationStageJob(std::shared_ptr<const Tabulator> tabulator, Stage stage,
                                        std::vector<std::size_t> cells, std::vector<double> pilot_lum,
-                                       std::vector<double> pilot_error, std::vector<double> scale)
+                                       std::vector<double> pilot_error, std::vector<double> scale,
+                                       std::vector<double> pilot_channel_error)
     : tabulator_(std::move(tabulator)), stage_(stage), cells_(std::move(cells)),
-      pilot_lum_(std::move(pilot_lum)), pilot_error_(std::move(pilot_error)), scale_(std::move(scale)) {
+      pilot_lum_(std::move(pilot_lum)), pilot_error_(std::move(pilot_error)), scale_(std::move(scale)),
+      pilot_channel_error_(std::move(pilot_channel_error)) {
     if (!tabulator_) throw std::invalid_argument("no tabulator");
 }
 
 void TabulationStageJob::run() {
     TabulationControl ctl{&done_, &cancelled_};
     if (stage_ == kPilot) pilot = tabulator_->pilot(cells_, ctl);
-    else finished = tabulator_->finish(cells_, pilot_lum_, pilot_error_, scale_, ctl);
+    else finished = tabulator_->finish(cells_, pilot_lum_, pilot_error_, scale_, ctl, pilot_channel_error_);
 }
 
 } // namespace bsdflab

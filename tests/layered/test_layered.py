@@ -85,8 +85,9 @@ def test_04_reported_error_matches_the_spread():
                        bl.Diffuse(0.7)),
     lambda: plastic_stack(0.6, samples=256),
 ])
-def test_05_reciprocity(make):
-    m = make()
+@pytest.mark.parametrize("estimator", ["pfmc2", "pfmc"])
+def test_05_reciprocity(make, estimator):
+    m = bl.from_dict({**make().to_dict(), "estimator": estimator})
     n = 48
     wi = random_unit_vectors(n, seed=5, hemisphere="upper")
     wo = random_unit_vectors(n, seed=6, hemisphere="upper")

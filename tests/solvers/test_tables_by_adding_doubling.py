@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from bsdflab import from_dict
 from bsdflab.presets import preset
 from bsdflab.tables import TableGrid, tabulate
 from bsdflab.testing import sidak_significance
@@ -38,6 +39,29 @@ def test_01_format_header_and_agreement_with_pfmc_table():
     other = tabulate(preset("xenopeltis", pigment_absorption=1.08), GRID, rel_error=0.05, wavelengths=WL,
                      method="adding-doubling", progress=False)
     assert (np.abs(other.values - mc.values) / np.hypot(mc.stderr, other.stderr)).max() > z_max
+
+
+@pytest.fixture(scope="module")
+def snake_ad_table():
+    return tabulate(preset("xenopeltis"), GRID, rel_error=0.05, wavelengths=WL, method="adding-doubling",
+                    progress=False)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("estimator", ["pfmc2", "pfmc"])
+@pytest.mark.parametrize("seed", range(20))
+def test_01b_agreement_at_20_consecutive_seeds(snake_ad_table, seed, estimator):
+    """test_01's z-test at seeds 0-19 for both estimators (issue 32: its fixed seed passed
+    while 25-40 % of other seeds exceeded the Sidak limit with version 6's cell errors;
+    version 7 pools the pilot's walk spread into them, docs/coverage.md). Each seed is its
+    own family at alpha 0.01 (40 such runs with exact errors would all pass with
+    probability 0.99^40 = 0.67); the seeds are fixed: 20 of 20 recorded passing for each estimator."""
+    ad = snake_ad_table
+    model = from_dict({**preset("xenopeltis").to_dict(), "estimator": estimator})
+    mc = tabulate(model, GRID, rel_error=0.05, wavelengths=WL, progress=False, seed=seed, min_samples=32768)
+    z_max = stats.norm.isf(sidak_significance(0.01, ad.values.size) / 2)
+    z = np.abs(ad.values - mc.values) / np.hypot(mc.stderr, ad.stderr)
+    assert z.max() <= z_max, f"seed {seed}: max z {z.max():.2f} > {z_max:.2f}"
 
 
 def test_02_bad_method():

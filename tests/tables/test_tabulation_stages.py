@@ -143,6 +143,12 @@ def test_04_deterministic_models_tabulate_in_stages_too():
     (lambda m, g, p, s: finish_cells(m, g, [0], p, [1.0, 2.0]), "one finite value per lobe"),
     (lambda m, g, p, s: finish_cells(m, g, [0], pilot_cells(m, g, [0]), s), "PilotBlock over all"),
     (lambda m, g, p, s: assemble(m, g, [finish_cells(m, g, [0], p, s)], p), "cover each"),
+    # the finish pools the pilot's walks by its own min_samples: a pilot of another effort
+    # gave every cell a wrong error, silently (the mutation: no check)
+    (lambda m, g, p, s: finish_cells(m, g, [0], p, s, min_samples=64), r"min_samples \(64\) must be the pilot's"),
+    (lambda m, g, p, s: merge_pilots([pilot_cells(m, g, [0], min_samples=64),
+                                      pilot_cells(m, g, range(1, p.cells.size))], p.cells.size),
+     "different min_samples"),
 ])
 def test_05_bad_stage_input(call, match):
     m, g = bl.Diffuse(0.4), TableGrid(2, 2, 2)

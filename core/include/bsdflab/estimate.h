@@ -28,7 +28,9 @@ namespace bsdflab {
 //    their angular part over the channels (closed form for one lossless film), exp and cos
 //    over channels come from libmvec: values change in the last bits, "pfmc" is still
 //    version 5's estimator (its golden values hold to 1e-9).
-constexpr int kEstimatorVersion = 6;
+// 7: a table cell's standard error pools the pilot's walk spread with the fresh walks'
+//    (tabulation.h pooled_error); values, sample counts and Layered.eval are unchanged.
+constexpr int kEstimatorVersion = 7;
 
 // Growable scratch memory of one thread's estimates.
 class EstimateWorkspace {

@@ -9,7 +9,9 @@
 //   finish  each cell gets n = clamp(1.1 min_samples (se / target)^2, min_samples,
 //           max_samples) walks, target = rel_error max(|pilot luminance|, floor x the mean
 //           pilot luminance of the cell's lobe), from a FRESH seed stream (1 of the cell).
-//           The stored value, error and sample count are those of the fresh walks alone.
+//           The stored value and sample count are those of the fresh walks alone; the
+//           error is the fresh mean's, with the walks' spread pooled over the pilot's and
+//           the fresh walks (pooled_error below).
 // Why this is unbiased: the pilot only chooses n. Given n, the finish walks are
 // independent of the pilot, so E[value | n] = f for every n, hence E[value] = f. (Pooling
 // the pilot into the value, as version 1 did, is biased low for heavy-tailed cells: a
@@ -57,9 +59,20 @@ struct TabulationControl {
     }
 };
 
+// The standard error of a mean of `n` fresh walks whose own standard error is `fresh`,
+// with the per-walk spread pooled with an independent pilot of `n0` walks (standard error
+// `pilot`): sqrt(((n0 - 1) n0 pilot^2 + (n - 1) n fresh^2) / (n0 + n - 2) / n). Why: a
+// heavy-tailed cell whose fresh walks miss their rare large contributions reads low in
+// value AND in spread, so its own z is skewed toward large negative values (issue 32:
+// 15x the normal share beyond 4 sigma for the snake); the pilot's walks are independent
+// of the value, and twice the walks give the spread twice the degrees of freedom
+// (docs/coverage.md measures it). n0 or n < 2: the fresh error.
+double pooled_error(double fresh, int n, double pilot, int n0);
+
 // Outputs of the pilot stage, one entry per listed cell.
 struct PilotCells {
     std::vector<double> lum, lum_error;
+    std::vector<double> error; // out_channels per cell: each channel's standard error
     std::uint64_t nonfinite = 0;
     std::uint64_t capped = 0; // walks cut by the model's depth cap (biased; 0 for a sound model)
 };
@@ -98,10 +111,13 @@ class Tabulator {
     // The number of final walks of a cell from its pilot (1 for a deterministic model).
     int effort(std::size_t cell, double pilot_lum, double pilot_error,
                const std::vector<double> &scale) const;
-    // pilot_lum / pilot_error: aligned with `cells`.
+    // pilot_lum / pilot_error: aligned with `cells`. pilot_channel_error: the pilot's
+    // per-channel errors (out_channels per cell, PilotCells::error) for the pooled errors,
+    // or empty: each channel then takes the luminance's pooled/fresh ratio.
     FinishedCells finish(const std::vector<std::size_t> &cells, const std::vector<double> &pilot_lum,
                          const std::vector<double> &pilot_error, const std::vector<double> &scale,
-                         const TabulationControl &ctl = {}) const;
+                         const TabulationControl &ctl = {},
+                         const std::vector<double> &pilot_channel_error = {}) const;
 
   private:
     // Mean and standard error of f (no cosine) for one cell, all rows of P (luminance last).
@@ -130,7 +146,8 @@ class TabulationStageJob {
     enum Stage { kPilot = 0, kFinish = 1 };
     TabulationStageJob(std::shared_ptr<const Tabulator> tabulator, Stage stage,
                        std::vector<std::size_t> cells, std::vector<double> pilot_lum = {},
-                       std::vector<double> pilot_error = {}, std::vector<double> scale = {});
+                       std::vector<double> pilot_error = {}, std::vector<double> scale = {},
+                       std::vector<double> pilot_channel_error = {});
     void run();  // blocking; call without the GIL
     void cancel() { cancelled_ = true; }
     bool cancelled() const { return cancelled_; }
@@ -144,7 +161,7 @@ class TabulationStageJob {
     std::shared_ptr<const Tabulator> tabulator_;
     Stage stage_;
     std::vector<std::size_t> cells_;
-    std::vector<double> pilot_lum_, pilot_error_, scale_;
+    std::vector<double> pilot_lum_, pilot_error_, scale_, pilot_channel_error_;
     std::atomic<std::size_t> done_{0};
     std::atomic<bool> cancelled_{false};
 };
