@@ -141,10 +141,11 @@ void RenderJob::sample_direct(const SurfaceHit &hit, const ShadingPoint &sp, con
             }
             if (aimed) log.add(origin, dir, tmax, true);
             if (aimed && !scene.occluded(origin, dir, tmax)) {
-                double w =
-                    (s_.strategy == LightStrategy::kMIS ? power_heuristic(es.pdf, bsdf.pdf(wi, wo, kAll, q))
-                                                        : 1.0) /
-                    es.pdf;
+                // A delta light cannot be found by BSDF sampling: its weight is 1.
+                double w = (s_.strategy == LightStrategy::kMIS && !es.delta
+                                ? power_heuristic(es.pdf, bsdf.pdf(wi, wo, kAll, q))
+                                : 1.0) /
+                           es.pdf;
                 double Le[N];
                 Colour::light(scene, es.radiance, Le);
                 Colour::add_connected(scene, L, beta, f, Le, w);
@@ -185,6 +186,15 @@ void RenderJob::trace_path_in(double px, double py, uint64_t sample_seed, double
                 scene.environment_radiance(d, rgb, env_pdf);
                 Colour::light(scene, rgb, Le);
                 double w = prev_delta ? 1.0 : mis_hit(prev_pdf, env_pdf);
+                Colour::add_emitted(scene, L, beta, w, Le);
+            }
+            // Soft suns in this direction: each is its own NEE strategy, weighted by its own
+            // density (delta lights are never found here).
+            for (std::size_t i = 0; i < scene.soft_lights(); ++i) {
+                double rgb[3], Le[N], light_pdf;
+                if (!scene.soft_light(i, d, rgb, light_pdf)) continue;
+                Colour::light(scene, rgb, Le);
+                double w = prev_delta ? 1.0 : mis_hit(prev_pdf, light_pdf);
                 Colour::add_emitted(scene, L, beta, w, Le);
             }
             break;
