@@ -1,0 +1,80 @@
+"""The sun preset's sky and sun (bsdflab/render/sky.py, Preetham et al. 1999).
+
+Checks of the transcription and of the physics it must show: the zenith value is the
+paper's zenith formula (worked by hand below), the Perez distribution has its circumsolar
+peak at the sun and its minimum roughly 90 deg away, a clear sky is blue at the zenith, the
+sun reddens and dims with air mass, and the renderer's environment is the sky the light
+brings (replacing the scene's own)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from bsdflab.render import Camera, Environment, Material, Scene, Shape
+from bsdflab.render.build import build_render_scene
+from bsdflab.render.lights import Light
+from bsdflab.render.sky import air_mass, sky_image, sky_radiance, sun_irradiance
+
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+
+
+def _sun(elevation, azimuth=0.0, turbidity=3.0, **kw):
+    return Light.from_dict({"type": "sun", "elevation_deg": elevation, "azimuth_deg": azimuth,
+                            "turbidity": turbidity, **kw})
+
+
+def test_zenith_luminance_is_the_papers_formula():
+    """T = 2, theta_s = 60 deg (elevation 30): chi = (4/9 - 2/120)(pi - 2 pi/3) = 0.447963,
+    Y_z = (4.0453 * 2 - 4.9710) tan(chi) - 0.2155 * 2 + 2.4192 = 3.11960 * 0.480551 + 1.98820
+    = 3.48736 kcd/m^2 (worked by hand from Preetham et al., Appendix A.2)."""
+    sun = _sun(30.0, turbidity=2.0)
+    rgb = sky_radiance(np.array([0.0, 1.0, 0.0]), sun.sun_direction(), 2.0)
+    assert float(rgb @ LUMINANCE) == pytest.approx(3.48736, rel=2e-3)  # sRGB's Y row rounds to 4 digits
+
+
+def test_sky_is_brightest_at_the_sun_darkest_away_from_it_and_blue_at_the_zenith():
+    sun = _sun(40.0, azimuth=30.0)
+    s = sun.sun_direction()
+    angles = np.radians(np.arange(2, 140, 2.0))
+    # a great circle through the sun and the zenith, on the side away from the horizon
+    up = np.array([0.0, 1.0, 0.0])
+    axis = np.cross(s, up)
+    axis /= np.linalg.norm(axis)
+    towards = np.cross(axis, s)
+    dirs = np.cos(angles)[:, None] * s + np.sin(angles)[:, None] * towards
+    keep = dirs[:, 1] > 0.05
+    lum = sky_radiance(dirs[keep], s, 3.0) @ LUMINANCE
+    assert np.argmax(lum) == 0                                      # circumsolar peak
+    darkest = math.degrees(angles[keep][np.argmin(lum)])
+    assert 60 < darkest < 120, darkest                              # the Perez minimum
+    zenith = sky_radiance(up, s, 3.0)
+    assert zenith[2] > zenith[1] > zenith[0]                        # blue
+    assert np.all(sky_radiance(np.array([0.0, -0.5, np.sqrt(0.75)]), s, 3.0) == 0)  # nothing below the horizon
+
+
+def test_the_sun_reddens_and_dims_as_it_sets():
+    high, low = sun_irradiance(_sun(70.0)), sun_irradiance(_sun(8.0))
+    assert high[0] / high[2] < low[0] / low[2]
+    assert low @ LUMINANCE < 0.8 * (high @ LUMINANCE)
+    assert air_mass(0.0) == pytest.approx(1.0, abs=1e-3) and 5 < air_mass(math.radians(80)) < 6
+    # at the zenith under a clear sky the atmosphere passes 70-90 % of the sunlight
+    kept = sun_irradiance(_sun(90.0 - 1e-9, turbidity=2.0, scale=1.0)) @ LUMINANCE / 128.0
+    assert 0.7 < kept < 0.9, kept
+
+
+def test_the_renderer_gets_the_sky_in_place_of_the_scene_environment():
+    plane = Shape({"type": "rectangle", "size": [4, 4]}, "white", name="floor")
+    camera = Camera(origin=(0.0, 2.0, 4.0), target=(0.0, 0.0, 0.0), width=8, height=6)
+    sun = _sun(25.0, azimuth=-30.0, scale=0.1)
+    scene = Scene(camera, (plane,), {"white": Material({"type": "diffuse", "reflectance": 0.5})},
+                  Environment("constant", radiance=(5.0, 0.0, 0.0)), lights=[sun])
+    core = build_render_scene(scene)
+    d = np.array([[0.3, 0.8, -0.52]])
+    d /= np.linalg.norm(d)
+    expected = 0.1 * sky_radiance(d, sun.sun_direction(), 3.0)
+    got = core.environment_eval(d)
+    # the map is bilinear over 128 x 256 texels: a few per mille from the exact sky
+    np.testing.assert_allclose(got, expected, rtol=1e-2, atol=0)
+    assert sky_image(sun.sun_direction(), 3.0).shape == (128, 256, 3)
