@@ -40,8 +40,8 @@ from bsdflab.reference.mitsuba_bsdf import to_mitsuba
 from bsdflab.reference.mitsuba_env import mitsuba
 from bsdflab.reference.mitsuba_spectral import emission as spectral_emission
 from bsdflab.reference.mitsuba_spectral import environment as spectral_environment
-from bsdflab.reference.mitsuba_spectral import to_mitsuba_spectral
-from bsdflab.render.lights import Light
+from bsdflab.reference.mitsuba_spectral import step_spectrum_dict, to_mitsuba_spectral
+from bsdflab.render.lights import Light, colour_of
 from bsdflab.render.scene import Material, Scene, Shape
 from bsdflab.render.sky import sky_image, sky_sun, sun_irradiance
 
@@ -186,7 +186,12 @@ def _light(mi, light: Light, spectral: bool) -> dict[str, Any]:
     """Mitsuba's ``point``, ``spot`` or ``directional`` emitter for one of our lights (same
     parameters and units); a sun is its directional light. A soft directional light (an
     angular diameter > 0, every sun) has no Mitsuba counterpart: ValueError."""
-    colour = spectral_emission if spectral else _rgb
+    def colour(value):  # our renderer's colour of the light, as a Mitsuba spectrum
+        rgb, bins = colour_of(value)
+        if not spectral:
+            return _rgb(rgb)
+        return step_spectrum_dict(bins, "zero") if bins else spectral_emission(rgb)
+
     if light.type == "point":
         return {"type": "point", "position": list(light.position), "intensity": colour(light.intensity)}
     if light.type == "spot":

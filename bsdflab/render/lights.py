@@ -9,7 +9,9 @@
 
 Units and conventions are Mitsuba 3's (``point``, ``spot``, ``directional``): intensity in
 W/sr, irradiance in W/m^2 on a surface facing the light, colours linear sRGB (one number
-or three); a spot shines along ``direction`` with Mitsuba's profile (full intensity inside
+or three) or a spectrum dict (bsdflab.spectra.Spectrum: spectral mode uses its bins as
+they are -- relative to the sensor's D65, as every spectrum in the renderer, so a flat 1
+is white --, RGB mode their RGB); a spot shines along ``direction`` with Mitsuba's profile (full intensity inside
 ``beam_width_deg``, falling linearly in angle to 0 at ``cutoff_angle_deg``; default beam
 width 3/4 of the cutoff, as Mitsuba); a directional light's ``direction`` is the way its
 light travels. ``angular_diameter_deg`` > 0 makes a soft sun: the same irradiance from a
@@ -49,7 +51,9 @@ _REQUIRED = {"point": ("position", "intensity"), "spot": ("position", "direction
              "directional": ("direction", "irradiance"), "sun": ()}
 
 
-def _colour(name: str, value: Any) -> tuple[float, float, float]:
+def _colour(name: str, value: Any) -> tuple[float, float, float] | dict:
+    if isinstance(value, dict):
+        return _spectrum(name, value)
     try:
         a = np.asarray(value, dtype=float)
     except (TypeError, ValueError, OverflowError):
@@ -62,6 +66,36 @@ def _colour(name: str, value: Any) -> tuple[float, float, float]:
     if np.any(a < 0) or np.any(a > MAX_VALUE):
         raise ValueError(f"{name} must be in [0, {MAX_VALUE:g}], got {brief(value)}")
     return (float(a[0]), float(a[1]), float(a[2]))
+
+
+def _spectrum(name: str, value: dict) -> dict:
+    """A spectral colour: a bsdflab spectrum dict (``{"type": "tabulated", "wavelengths": [...],
+    "values": [...]}``, "constant" or "rgb"), checked on the renderer's wavelength grid."""
+    from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum
+
+    try:
+        spectrum = Spectrum.from_dict(value)
+        values = np.asarray(spectrum.at(DEFAULT_WAVELENGTHS), dtype=float)
+    except (TypeError, KeyError) as e:
+        raise ValueError(f"{name}: not a spectrum dict ({e})") from None
+    except ValueError as e:
+        raise ValueError(f"{name}: {e}") from None
+    if not np.all(np.isfinite(values)) or np.any(values < 0) or np.any(values > MAX_VALUE):
+        raise ValueError(f"{name} must be finite and in [0, {MAX_VALUE:g}] at every wavelength")
+    return spectrum.to_dict()
+
+
+def colour_of(value) -> tuple[list[float], list[float]]:
+    """(RGB, spectrum) the renderer gets for a light's colour: an RGB triple and no spectrum
+    (spectral mode lifts the RGB), or a spectrum's 81 bins and their RGB (W v, clipped to
+    >= 0: a spectrum outside the sRGB gamut is clipped in RGB mode only)."""
+    if not isinstance(value, dict):
+        return list(value), []
+    from bsdflab.spectra import DEFAULT_WAVELENGTHS, Spectrum, srgb_weights
+
+    bins = np.asarray(Spectrum.from_dict(value).at(DEFAULT_WAVELENGTHS), dtype=float)
+    rgb = np.maximum(srgb_weights(DEFAULT_WAVELENGTHS) @ bins, 0.0)
+    return rgb.tolist(), bins.tolist()
 
 
 def _point(name: str, value: Any) -> tuple[float, float, float]:
@@ -92,8 +126,8 @@ class Light:
     type: str
     position: tuple[float, float, float] | None = None
     direction: tuple[float, float, float] | None = None
-    intensity: tuple[float, float, float] | None = None
-    irradiance: tuple[float, float, float] | None = None
+    intensity: tuple[float, float, float] | dict | None = None
+    irradiance: tuple[float, float, float] | dict | None = None
     cutoff_angle_deg: float | None = None
     beam_width_deg: float | None = None
     angular_diameter_deg: float | None = None
@@ -212,13 +246,14 @@ def lights_of(value: Any) -> tuple[Light, ...]:
 def add_to_core(core_scene, light: Light) -> None:
     """Add ``light`` to a ``_core.RenderScene`` (a sun as its directional light)."""
     if light.type == "point":
-        core_scene.add_point_light(list(light.position), list(light.intensity))
+        core_scene.add_point_light(list(light.position), *colour_of(light.intensity))
     elif light.type == "spot":
-        core_scene.add_spot_light(list(light.position), list(light.direction), list(light.intensity),
-                                  light.cutoff_angle_deg, light.beam_width_deg)
+        rgb, bins = colour_of(light.intensity)
+        core_scene.add_spot_light(list(light.position), list(light.direction), rgb, light.cutoff_angle_deg,
+                                  light.beam_width_deg, bins)
     elif light.type == "directional":
-        core_scene.add_directional_light(list(light.direction), list(light.irradiance),
-                                         light.angular_diameter_deg)
+        rgb, bins = colour_of(light.irradiance)
+        core_scene.add_directional_light(list(light.direction), rgb, light.angular_diameter_deg, bins)
     else:
         from bsdflab.render.sky import sun_irradiance
 

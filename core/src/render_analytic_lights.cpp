@@ -64,7 +64,7 @@ AnalyticLight AnalyticLight::directional(const Vec3 &axis, const double irradian
     if (half_angle > 0) {
         const double s = std::sin(0.5 * half_angle), sin_max = std::sin(half_angle);
         l.one_minus_cos_ = 2 * s * s;
-        for (int c = 0; c < 3; ++c) l.cone_radiance_[c] = irradiance[c] / (kPi * sin_max * sin_max);
+        l.cone_factor_ = 1 / (kPi * sin_max * sin_max);
     }
     return l;
 }
@@ -78,12 +78,13 @@ double AnalyticLight::falloff(double cos_theta) const {
 }
 
 bool AnalyticLight::sample(const Vec3 &ref, double u1, double u2, Vec3 &wo, double &dist, double &pdf,
-                           double rgb[3]) const {
+                           double rgb[3], double &factor) const {
     if (kind_ == Kind::kDirectional) {
         dist = std::numeric_limits<double>::infinity();
         if (half_angle_ == 0) {
             wo = -axis_;
             pdf = 1.0;
+            factor = 1.0;
             std::copy(value_, value_ + 3, rgb);
             return true;
         }
@@ -95,7 +96,8 @@ bool AnalyticLight::sample(const Vec3 &ref, double u1, double u2, Vec3 &wo, doub
         orthonormal_basis(n, s, b);
         wo = normalized(s * (sin_t * std::cos(phi)) + b * (sin_t * std::sin(phi)) + n * cos_t);
         pdf = 1 / (2 * kPi * one_minus_cos_);
-        std::copy(cone_radiance_, cone_radiance_ + 3, rgb);
+        factor = cone_factor_;
+        for (int c = 0; c < 3; ++c) rgb[c] = value_[c] * factor;
         return true;
     }
     const Vec3 to = position_ - ref;
@@ -106,16 +108,18 @@ bool AnalyticLight::sample(const Vec3 &ref, double u1, double u2, Vec3 &wo, doub
     const double f = falloff(-dot(wo, axis_));
     if (!(f > 0)) return false;
     pdf = 1.0;
-    for (int c = 0; c < 3; ++c) rgb[c] = value_[c] * f / d2;
+    factor = f / d2;
+    for (int c = 0; c < 3; ++c) rgb[c] = value_[c] * factor;
     return true;
 }
 
-bool AnalyticLight::eval_direction(const Vec3 &d, double rgb[3], double &pdf) const {
+bool AnalyticLight::eval_direction(const Vec3 &d, double rgb[3], double &pdf, double &factor) const {
     if (delta() || !all_finite(d)) return false;
     // 1 - cos, from the chord |d + axis|^2 = 2 (1 - cos): exact for tiny cones.
     const Vec3 chord = d + axis_;
     if (!(0.5 * dot(chord, chord) <= one_minus_cos_)) return false;
-    std::copy(cone_radiance_, cone_radiance_ + 3, rgb);
+    factor = cone_factor_;
+    for (int c = 0; c < 3; ++c) rgb[c] = value_[c] * factor;
     pdf = 1 / (2 * kPi * one_minus_cos_);
     return true;
 }

@@ -30,10 +30,16 @@ double RenderScene::area_selection() const {
     return 1.0 / double(strategies_);
 }
 
-void RenderScene::add_light(const AnalyticLight &light) {
+void RenderScene::add_light(const AnalyticLight &light, std::vector<double> spectrum) {
     if (committed_) throw std::logic_error("scene already committed: add lights before commit()");
+    if (!spectrum.empty() && spectrum.size() != std::size_t(kSpectralBins))
+        throw std::invalid_argument("light: a spectrum needs one value per spectral bin (81)");
+    for (double v : spectrum)
+        if (!(std::isfinite(v) && v >= 0))
+            throw std::invalid_argument("light: spectrum must be finite and >= 0");
     if (!light.delta()) soft_.push_back(analytic_.size());
     analytic_.push_back(light);
+    analytic_spectra_.push_back(std::move(spectrum));
 }
 
 EmitterSample RenderScene::sample_emitter(const Vec3 &ref, double u0, double u1, double u2) const {
@@ -63,12 +69,13 @@ EmitterSample RenderScene::sample_emitter(const Vec3 &ref, double u0, double u1,
     }
     const AnalyticLight &light = analytic_[k];
     double pdf;
-    if (!light.sample(ref, u1, u2, s.wo, s.dist, pdf, s.radiance) || !(pdf > 0)) {
+    if (!light.sample(ref, u1, u2, s.wo, s.dist, pdf, s.radiance, s.factor) || !(pdf > 0)) {
         s.radiance[0] = s.radiance[1] = s.radiance[2] = 0.0;
         return s;
     }
     s.pdf = pdf / n;
     s.delta = light.delta();
+    if (!analytic_spectra_[k].empty()) s.spectrum = analytic_spectra_[k].data();
     return s;
 }
 
@@ -96,9 +103,12 @@ EmitterSample RenderScene::sample_area(const Vec3 &ref, double u0, double u1, do
     return s;
 }
 
-bool RenderScene::soft_light(std::size_t i, const Vec3 &d, double rgb[3], double &pdf) const {
-    if (!analytic_[soft_[i]].eval_direction(d, rgb, pdf)) return false;
+bool RenderScene::soft_light(std::size_t i, const Vec3 &d, double rgb[3], double &pdf,
+                             const double *&spectrum, double &factor) const {
+    const std::size_t k = soft_[i];
+    if (!analytic_[k].eval_direction(d, rgb, pdf, factor)) return false;
     pdf /= double(strategies_);
+    spectrum = analytic_spectra_[k].empty() ? nullptr : analytic_spectra_[k].data();
     return true;
 }
 

@@ -37,7 +37,13 @@ POINT = {"type": "point", "position": [1.2, 2.2, 1.0], "intensity": [6.0, 5.0, 4
 SPOT = {"type": "spot", "position": [-1.0, 2.5, 1.5], "direction": [1.0, -1.5, -1.5], "intensity": 14.0,
         "cutoff_angle_deg": 25.0, "beam_width_deg": 15.0}
 DIRECTIONAL = {"type": "directional", "direction": [0.4, -1.0, -0.3], "irradiance": [1.2, 1.1, 1.0]}
-LIGHTS = {"point": [POINT], "spot": [SPOT], "directional": [DIRECTIONAL], "mixed": [POINT, SPOT, DIRECTIONAL]}
+# A light whose colour is a spectrum (rising to the red): spectral mode uses its bins as they
+# are, Mitsuba gets them as the same step spectrum; RGB mode uses its RGB.
+_WL = np.arange(380.0, 781.0, 5.0)
+SPECTRAL_POINT = {**POINT, "intensity": {"type": "tabulated", "wavelengths": _WL.tolist(),
+                                         "values": np.linspace(1.0, 9.0, len(_WL)).tolist()}}
+LIGHTS = {"point": [POINT], "spot": [SPOT], "directional": [DIRECTIONAL], "mixed": [POINT, SPOT, DIRECTIONAL],
+          "spectral-point": [SPECTRAL_POINT]}
 
 
 def _coarse_envmap(folder: Path) -> Environment:
@@ -87,7 +93,7 @@ def _check(label: str, ours, theirs, tmp_path: Path):
 
 
 @pytest.mark.parametrize("spectral", [False, True], ids=["rgb", "spectral"])
-@pytest.mark.parametrize("name", ["point", "spot", "directional", "mixed"])
+@pytest.mark.parametrize("name", ["point", "spot", "directional", "mixed", "spectral-point"])
 def test_lights_match_mitsuba(name, spectral, folder, tmp_path):
     scene = _scene(name, spectral, Path(folder))
     _check(f"lights-{name}-{'spectral' if spectral else 'rgb'}", _ours(scene, spectral),

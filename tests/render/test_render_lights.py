@@ -270,3 +270,31 @@ def test_09_scene_dict_round_trip_with_lights_and_lights_count_as_light():
     assert again == scene
     assert again.lights[0].beam_width_deg == pytest.approx(15.0)  # Mitsuba's default: 3/4 of the cutoff
     assert "lights" not in replace(scene, lights=(), environment=Environment("constant")).to_dict()
+
+
+def test_10_a_spectral_light_colour_multiplies_a_spectral_reflectance_bin_by_bin():
+    """A point light whose intensity is a spectrum (rising towards the red) over a plane whose
+    diffuse reflectance is a narrow band at 600 nm: spectral mode gives sum_l W_l v_l r_l / pi
+    x cos/r^2 per pixel, the bins multiplied as they are. Power: the same render against the
+    lift of the light's RGB (W U (W v)), what spectral mode did before lights could carry a
+    spectrum, is rejected."""
+    wl = DEFAULT_WAVELENGTHS
+    v = np.linspace(0.2, 1.8, len(wl))
+    band = np.exp(-0.5 * ((wl - 600.0) / 15.0) ** 2)
+    light = {"type": "point", "position": [0.2, 1.0, 0.0],
+             "intensity": {"type": "tabulated", "wavelengths": wl.tolist(), "values": (3.0 * v).tolist()}}
+    reflectance = {"type": "tabulated", "wavelengths": wl.tolist(), "values": band.tolist()}
+    scene = _plane_scene([light])
+    scene = replace(scene, materials={"white": Material({"type": "diffuse", "reflectance": reflectance})})
+    ours = _render(scene, spectral=True)
+    W = srgb_weights(wl)
+
+    def expected_for(spectrum):
+        colour = W @ (spectrum * band) / RHO  # _point_radiance multiplies by RHO
+        return _pixel_means(scene.camera, _point_radiance(light["position"], colour))
+    result = _z_test(ours, expected_for(3.0 * v))
+    assert result.passed, result.summary()
+    lifted = rgb_to_spectrum(W @ (3.0 * v), wl)
+    assert not _z_test(ours, expected_for(lifted)).passed
+    rgb_mode = _render(scene)  # RGB mode: the light's RGB, W v
+    assert np.all(np.isfinite(rgb_mode[0])) and rgb_mode[0].max() > 0

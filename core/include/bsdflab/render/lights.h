@@ -34,12 +34,14 @@ struct AnalyticLight {
     // A direction from `ref` towards the light: unit `wo`, the distance (infinity for
     // directional lights), the solid-angle density (1 for a delta light: a discrete choice)
     // and the radiance arriving along it (for a delta light: what replaces it in the
-    // estimator, I falloff / r^2 or E). False when the light sends nothing to `ref`.
-    bool sample(const Vec3 &ref, double u1, double u2, Vec3 &wo, double &dist, double &pdf,
-                double rgb[3]) const;
-    // A ray leaving the scene in direction d (unit): the radiance it finds and sample()'s
-    // density of d. Non-zero only for soft suns, inside their cone.
-    bool eval_direction(const Vec3 &d, double rgb[3], double &pdf) const;
+    // estimator, I falloff / r^2 or E) as `factor` times the light's colour: rgb = factor
+    // x colour (a spectral colour scales by the same factor). False when the light sends
+    // nothing to `ref`.
+    bool sample(const Vec3 &ref, double u1, double u2, Vec3 &wo, double &dist, double &pdf, double rgb[3],
+                double &factor) const;
+    // A ray leaving the scene in direction d (unit): the radiance it finds (rgb = factor x
+    // colour) and sample()'s density of d. Non-zero only for soft suns, inside their cone.
+    bool eval_direction(const Vec3 &d, double rgb[3], double &pdf, double &factor) const;
 
     // Mitsuba's spot profile at cos(angle from the axis), in [0, 1].
     double falloff(double cos_theta) const;
@@ -50,7 +52,7 @@ struct AnalyticLight {
     double value_[3] = {0, 0, 0}; // intensity, or irradiance
     double cutoff_ = 0, beam_ = 0, cos_cutoff_ = 0, cos_beam_ = 0;
     double half_angle_ = 0, one_minus_cos_ = 0; // 1 - cos(half_angle), kept exactly for small cones
-    double cone_radiance_[3] = {0, 0, 0};
+    double cone_factor_ = 0; // radiance / irradiance of a soft sun: 1 / (pi sin^2 half_angle)
 };
 
 } // namespace bsdflab

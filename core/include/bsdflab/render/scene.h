@@ -71,6 +71,10 @@ struct EmitterSample {
     // A delta light (point, spot, sharp directional): pdf is the selection probability
     // alone, radiance what replaces radiance in the estimator, and no MIS applies.
     bool delta = false;
+    // A light with a spectral colour (kSpectralBins values): spectral mode uses
+    // spectrum x factor instead of lifting `radiance` (its RGB x factor).
+    const double *spectrum = nullptr;
+    double factor = 0;
 };
 
 class RenderScene {
@@ -84,8 +88,9 @@ class RenderScene {
     int add_mesh(MeshInput m);
     void set_camera(const Camera &c);
     void set_environment(Environment e);
-    // A point, spot or directional light (render/lights.h).
-    void add_light(const AnalyticLight &light);
+    // A point, spot or directional light (render/lights.h); `spectrum` (kSpectralBins
+    // values, or empty) is its colour for spectral mode, whose RGB the light carries.
+    void add_light(const AnalyticLight &light, std::vector<double> spectrum = {});
     // Spectral mode's colour: U (kSpectralBins x 3) lifts RGB emission to the bins, W
     // (3 x kSpectralBins) takes a spectrum (illuminant folded in) to linear sRGB.
     void set_spectral(std::vector<double> U, std::vector<double> W);
@@ -134,7 +139,9 @@ class RenderScene {
     // find: soft_light(i, d, ...) gives the i-th one's radiance and sample_emitter's density
     // (selection included) in direction d; false outside its cone.
     std::size_t soft_lights() const { return soft_.size(); }
-    bool soft_light(std::size_t i, const Vec3 &d, double rgb[3], double &pdf) const;
+    // `spectrum`: the light's spectral colour (to scale by `factor`), or null.
+    bool soft_light(std::size_t i, const Vec3 &d, double rgb[3], double &pdf, const double *&spectrum,
+                    double &factor) const;
 
   private:
     struct Mesh;
@@ -156,6 +163,7 @@ class RenderScene {
     Distribution1D light_choice_;
     std::vector<std::vector<double>> light_prob_; // per mesh, per triangle (empty if not emissive)
     std::vector<AnalyticLight> analytic_;
+    std::vector<std::vector<double>> analytic_spectra_; // per analytic light: kSpectralBins or empty
     std::vector<std::size_t> soft_;   // indices into analytic_ of the soft suns
     std::size_t strategies_ = 0;      // environment + area lights + analytic lights
     int max_channels_ = 3;
