@@ -1,11 +1,10 @@
 // Emitters: emitted radiance, choosing and sampling a light (triangle emitters by power,
 // the environment by its map, point/spot/directional lights by lights.h), and the densities
-// MIS needs (pbrt-v4's light sampler and
-// Mitsuba's emitter sampling play these roles).
+// MIS needs (pbrt-v4's light sampler and Mitsuba's emitter sampling play these roles).
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 #include <limits>
+#include <stdexcept>
 #include "bsdflab/render/scene.h"
 #include "render_scene_impl.h"
 
