@@ -16,7 +16,8 @@ paper) by Rayleigh scattering exp(-0.008735 lambda^-4.08 m) and aerosols
 exp(-beta lambda^-1.3 m), beta = 0.04608 T - 0.04586 (lambda in um) -- the paper's
 Appendix A.1 without its ozone, water and mixed-gas absorption bands (a few per cent in
 the visible). Its RGB treats the spectrum as the renderer does every emitter: relative to
-D65 (``spectrum_to_rgb`` of S / D65), scaled to the transmitted illuminance in klx.
+D65 (``spectrum_to_rgb`` of S / D65), scaled to the transmitted illuminance in klx and
+clipped to >= 0 (a low sun in haze has a negative sRGB blue).
 
 Both are multiplied by the light's ``scale`` (default 0.05: a clear-sky ground of albedo
 0.35 then comes out near radiance 0.5, the other scenes' range).
@@ -115,7 +116,7 @@ def sky_sun(lights):
 
 
 def sun_irradiance(light) -> np.ndarray:
-    """Linear sRGB irradiance of a ``sun`` light on a surface facing it (klx x scale)."""
+    """Linear sRGB irradiance of a ``sun`` light on a surface facing it (klx x scale), >= 0."""
     import colour
 
     wl = DEFAULT_WAVELENGTHS
@@ -129,4 +130,7 @@ def sun_irradiance(light) -> np.ndarray:
     cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
     ybar = np.interp(wl, cmfs.wavelengths, cmfs.values[:, 1])
     kept = float(np.sum(ybar * ext * sun_transmittance(wl, theta_s, light.turbidity)) / np.sum(ybar * ext))
-    return light.scale * SOLAR_ILLUMINANCE_KLX * kept * rgb / float(rgb @ _LUMINANCE)
+    # Scaled by the spectrum's own luminance, then clipped to >= 0: a low sun in haze is so
+    # red that its sRGB has a negative blue, which no light may carry (as colour_of clips).
+    rgb = light.scale * SOLAR_ILLUMINANCE_KLX * kept * rgb / float(rgb @ _LUMINANCE)
+    return np.maximum(rgb, 0.0)

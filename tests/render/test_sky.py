@@ -15,7 +15,7 @@ import pytest
 from bsdflab.render import Camera, Environment, Material, Scene, Shape
 from bsdflab.render.build import build_render_scene
 from bsdflab.render.lights import Light
-from bsdflab.render.sky import air_mass, sky_image, sky_radiance, sun_irradiance
+from bsdflab.render.sky import air_mass, sky_image, sky_radiance, sun_irradiance, sun_transmittance
 
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 
@@ -78,3 +78,28 @@ def test_the_renderer_gets_the_sky_in_place_of_the_scene_environment():
     # the map is bilinear over 128 x 256 texels: a few per mille from the exact sky
     np.testing.assert_allclose(got, expected, rtol=1e-2, atol=0)
     assert sky_image(sun.sun_direction(), 3.0).shape == (128, 256, 3)
+
+
+@pytest.mark.parametrize("elevation, turbidity", [(5.0, 10.0), (1.0, 3.0), (0.1, 1.7)])
+def test_a_low_sun_in_haze_is_a_valid_light(elevation, turbidity):
+    """Near the horizon the atmosphere leaves a spectrum so red that its sRGB has a negative
+    blue (or green): the sun's irradiance is that RGB clipped to >= 0 (as any out-of-gamut
+    light colour), with the spectrum's luminance kept to within the clipped part, and the
+    scene builds. Regression: the negative channel reached the core, which refused the
+    light ("irradiance must be finite and >= 0") for a sunset the scene check had accepted."""
+    sun = _sun(elevation, turbidity=turbidity, scale=1.0)
+    rgb = sun_irradiance(sun)
+    assert np.all(rgb >= 0) and rgb[0] > 0
+    # the transmitted illuminance, from the black body and the CIE y-bar independently
+    import colour
+
+    wl = np.arange(360.0, 831.0)
+    body = colour.sd_blackbody(5778.0, colour.SpectralShape(360, 830, 1)).values
+    ybar = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].align(colour.SpectralShape(360, 830, 1)).values[:, 1]
+    kept = np.sum(ybar * body * sun_transmittance(wl, math.radians(90.0 - elevation), turbidity)) / np.sum(ybar * body)
+    assert 128.0 * kept <= rgb @ LUMINANCE <= 1.02 * 128.0 * kept
+    plane = Shape({"type": "rectangle", "size": [4, 4]}, "white", name="floor")
+    camera = Camera(origin=(0.0, 2.0, 4.0), target=(0.0, 0.0, 0.0), width=8, height=6)
+    scene = Scene(camera, (plane,), {"white": Material({"type": "diffuse", "reflectance": 0.5})},
+                  Environment(), lights=[sun])
+    build_render_scene(scene)
