@@ -12,6 +12,10 @@
 namespace bsdflab {
 
 namespace {
+// 1 - cos(half angle) below which a soft sun is a delta light: keeps its density (~1e99) and
+// that squared finite (the cone's half angle is then ~1e-50 rad, far below any scene's detail).
+constexpr double kMinConeOneMinusCos = 1e-100;
+
 void check_colour(const double v[3], const char *what) {
     for (int c = 0; c < 3; ++c)
         if (!(std::isfinite(v[c]) && v[c] >= 0))
@@ -60,9 +64,11 @@ AnalyticLight AnalyticLight::directional(const Vec3 &axis, const double irradian
     l.kind_ = Kind::kDirectional;
     l.axis_ = unit_axis(axis, "direction");
     std::copy(irradiance, irradiance + 3, l.value_);
-    l.half_angle_ = half_angle;
-    if (half_angle > 0) {
-        const double s = std::sin(0.5 * half_angle), sin_max = std::sin(half_angle);
+    const double s = std::sin(0.5 * half_angle), sin_max = std::sin(half_angle);
+    // A cone so narrow that its density 1 / (2 pi (1 - cos)) would overflow when MIS squares
+    // it (or be infinite) is the sharp light it cannot be told from.
+    if (2 * s * s >= kMinConeOneMinusCos) {
+        l.half_angle_ = half_angle;
         l.one_minus_cos_ = 2 * s * s;
         l.cone_factor_ = 1 / (kPi * sin_max * sin_max);
     }

@@ -298,3 +298,18 @@ def test_10_a_spectral_light_colour_multiplies_a_spectral_reflectance_bin_by_bin
     assert not _z_test(ours, expected_for(lifted)).passed
     rgb_mode = _render(scene)  # RGB mode: the light's RGB, W v
     assert np.all(np.isfinite(rgb_mode[0])) and rgb_mode[0].max() > 0
+
+
+@pytest.mark.parametrize("diameter_deg", [1e-100, 1e-300])
+def test_11_a_vanishing_angular_diameter_is_the_sharp_directional_light(diameter_deg):
+    """A soft sun far narrower than its density can represent (1/(2 pi (1 - cos a)) overflows
+    when squared by the power heuristic at 1e-100 deg, and is infinite at 1e-300 deg) must
+    render as the sharp directional light, rho/pi E cos(theta) to float precision, with no
+    invalid samples. Regression: every sample was NaN, dropped, and the image black."""
+    theta = math.radians(30.0)
+    light = {"type": "directional", "direction": [math.sin(theta), -math.cos(theta), 0.0],
+             "irradiance": [1.5, 1.0, 0.25], "angular_diameter_deg": diameter_deg}
+    r = render(_plane_scene([light]).with_resolution(8, 8), spp=4, seed=0, progress=False)
+    expected = RHO / np.pi * math.cos(theta) * np.array([1.5, 1.0, 0.25])
+    assert r.invalid_samples == 0
+    np.testing.assert_allclose(r.mean, np.broadcast_to(expected, r.mean.shape), rtol=1e-9, atol=0)

@@ -25,7 +25,8 @@ struct AnalyticLight {
                               double cutoff, double beam_width);
     // directional: irradiance E on a surface facing the light; light travels along `axis`.
     // half_angle > 0 (radians, < pi/2) spreads it over a cone of that half angle about -axis
-    // with constant radiance E / (pi sin^2 half_angle).
+    // with constant radiance E / (pi sin^2 half_angle); a cone too narrow for its density to
+    // be represented (1 - cos < 1e-100) is the sharp light.
     static AnalyticLight directional(const Vec3 &axis, const double irradiance[3], double half_angle);
 
     Kind kind() const { return kind_; }
