@@ -313,3 +313,53 @@ def test_11_a_vanishing_angular_diameter_is_the_sharp_directional_light(diameter
     expected = RHO / np.pi * math.cos(theta) * np.array([1.5, 1.0, 0.25])
     assert r.invalid_samples == 0
     np.testing.assert_allclose(r.mean, np.broadcast_to(expected, r.mean.shape), rtol=1e-9, atol=0)
+
+
+def test_12_a_wide_soft_sun_among_other_strategies_is_weighted_by_its_selection():
+    """A soft sun of 80 deg diameter straight overhead (its cone inside the plane's
+    hemisphere: radiance rho/pi E), a point light and a constant environment (the plane sees
+    all of its upper hemisphere: rho L_env): three NEE strategies, so the density MIS gives
+    a BSDF-sampled ray that finds the sun must be the cone's 1/(2 pi (1 - cos a)) times the
+    selection probability 1/3, as next-event estimation's. The cone is wide enough for the
+    BSDF strategy to matter. Power: with the selection left out of the sun's hit density
+    (RenderScene::soft_light) the weights no longer sum to 1 and the image is ~30 % dark
+    (every pixel rejected; tests 04 and 05 pass that mutant); 5 % more light is rejected
+    over 4 x 4 blocks."""
+    sun = {"type": "directional", "direction": [0.0, -1.0, 0.0], "irradiance": [1.0, 0.8, 0.6],
+           "angular_diameter_deg": 80.0}
+    point = {"type": "point", "position": [0.3, 1.0, -0.2], "intensity": [0.5, 0.4, 0.3]}
+    env = (0.2, 0.25, 0.3)
+    scene = _plane_scene([sun, point], environment=Environment("constant", radiance=env))
+    ours = _render(scene, spp=256)
+    expected = (_pixel_means(scene.camera, _point_radiance(point["position"], point["intensity"]))
+                + RHO / np.pi * np.array(sun["irradiance"]) + RHO * np.array(env))
+    result = _z_test(ours, expected)
+    assert result.passed, result.summary()
+    assert not image_z_test(*ours, 1.05 * expected, np.zeros_like(expected), alpha=ALPHA, block=4).passed
+
+
+def test_13_a_large_area_light_among_analytic_lights_is_weighted_by_its_selection():
+    """A large, near area light (a wall beside the plane), a constant environment and a
+    point light against the sum of three renders with one of them lit each (linearity, as
+    test 05). The lamp is large and close, so BSDF-sampled rays find it often and its MIS
+    density on a hit (RenderScene::emitter_pdf) matters. Power: that density without the
+    area-light selection probability 1/3 (a mutant tests 04, 05 and 12 pass) is rejected,
+    and so is the sum with the lamp at 95 %."""
+    lamp = Shape({"type": "rectangle", "center": [1.0, 0.5, 0.0], "normal": [-1, 0, 0], "size": [1.0, 3.0]},
+                 emission=(1.5, 1.4, 1.2), name="lamp")
+    point = {"type": "point", "position": [-0.4, 0.8, 0.3], "intensity": [0.6, 0.5, 0.4]}
+    env = Environment("constant", radiance=(0.1, 0.15, 0.25))
+
+    def scene(lights, lit, with_env):  # the lamp is always there (it casts shadows), lit or not
+        shape = lamp if lit else replace(lamp, emission=(0.0, 0.0, 0.0))
+        s = _plane_scene(lights, fov_deg=60.0, environment=env if with_env else None, shapes=(shape,))
+        return s.with_resolution(16, 16)
+
+    mixed = _render(scene([point], True, True), spp=256, seed=1)
+    parts = [_render(scene([], True, False), spp=256, seed=2), _render(scene([], False, True), spp=256, seed=3),
+             _render(scene([point], False, False), spp=256, seed=4)]
+    total = sum(p[0] for p in parts), sum(p[1] for p in parts)
+    result = image_z_test(*mixed, *total, alpha=ALPHA, block=2)
+    assert result.passed, result.summary()
+    dimmer = total[0] - 0.05 * parts[0][0], total[1]
+    assert not image_z_test(*mixed, *dimmer, alpha=ALPHA, block=2).passed
