@@ -21,8 +21,8 @@ What goes over, and how it matches our renderer (bsdflab/render/build.py):
     The two codes place rows differently, see ``mitsuba_latlong``. A sun light's sky goes
     over the same way (RGB only).
   * lights: ``point``, ``spot`` (same cutoff, beam width and linear falloff), ``directional``
-    with the same parameters; a sun as its directional light. Soft suns (an angular
-    diameter) have no counterpart and are refused.
+    with the same parameters; a sun as its directional light (its spectrum in spectral
+    mode). Soft suns (an angular diameter) have no counterpart and are refused.
   * camera: ``perspective`` from ``look_at`` with the horizontal fov; box-filtered
     ``hdrfilm``; ``path`` integrator with max_depth / rr_depth; ``independent`` sampler.
   * ``spectral=True`` (for a Mitsuba spectral variant; our ``render(spectral=True)``):
@@ -43,7 +43,7 @@ from bsdflab.reference.mitsuba_spectral import environment as spectral_environme
 from bsdflab.reference.mitsuba_spectral import step_spectrum_dict, to_mitsuba_spectral
 from bsdflab.render.lights import Light, colour_of
 from bsdflab.render.scene import Material, Scene, Shape
-from bsdflab.render.sky import sky_image, sky_sun, sun_irradiance
+from bsdflab.render.sky import sky_image, sky_sun, sun_irradiance, sun_spectrum
 
 # Mitsuba's perspective camera clips at near_clip (ours does not clip): a small fraction of
 # the camera's distance to its target keeps the clip far below any scene feature.
@@ -205,8 +205,8 @@ def _light(mi, light: Light, spectral: bool) -> dict[str, Any]:
                          "counterpart (its directional emitter is a delta light); set angular_diameter_deg to 0")
     if light.type == "directional":
         return {"type": "directional", "direction": list(light.direction), "irradiance": colour(light.irradiance)}
-    return {"type": "directional", "direction": (-light.sun_direction()).tolist(),
-            "irradiance": colour(sun_irradiance(light))}
+    irradiance = step_spectrum_dict(sun_spectrum(light).tolist(), "zero") if spectral else colour(sun_irradiance(light))
+    return {"type": "directional", "direction": (-light.sun_direction()).tolist(), "irradiance": irradiance}
 
 
 def _sun_sky(mi, sun: Light, spectral: bool) -> dict[str, Any]:

@@ -255,7 +255,7 @@ def add_to_core(core_scene, light: Light) -> None:
         rgb, bins = colour_of(light.irradiance)
         core_scene.add_directional_light(list(light.direction), rgb, light.angular_diameter_deg, bins)
     else:
-        from bsdflab.render.sky import sun_irradiance
+        from bsdflab.render.sky import sun_irradiance, sun_spectrum
 
         core_scene.add_directional_light((-light.sun_direction()).tolist(), sun_irradiance(light).tolist(),
-                                         light.angular_diameter_deg)
+                                         light.angular_diameter_deg, sun_spectrum(light).tolist())

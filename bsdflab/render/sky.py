@@ -15,8 +15,8 @@ the solar illuminance constant), attenuated along the air mass m (Kasten 1966, a
 paper) by Rayleigh scattering exp(-0.008735 lambda^-4.08 m) and aerosols
 exp(-beta lambda^-1.3 m), beta = 0.04608 T - 0.04586 (lambda in um) -- the paper's
 Appendix A.1 without its ozone, water and mixed-gas absorption bands (a few per cent in
-the visible). Its RGB treats the spectrum as the renderer does every emitter: relative to
-D65 (``spectrum_to_rgb`` of S / D65), scaled to the transmitted illuminance in klx and
+the visible). Spectral mode lights with that spectrum (``sun_spectrum``: relative to D65,
+as every emitter spectrum, at the transmitted illuminance in klx); RGB mode with its RGB,
 clipped to >= 0 (a low sun in haze has a negative sRGB blue).
 
 Both are multiplied by the light's ``scale`` (default 0.05: a clear-sky ground of albedo
@@ -115,8 +115,10 @@ def sky_sun(lights):
     return next((lt for lt in lights if lt.type == "sun" and lt.sky), None)
 
 
-def sun_irradiance(light) -> np.ndarray:
-    """Linear sRGB irradiance of a ``sun`` light on a surface facing it (klx x scale), >= 0."""
+def sun_spectrum(light) -> np.ndarray:
+    """A ``sun`` light's irradiance spectrum on the renderer's bins (DEFAULT_WAVELENGTHS),
+    relative to D65 as every emitter spectrum, scaled so that its luminance is the
+    transmitted illuminance (klx x scale). Spectral mode lights with it."""
     import colour
 
     wl = DEFAULT_WAVELENGTHS
@@ -125,12 +127,17 @@ def sun_irradiance(light) -> np.ndarray:
     ext = np.interp(wl, body.wavelengths, body.values)
     d65 = colour.SDS_ILLUMINANTS["D65"]
     rel = ext * sun_transmittance(wl, theta_s, light.turbidity) / np.interp(wl, d65.wavelengths, d65.values)
-    rgb = np.asarray(spectrum_to_rgb(rel, wl), dtype=float)
     # Illuminance after the atmosphere, relative to outside it (luminance-weighted).
     cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
     ybar = np.interp(wl, cmfs.wavelengths, cmfs.values[:, 1])
     kept = float(np.sum(ybar * ext * sun_transmittance(wl, theta_s, light.turbidity)) / np.sum(ybar * ext))
-    # Scaled by the spectrum's own luminance, then clipped to >= 0: a low sun in haze is so
-    # red that its sRGB has a negative blue, which no light may carry (as colour_of clips).
-    rgb = light.scale * SOLAR_ILLUMINANCE_KLX * kept * rgb / float(rgb @ _LUMINANCE)
+    luminance = float(np.asarray(spectrum_to_rgb(rel, wl), dtype=float) @ _LUMINANCE)
+    return light.scale * SOLAR_ILLUMINANCE_KLX * kept * rel / luminance
+
+
+def sun_irradiance(light) -> np.ndarray:
+    """Linear sRGB irradiance of a ``sun`` light on a surface facing it (klx x scale): the RGB
+    of sun_spectrum, clipped to >= 0 (a low sun in haze is so red that its sRGB has a
+    negative blue, which no light may carry; colour_of clips the same way)."""
+    rgb = np.asarray(spectrum_to_rgb(sun_spectrum(light), DEFAULT_WAVELENGTHS), dtype=float)
     return np.maximum(rgb, 0.0)

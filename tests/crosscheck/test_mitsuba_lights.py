@@ -42,8 +42,12 @@ DIRECTIONAL = {"type": "directional", "direction": [0.4, -1.0, -0.3], "irradianc
 _WL = np.arange(380.0, 781.0, 5.0)
 SPECTRAL_POINT = {**POINT, "intensity": {"type": "tabulated", "wavelengths": _WL.tolist(),
                                          "values": np.linspace(1.0, 9.0, len(_WL)).tolist()}}
+# The sun preset without its sky and with a sharp disc (Mitsuba has no soft sun): its RGB in
+# RGB mode, its atmospheric spectrum (bsdflab.render.sky.sun_spectrum) in spectral mode.
+SUN = {"type": "sun", "elevation_deg": 25.0, "azimuth_deg": 40.0, "turbidity": 4.0, "scale": 0.01,
+       "angular_diameter_deg": 0.0, "sky": False}
 LIGHTS = {"point": [POINT], "spot": [SPOT], "directional": [DIRECTIONAL], "mixed": [POINT, SPOT, DIRECTIONAL],
-          "spectral-point": [SPECTRAL_POINT]}
+          "spectral-point": [SPECTRAL_POINT], "sun": [SUN]}
 
 
 def _coarse_envmap(folder: Path) -> Environment:
@@ -93,7 +97,7 @@ def _check(label: str, ours, theirs, tmp_path: Path):
 
 
 @pytest.mark.parametrize("spectral", [False, True], ids=["rgb", "spectral"])
-@pytest.mark.parametrize("name", ["point", "spot", "directional", "mixed", "spectral-point"])
+@pytest.mark.parametrize("name", ["point", "spot", "directional", "mixed", "spectral-point", "sun"])
 def test_lights_match_mitsuba(name, spectral, folder, tmp_path):
     scene = _scene(name, spectral, Path(folder))
     _check(f"lights-{name}-{'spectral' if spectral else 'rgb'}", _ours(scene, spectral),
