@@ -185,7 +185,7 @@ class Light:
         if name == "azimuth_deg":
             return real_scalar(field_name, value, -360.0, 360.0)
         if name == "turbidity":
-            return real_scalar(field_name, value, 1.7, 10.0)
+            return real_scalar(field_name, value, 2.0, 10.0)  # Preetham's fit: T = 2 (very clear) to 10
         if name == "scale":
             return real_scalar(field_name, value, 0.0, MAX_VALUE, lo_open=True)
         if name == "sky":
