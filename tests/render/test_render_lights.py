@@ -398,3 +398,34 @@ def test_14_spectral_mode_lights_with_the_suns_own_spectrum():
     s *= scale * klx / (np.array([0.2126, 0.7152, 0.0722]) @ (W @ s))
     expected = math.sin(math.radians(elevation)) / np.pi * (W @ (s * band))
     np.testing.assert_allclose(r.mean, np.broadcast_to(expected, r.mean.shape), rtol=1e-9, atol=0)
+
+
+def test_15_lit_images_do_not_depend_on_thread_count_and_repeat_per_seed(tmp_path):
+    """Every kind of light at once (point, spot, soft sun, area lamp, environment), 40 x 40
+    pixels (9 tiles, so 2 threads really split each pass), RGB and spectral: the same images
+    with 1 and 2 threads and for a repeated seed, bit for bit; another seed gives others."""
+    import json
+
+    from support.thread_images import images_per_thread_count
+
+    lamp = Shape({"type": "rectangle", "center": [0.8, 1.2, 0.0], "normal": [0, -1, 0], "size": [0.4, 0.4]},
+                 emission=(6.0, 6.0, 6.0), name="lamp")
+    lights = [{"type": "point", "position": [-0.6, 1.0, -0.5], "intensity": [1.0, 0.5, 0.2]},
+              {"type": "spot", "position": [0.0, 1.5, 0.6], "direction": [0.0, -1.0, -0.4], "intensity": 2.0},
+              {"type": "directional", "direction": [0.3, -1.0, 0.2], "irradiance": 0.7,
+               "angular_diameter_deg": 6.0}]
+    scene = replace(_plane_scene(lights, environment=Environment("constant", radiance=(0.1, 0.15, 0.25)),
+                                 shapes=(lamp,)), max_depth=4).with_resolution(40, 40)
+
+    def images(seed):
+        return np.stack([render(scene, spp=2, seed=seed, progress=False, spectral=m).mean for m in (False, True)])
+
+    text = json.dumps(scene.to_dict())
+    one = "render(Scene.from_dict(json.loads(" + repr(text) + ")), spp=2, seed=5, progress=False, spectral=MODE).mean"
+    expr = f"np.stack([{one.replace('MODE', 'False')}, {one.replace('MODE', 'True')}])"
+    out = images_per_thread_count(tmp_path, "import json; from bsdflab.render import Scene, render", expr)
+    assert np.array_equal(out["1"], out["2"])
+    again = images(5)
+    assert np.array_equal(again, out["1"])
+    other = images(6)
+    assert not np.array_equal(other[0], again[0]) and not np.array_equal(other[1], again[1])
