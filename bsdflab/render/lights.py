@@ -103,7 +103,8 @@ def _point(name: str, value: Any) -> tuple[float, float, float]:
         a = np.asarray(value, dtype=float)
     except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name} must be 3 finite numbers, got {brief(value)}") from None
-    if isinstance(value, (str, bytes)) or a.shape != (3,) or not np.all(np.isfinite(a)):
+    flags = isinstance(value, (list, tuple)) and any(isinstance(x, (bool, np.bool_)) for x in value)
+    if isinstance(value, (str, bytes)) or flags or a.shape != (3,) or not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be 3 finite numbers, got {brief(value)}")
     if np.abs(a).max() > 1e15:
         raise ValueError(f"{name} must be within 1e15 of the origin, got {brief(value)}")

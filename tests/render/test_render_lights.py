@@ -240,6 +240,8 @@ def test_07_delta_lights_are_never_found_by_bsdf_sampling():
     ({"type": "point", "position": [0, 1, 0], "intensity": float("nan")}, "intensity"),
     ({"type": "point", "position": [0, float("inf"), 0], "intensity": 1.0}, "position"),
     ({"type": "point", "intensity": 1.0}, "position is required"),
+    ({"type": "point", "position": [True, 1, 0], "intensity": 1.0}, "position"),
+    ({"type": "directional", "direction": [0, -1, False], "irradiance": 1.0}, "direction"),
     ({"type": "spot", "position": [0, 1, 0], "direction": [0, -1, 0], "intensity": 1, "cutoff_angle_deg": 0},
      "cutoff_angle_deg"),
     ({"type": "spot", "position": [0, 1, 0], "direction": [0, -1, 0], "intensity": 1, "cutoff_angle_deg": 20,
