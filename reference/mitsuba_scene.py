@@ -18,7 +18,11 @@ What goes over, and how it matches our renderer (bsdflab/render/build.py):
     then the image checks light transport only.
   * environment: "constant" -> ``constant``; "sky" / "envmap" -> ``envmap`` from the very
     lat-long image our renderer uses (bsdflab/render/environment.py), times ``scale``.
-    The two codes place rows differently, see ``mitsuba_latlong``.
+    The two codes place rows differently, see ``mitsuba_latlong``. A sun light's sky goes
+    over the same way (RGB only).
+  * lights: ``point``, ``spot`` (same cutoff, beam width and linear falloff), ``directional``
+    with the same parameters; a sun as its directional light (its spectrum in spectral
+    mode). Soft suns (an angular diameter) have no counterpart and are refused.
   * camera: ``perspective`` from ``look_at`` with the horizontal fov; box-filtered
     ``hdrfilm``; ``path`` integrator with max_depth / rr_depth; ``independent`` sampler.
   * ``spectral=True`` (for a Mitsuba spectral variant; our ``render(spectral=True)``):
@@ -36,8 +40,10 @@ from bsdflab.reference.mitsuba_bsdf import to_mitsuba
 from bsdflab.reference.mitsuba_env import mitsuba
 from bsdflab.reference.mitsuba_spectral import emission as spectral_emission
 from bsdflab.reference.mitsuba_spectral import environment as spectral_environment
-from bsdflab.reference.mitsuba_spectral import to_mitsuba_spectral
+from bsdflab.reference.mitsuba_spectral import step_spectrum_dict, to_mitsuba_spectral
+from bsdflab.render.lights import Light, colour_of
 from bsdflab.render.scene import Material, Scene, Shape
+from bsdflab.render.sky import sky_image, sky_sun, sun_irradiance, sun_spectrum
 
 # Mitsuba's perspective camera clips at near_clip (ours does not clip): a small fraction of
 # the camera's distance to its target keeps the clip far below any scene feature.
@@ -71,8 +77,12 @@ def to_mitsuba_scene(scene: Scene, spp: int = 16, base_dir: str | None = None,
         bsdf = bsdfs[shape.material] if shape.material is not None else BLACK
         out[f"shape_{i}"] = _mesh(mi, shape, i, bsdf, base_dir, spectral)
     env = spectral_environment(scene.environment) if spectral else _environment(mi, scene, base_dir)
+    if sky_sun(scene.lights) is not None:  # the sun preset's sky replaces the environment, as ours
+        env = _sun_sky(mi, sky_sun(scene.lights), spectral)
     if env is not None:
         out["environment"] = env
+    for i, light in enumerate(scene.lights):
+        out[f"light_{i}"] = _light(mi, light, spectral)
     return out
 
 
@@ -170,6 +180,41 @@ def _environment(mi, scene: Scene, base_dir) -> dict[str, Any] | None:
 
     image = environment_image(env, base_dir)
     return {"type": "envmap", "bitmap": mi.Bitmap(mitsuba_latlong(image)), "scale": float(env.scale)}
+
+
+def _light(mi, light: Light, spectral: bool) -> dict[str, Any]:
+    """Mitsuba's ``point``, ``spot`` or ``directional`` emitter for one of our lights (same
+    parameters and units); a sun is its directional light. A soft directional light (an
+    angular diameter > 0, every sun) has no Mitsuba counterpart: ValueError."""
+    def colour(value):  # our renderer's colour of the light, as a Mitsuba spectrum
+        rgb, bins = colour_of(value)
+        if not spectral:
+            return _rgb(rgb)
+        return step_spectrum_dict(bins, "zero") if bins else spectral_emission(rgb)
+
+    if light.type == "point":
+        return {"type": "point", "position": list(light.position), "intensity": colour(light.intensity)}
+    if light.type == "spot":
+        p, d = np.asarray(light.position), np.asarray(light.direction, dtype=float)
+        helper = [1.0, 0.0, 0.0] if abs(d[0]) < 0.9 * np.linalg.norm(d) else [0.0, 1.0, 0.0]
+        return {"type": "spot", "intensity": colour(light.intensity), "cutoff_angle": light.cutoff_angle_deg,
+                "beam_width": light.beam_width_deg,
+                "to_world": mi.ScalarTransform4f().look_at(origin=p.tolist(), target=(p + d).tolist(), up=helper)}
+    if light.angular_diameter_deg > 0:
+        raise ValueError(f"{light.type} light {light.name!r}: an angular diameter > 0 (a soft sun) has no Mitsuba "
+                         "counterpart (its directional emitter is a delta light); set angular_diameter_deg to 0")
+    if light.type == "directional":
+        return {"type": "directional", "direction": list(light.direction), "irradiance": colour(light.irradiance)}
+    irradiance = step_spectrum_dict(sun_spectrum(light).tolist(), "zero") if spectral else colour(sun_irradiance(light))
+    return {"type": "directional", "direction": (-light.sun_direction()).tolist(), "irradiance": irradiance}
+
+
+def _sun_sky(mi, sun: Light, spectral: bool) -> dict[str, Any]:
+    if spectral:
+        raise ValueError("the sun's sky is a lat-long environment: it has no spectral Mitsuba counterpart "
+                         "(see mitsuba_spectral.environment); set \"sky\": false")
+    image = sky_image(sun.sun_direction(), sun.turbidity)
+    return {"type": "envmap", "bitmap": mi.Bitmap(mitsuba_latlong(image)), "scale": float(sun.scale)}
 
 
 def mitsuba_latlong(image: np.ndarray) -> np.ndarray:

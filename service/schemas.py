@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict, field_validator, model_validator
 from pydantic.json_schema import SkipJsonSchema
 
 
@@ -282,6 +282,19 @@ class RenderRequest(Request):
     spp: Int = Field(16, ge=1, le=1 << 20)
     seed: Seed = 0
     max_depth: Int | None = Field(None, ge=1, le=1024)
+    lights: list[dict[str, Any]] | None = Field(
+        None, max_length=64, description="lights added to the scene's own: point, spot, directional or sun "
+        "(docs/scene_format.md, Lights)",
+        examples=[[{"type": "sun", "elevation_deg": 35, "azimuth_deg": -40}]])
+
+    @field_validator("lights")
+    @classmethod
+    def _lights(cls, value):
+        from bsdflab.render.lights import lights_of
+
+        if value:
+            lights_of(value)  # a bad light is a 422 naming its field
+        return value
 
 
 class RenderInfo(BaseModel):

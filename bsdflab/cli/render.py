@@ -22,7 +22,10 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--max-depth", type=int, default=None, help="longest path in vertices (default: the scene's)")
     p.add_argument("--option", "-o", action="append", default=[], metavar="KEY=VALUE",
-                   help="scene option, e.g. -o material=direct or -o variant=full (repeatable)")
+                   help="scene option, e.g. -o material=direct or -o variant=full (repeatable); "
+                        "-o light=<light JSON or type> adds a light, e.g. -o light=sun or "
+                        "-o 'light={\"type\": \"point\", \"position\": [0, 50, 0], \"intensity\": 2000}' "
+                        "(docs/scene_format.md, Lights)")
     p.add_argument("--out", default="render.exr", help="output EXR path (default render.exr); "
                                                        "the PNG goes beside it")
     p.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops (default 0)")
@@ -51,16 +54,45 @@ def _scenes(args):
     from bsdflab.scenes.scene_file import load_scene
 
     kwargs = _options(args.option)
+    extra = _extra_lights(kwargs)
     if args.scene.endswith(".json"):
         if kwargs:
-            raise ValueError("--option applies to built-in scenes, not scene files")
-        return [("", load_scene(args.scene))], os.path.dirname(os.path.abspath(args.scene))
+            raise ValueError("--option applies to built-in scenes, not scene files (except light= and lights=)")
+        return _lit([("", load_scene(args.scene))], extra), os.path.dirname(os.path.abspath(args.scene))
     if args.scene in SCENE_SETS:
-        return scene_set(args.scene, **kwargs), None
+        return _lit(scene_set(args.scene, **kwargs), extra), None
     if args.scene not in SCENES:
         raise ValueError(f"unknown scene {args.scene!r}; known scenes: {', '.join([*SCENES, *SCENE_SETS])} "
                          "(or a .json file)")
-    return [("", scene(args.scene, **kwargs))], None
+    return _lit([("", scene(args.scene, **kwargs))], extra), None
+
+
+def _extra_lights(kwargs: dict) -> list:
+    """The lights ``-o light=...`` (one: a light dict, or a bare type name such as ``sun``
+    for its defaults) and ``-o lights=[...]`` add to the scene; taken out of ``kwargs``."""
+    from bsdflab.render.lights import lights_of
+
+    extra = []
+    if "light" in kwargs:
+        one = kwargs.pop("light")
+        extra.append({"type": one} if isinstance(one, str) else one)
+    if "lights" in kwargs:
+        many = kwargs.pop("lights")
+        if not isinstance(many, list):
+            raise ValueError(f"--option lights= must be a JSON list of light dicts, got {many!r}")
+        extra += many
+    try:
+        return list(lights_of(extra))
+    except ValueError as e:
+        raise ValueError(f"--option light: {e}") from None
+
+
+def _lit(scenes: list, extra: list) -> list:
+    from dataclasses import replace
+
+    if not extra:
+        return scenes
+    return [(label, replace(s, lights=(*s.lights, *extra))) for label, s in scenes]
 
 
 def _list_scenes() -> int:

@@ -5,6 +5,9 @@ Request (normalised)::
     {"scene": "sphere", "options": {...the scene's own keywords...}, "width": 320,
      "height": 180, "spp": 16, "seed": 0, "max_depth": null}
 
+plus ``"lights": [...]`` (light dicts, bsdflab.render.lights) added to the scene's own, kept
+only when non-empty (so requests without lights keep their keys).
+
 Artefacts in ``out_dir`` (a content-addressed folder): ``<key>.exr`` and ``<key>.png``.
 Tables the scene's materials need are built into, or reused from, the same folder (it is
 their table cache), so a table asked for on its own and one a render needs are one file.
@@ -18,19 +21,22 @@ from typing import Any
 
 from bsdflab._version import __version__
 from bsdflab.render import render, write_exr, write_png
+from bsdflab.render.lights import lights_of
 from bsdflab.render.render import MAX_SPP
 from bsdflab.scenes import SCENES, scene
 from bsdflab.tables.file_format import canonical_json
 from bsdflab.util import args as check
 from bsdflab.util.progress import monitored
 
-FIELDS = {"scene", "options", "width", "height", "spp", "seed", "max_depth"}
+FIELDS = {"scene", "options", "width", "height", "spp", "seed", "max_depth", "lights"}
 MAX_SIDE = 16384
 
 
 def build_scene(request: dict[str, Any]):
     """The ``bsdflab.render.Scene`` a normalised request describes."""
     s = scene(request["scene"], width=request["width"], height=request["height"], **request["options"])
+    if request.get("lights"):
+        s = replace(s, lights=(*s.lights, *lights_of(request["lights"])))
     return s if request["max_depth"] is None else replace(s, max_depth=request["max_depth"])
 
 
@@ -52,6 +58,8 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
            "max_depth": request.get("max_depth")}
     if out["max_depth"] is not None:
         out["max_depth"] = check.integer("max_depth", out["max_depth"], 1, 1024)
+    if request.get("lights"):
+        out["lights"] = [light.to_dict() for light in lights_of(request["lights"])]
     scene = build_scene(out)   # the scene's own checks (options, materials)
     out["max_depth"] = scene.max_depth
     _canonical(out)            # options must be plain JSON

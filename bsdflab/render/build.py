@@ -12,7 +12,9 @@ from bsdflab import _core
 from bsdflab.bsdfs.base import BSDF, from_dict
 from bsdflab.render.environment import environment_image
 from bsdflab.render.geometry import build_mesh
+from bsdflab.render.lights import add_to_core
 from bsdflab.render.scene import Material, Scene
+from bsdflab.render.sky import sky_image, sky_sun
 from bsdflab.render.textures import ScaleTexture
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, rgb_to_spectrum, srgb_weights
 from bsdflab.tables.cache import get
@@ -152,11 +154,19 @@ def build_render_scene(scene: Scene, base_dir: str | None = None, progress: bool
     c = scene.camera
     core_scene.set_camera(list(c.origin), list(c.target), list(c.up), c.fov_deg, c.width, c.height)
     env = scene.environment
-    if env.type == "constant":
+    sun = sky_sun(scene.lights)
+    if sun is not None:  # the sun preset's sky replaces the scene's environment
+        core_scene.set_environment_map(sky_image(sun.sun_direction(), sun.turbidity), sun.scale)
+    elif env.type == "constant":
         core_scene.set_environment_constant(list(env.radiance))
     else:
         image = environment_image(env, base_dir)
         if image is not None:
             core_scene.set_environment_map(image, env.scale)
+    for i, light in enumerate(scene.lights):
+        try:
+            add_to_core(core_scene, light)
+        except ValueError as e:
+            raise ValueError(f"light {i}: {e}") from None
     core_scene.commit()
     return core_scene

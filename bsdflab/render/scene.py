@@ -4,7 +4,8 @@ World conventions (the same as Mitsuba 3, so scenes convert one-to-one): +Y is u
 ground is the plane y = 0; lengths are in scene units (the snake scene uses centimetres);
 colours and radiances are linear sRGB (D65). A scene names its geometry by *spec dicts*
 (``{"type": "sphere", ...}``, built into triangle meshes by ``bsdflab.render.geometry``),
-its materials by bsdflab BSDF dicts, and its lights as emissive shapes plus an environment.
+its materials by bsdflab BSDF dicts, and its lights as emissive shapes, an environment and
+lights without geometry (point, spot, directional, sun: ``bsdflab.render.lights``).
 
 Nothing here computes light transport: ``bsdflab.render.render`` turns a ``Scene`` into the
 C++ renderer's input.
@@ -17,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from bsdflab.render.lights import Light, lights_of
 from bsdflab.util import limits
 from bsdflab.util.args import brief, integer, nesting
 
@@ -189,9 +191,11 @@ class Scene:
     max_depth: int = 8
     rr_depth: int = 5
     name: str = "scene"
+    lights: tuple[Light, ...] = ()
 
     def __post_init__(self):
         object.__setattr__(self, "shapes", tuple(self.shapes))
+        object.__setattr__(self, "lights", lights_of(self.lights))
         if not self.shapes:
             raise ValueError("a scene needs at least one shape")
         for s in self.shapes:
@@ -200,14 +204,16 @@ class Scene:
                                  f"materials: {', '.join(sorted(self.materials)) or '(none)'}")
         object.__setattr__(self, "max_depth", integer("max_depth", self.max_depth, 1, 1024))
         object.__setattr__(self, "rr_depth", integer("rr_depth", self.rr_depth, 1, 1024))
-        if self.environment.type == "none" and not any(s.emission and max(s.emission) > 0 for s in self.shapes):
-            raise ValueError("the scene has no light: add an emissive shape or an environment")
+        if (self.environment.type == "none" and not self.lights
+                and not any(s.emission and max(s.emission) > 0 for s in self.shapes)):
+            raise ValueError("the scene has no light: add an emissive shape, an environment or a light")
 
     def with_resolution(self, width: int, height: int) -> Scene:
         return replace(self, camera=replace(self.camera, width=width, height=height))
 
     # -- dict form (scene files, the HTTP API) -----------------------------------------
     def to_dict(self) -> dict[str, Any]:
+        lights = {"lights": [light.to_dict() for light in self.lights]} if self.lights else {}
         return {
             "name": self.name,
             "camera": _plain(self.camera),
@@ -216,6 +222,7 @@ class Scene:
             "environment": _plain(self.environment),
             "max_depth": self.max_depth,
             "rr_depth": self.rr_depth,
+            **lights,  # only when there are any: older scene dicts (and their hashes) stay as they were
         }
 
     @classmethod
@@ -223,7 +230,8 @@ class Scene:
         if not isinstance(d, dict):
             raise ValueError("a scene must be a dict")
         nesting("the scene", d)
-        unknown = set(d) - {"name", "camera", "shapes", "materials", "environment", "max_depth", "rr_depth"}
+        unknown = set(d) - {"name", "camera", "shapes", "materials", "environment", "max_depth", "rr_depth",
+                            "lights"}
         if unknown:
             raise ValueError(f"unknown scene keys: {', '.join(sorted(unknown))}")
         try:
@@ -235,6 +243,7 @@ class Scene:
                 max_depth=d.get("max_depth", 8),
                 rr_depth=d.get("rr_depth", 5),
                 name=str(d.get("name", "scene")),
+                lights=lights_of(d.get("lights", ())),
             )
         except (TypeError, KeyError, OverflowError, AttributeError) as e:
             raise ValueError(f"bad scene: {e}") from None

@@ -55,6 +55,9 @@ def soft_box(position, target, size: float, radiance) -> Shape:
                  name="soft box")
 
 
+_soft_box = soft_box  # snake()'s soft_box option shadows the name there
+
+
 def sky(scale: float = 0.5) -> Environment:
     return Environment(type="sky", zenith=(0.25, 0.45, 0.9), horizon=(0.9, 0.95, 1.0),
                        ground=(0.25, 0.22, 0.2), scale=scale)
@@ -97,9 +100,13 @@ def snake_bsdf(material: str = "table", thickness_jitter: float = THICKNESS_JITT
 
 # -- the scene ----------------------------------------------------------------------------------------
 def snake(width: int = 640, height: int = 360, material: str = "table", scales: bool = True,
-          eyes: bool = True, max_depth: int = 8, **shape) -> Scene:
+          eyes: bool = True, max_depth: int = 8, soft_box: bool = True, **shape) -> Scene:
     """The snake scene. ``shape`` overrides snake geometry parameters (SNAKE_DEFAULTS,
-    e.g. ``segments=400``)."""
+    e.g. ``segments=400``). ``soft_box=False`` leaves the soft box out (for lights of one's
+    own, e.g. ``bsdflab render snake -o soft_box=false -o light=sun``)."""
+    from bsdflab.util.args import flag
+
+    soft_box_on = flag("soft_box", soft_box)
     spec = copy.deepcopy({**SNAKE_DEFAULTS, **shape})
     layout = layout_of(spec)
     bsdf = snake_bsdf(material)
@@ -116,6 +123,7 @@ def snake(width: int = 640, height: int = 360, material: str = "table", scales: 
         shapes += [Shape({"type": "sphere", "center": c, "radius": r, "subdivisions": 24}, material="eye",
                          name=f"eye {i}") for i, (c, r) in enumerate(snake_eyes(layout))]
     centre = np.append(layout.xz_dense.mean(axis=0), 0.0)[[0, 2, 1]] + [0.0, 2.0, 0.0]
-    shapes.append(soft_box(centre + [-45.0, 85.0, -40.0], centre, 50.0, (14.0, 13.3, 12.4)))
+    if soft_box_on:
+        shapes.append(_soft_box(centre + [-45.0, 85.0, -40.0], centre, 50.0, (14.0, 13.3, 12.4)))
     camera = orbit_camera(centre, 100.0, 25.0, 36.0, 42.0, width, height)
     return Scene(camera, tuple(shapes), materials, sky(), max_depth=max_depth, name="snake")

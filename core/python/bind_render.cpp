@@ -3,6 +3,7 @@
 #include <pybind11/stl.h>
 #include "arrays.h"
 #include "bsdflab/render/path_tracer.h"
+#include "bsdflab/sampling.h"
 
 namespace py = pybind11;
 using namespace bsdflab;
@@ -108,6 +109,45 @@ void bind_render(py::module_ &m) {
                      int(image.shape(1)), int(image.shape(0)),
                      std::vector<float>(image.data(), image.data() + image.size()), scale));
              })
+        .def(
+            "add_point_light",
+            [](RenderScene &s, const std::vector<double> &position, const std::vector<double> &intensity,
+               const std::vector<double> &spectrum) {
+                Vec3 I = vec3(intensity, "intensity");
+                const double v[3] = {I.x, I.y, I.z};
+                s.add_light(AnalyticLight::point(vec3(position, "position"), v), spectrum);
+            },
+            py::arg("position"), py::arg("intensity"), py::arg("spectrum") = std::vector<double>(),
+            "a point light of intensity I (W/sr, linear sRGB); spectrum: its 81 bins for spectral mode, or "
+            "[]")
+        .def(
+            "add_spot_light",
+            [](RenderScene &s, const std::vector<double> &position, const std::vector<double> &direction,
+               const std::vector<double> &intensity, double cutoff_deg, double beam_width_deg,
+               const std::vector<double> &spectrum) {
+                Vec3 I = vec3(intensity, "intensity");
+                const double v[3] = {I.x, I.y, I.z}, rad = kPi / 180;
+                s.add_light(AnalyticLight::spot(vec3(position, "position"), vec3(direction, "direction"), v,
+                                                cutoff_deg * rad, beam_width_deg * rad),
+                            spectrum);
+            },
+            py::arg("position"), py::arg("direction"), py::arg("intensity"), py::arg("cutoff_deg"),
+            py::arg("beam_width_deg"), py::arg("spectrum") = std::vector<double>(),
+            "a spot light with Mitsuba 3's falloff (angles from the axis); spectrum as for a point light")
+        .def(
+            "add_directional_light",
+            [](RenderScene &s, const std::vector<double> &direction, const std::vector<double> &irradiance,
+               double angular_diameter_deg, const std::vector<double> &spectrum) {
+                Vec3 E = vec3(irradiance, "irradiance");
+                const double v[3] = {E.x, E.y, E.z};
+                s.add_light(AnalyticLight::directional(vec3(direction, "direction"), v,
+                                                       0.5 * angular_diameter_deg * kPi / 180),
+                            spectrum);
+            },
+            py::arg("direction"), py::arg("irradiance"), py::arg("angular_diameter_deg") = 0.0,
+            py::arg("spectrum") = std::vector<double>(),
+            "light from infinitely far along `direction` (the way it travels), irradiance E facing it; "
+            "an angular diameter > 0 spreads it over a cone (a soft sun); spectrum as for a point light")
         .def("commit", &RenderScene::commit, py::call_guard<py::gil_scoped_release>())
         .def_property("robust", &RenderScene::robust, &RenderScene::set_robust,
                       "Embree's robust (watertight) traversal; set before commit()")

@@ -45,6 +45,10 @@ template <> struct PathColour<3> {
     static void light(const RenderScene &, const double rgb[3], double out[3]) {
         for (int c = 0; c < 3; ++c) out[c] = rgb[c];
     }
+    // An emitter's colour: RGB mode always uses its RGB.
+    static void light(const RenderScene &scene, const double rgb[3], const double *, double, double out[3]) {
+        light(scene, rgb, out);
+    }
     static void add_emitted(const RenderScene &, double L[3], const double beta[3], double w,
                             const double Le[3]) {
         for (int c = 0; c < 3; ++c) L[c] += beta[c] * w * Le[c];
@@ -59,6 +63,12 @@ template <> struct PathColour<kSpectralBins> {
     static constexpr int N = kSpectralBins;
     static void bsdf(const RenderBSDF &rb, const double *ch, double out[N]) { rb.to_spectrum(ch, out); }
     static void light(const RenderScene &scene, const double rgb[3], double out[N]) { scene.lift(rgb, out); }
+    // A light with its own spectrum uses it (times its geometric factor); others lift RGB.
+    static void light(const RenderScene &scene, const double rgb[3], const double *spectrum, double factor,
+                      double out[N]) {
+        if (!spectrum) return scene.lift(rgb, out);
+        for (int l = 0; l < N; ++l) out[l] = spectrum[l] * factor;
+    }
     static void sense(const RenderScene &scene, double L[3], const double v[N]) {
         const double *W = scene.sensor();
         for (int r = 0; r < 3; ++r) {
@@ -141,12 +151,13 @@ void RenderJob::sample_direct(const SurfaceHit &hit, const ShadingPoint &sp, con
             }
             if (aimed) log.add(origin, dir, tmax, true);
             if (aimed && !scene.occluded(origin, dir, tmax)) {
-                double w =
-                    (s_.strategy == LightStrategy::kMIS ? power_heuristic(es.pdf, bsdf.pdf(wi, wo, kAll, q))
-                                                        : 1.0) /
-                    es.pdf;
+                // A delta light cannot be found by BSDF sampling: its weight is 1.
+                double w = (s_.strategy == LightStrategy::kMIS && !es.delta
+                                ? power_heuristic(es.pdf, bsdf.pdf(wi, wo, kAll, q))
+                                : 1.0) /
+                           es.pdf;
                 double Le[N];
-                Colour::light(scene, es.radiance, Le);
+                Colour::light(scene, es.radiance, es.spectrum, es.factor, Le);
                 Colour::add_connected(scene, L, beta, f, Le, w);
             }
         }
@@ -185,6 +196,16 @@ void RenderJob::trace_path_in(double px, double py, uint64_t sample_seed, double
                 scene.environment_radiance(d, rgb, env_pdf);
                 Colour::light(scene, rgb, Le);
                 double w = prev_delta ? 1.0 : mis_hit(prev_pdf, env_pdf);
+                Colour::add_emitted(scene, L, beta, w, Le);
+            }
+            // Soft suns in this direction: each is its own NEE strategy, weighted by its own
+            // density (delta lights are never found here).
+            for (std::size_t i = 0; i < scene.soft_lights(); ++i) {
+                double rgb[3], Le[N], light_pdf, factor;
+                const double *spectrum;
+                if (!scene.soft_light(i, d, rgb, light_pdf, spectrum, factor)) continue;
+                Colour::light(scene, rgb, spectrum, factor, Le);
+                double w = prev_delta ? 1.0 : mis_hit(prev_pdf, light_pdf);
                 Colour::add_emitted(scene, L, beta, w, Le);
             }
             break;

@@ -142,6 +142,7 @@ void RenderScene::commit() {
         }
     }
     light_choice_ = Distribution1D(power);
+    strategies_ = (environment_.active() ? 1 : 0) + (lights_.empty() ? 0 : 1) + analytic_.size();
     for (std::size_t k = 0; k < lights_.size(); ++k) {
         auto [m, f] = lights_[k];
         if (light_prob_[m].empty()) light_prob_[m].assign(meshes_[m].area.size(), 0.0);

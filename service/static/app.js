@@ -284,12 +284,21 @@ function follow(job) {
   source.onerror = () => { if (source.readyState === EventSource.CLOSED) endRender(); };
 }
 
+// The page's light presets (the API takes any list of light dicts: docs/scene_format.md).
+const LIGHTS = {
+  "sun-60": { type: "sun", elevation_deg: 60, azimuth_deg: -40 },
+  "sun-20": { type: "sun", elevation_deg: 20, azimuth_deg: -60, turbidity: 4 },
+  "spot": { type: "spot", position: [0, 120, 0], direction: [0, -1, 0], intensity: 30000, cutoff_angle_deg: 30 },
+};
+
 async function startRender(event) {
   event.preventDefault();
   const [width, height] = $("size").value.split("x").map(Number);
   const scene = $("scene").value;
   const request = { scene, width, height, spp: +$("spp").value,
     options: scene === "sphere" ? { variant: $("variant").value } : { material: $("material").value } };
+  const light = LIGHTS[$("light").value];
+  if (light) request.lights = [light];
   $("render-button").disabled = true;
   $("progress-bar").style.width = "0%";
   $("render-image").hidden = true;

@@ -184,7 +184,8 @@ def test_corrupted_json_names_line_and_column(tmp_path):
     ({"format": "mitsuba"}, "not a bsdflab scene file"),
     ({"format": None}, "not a bsdflab scene file"),
     ({"version": 2}, "version 2"),
-    ({"lights": []}, "unknown scene keys: lights"),
+    ({"lamps": []}, "unknown scene keys: lamps"),
+    ({"lights": [{"type": "point", "intensity": 1}]}, "position is required"),
     ({"max_depth": 0}, "max_depth"),
 ])
 def test_bad_scene_files(tmp_path, change, message):

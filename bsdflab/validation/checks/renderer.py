@@ -194,3 +194,26 @@ def _versus_mitsuba(ctx, scene, spectral: bool):
     return Outcome(test.passed, test.n_rejected, 0, "<=", test.summary(),
                    {"flip_mean": flip_mean, "min_p": test.min_p, "worst_z": test.worst_z,
                     "pixel_channels": test.n_tested})
+
+
+# Point, spot and directional lights with the lamp (an area light) and the sky: several
+# emitters, so both renderers' light selection and delta-light weights are exercised.
+MIXED_LIGHTS = ({"type": "point", "position": [1.2, 2.2, 1.0], "intensity": [6.0, 5.0, 4.0]},
+                {"type": "spot", "position": [-1.0, 2.5, 1.5], "direction": [1.0, -1.5, -1.5], "intensity": 14.0,
+                 "cutoff_angle_deg": 25.0, "beam_width_deg": 15.0},
+                {"type": "directional", "direction": [0.4, -1.0, -0.3], "irradiance": [1.2, 1.1, 1.0]})
+
+
+@REGISTRY.check(name="renderer/mitsuba/lights-mixed", family="renderer",
+                title="Point, spot and directional lights with an area light and a sky: bsdflab against Mitsuba 3",
+                model="bsdflab.render (delta lights by next-event estimation, uniform emitter selection, MIS)",
+                reference="Mitsuba 3 path integrator with its point, spot and directional emitters",
+                statistic="rejected pixel-channels of the per-pixel two-sample z-test",
+                tolerance=MITSUBA_IMAGE_TOLERANCE, effort=MITSUBA_IMAGE_EFFORT,
+                seed=55, requires=("mitsuba", "flip_evaluator"))
+def _lights_vs_mitsuba(ctx):
+    from dataclasses import replace
+
+    e = ctx.effort
+    scene = replace(sphere_on_floor(int(e["width"]), int(e["height"])), lights=MIXED_LIGHTS)
+    return _versus_mitsuba(ctx, scene, spectral=False)

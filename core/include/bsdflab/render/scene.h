@@ -13,6 +13,7 @@
 #include "bsdflab/render/camera.h"
 #include "bsdflab/render/distribution.h"
 #include "bsdflab/render/environment.h"
+#include "bsdflab/render/lights.h"
 #include "bsdflab/render/shading.h"
 #include "bsdflab/scale_texture.h"
 
@@ -67,6 +68,13 @@ struct EmitterSample {
     double dist = 0;   // distance to the light point (inf for the environment)
     double pdf = 0;    // solid-angle density, light selection included; 0 = failed
     double radiance[3] = {0, 0, 0};
+    // A delta light (point, spot, sharp directional): pdf is the selection probability
+    // alone, radiance what replaces radiance in the estimator, and no MIS applies.
+    bool delta = false;
+    // A light with a spectral colour (kSpectralBins values): spectral mode uses
+    // spectrum x factor instead of lifting `radiance` (its RGB x factor).
+    const double *spectrum = nullptr;
+    double factor = 0;
 };
 
 class RenderScene {
@@ -80,6 +88,9 @@ class RenderScene {
     int add_mesh(MeshInput m);
     void set_camera(const Camera &c);
     void set_environment(Environment e);
+    // A point, spot or directional light (render/lights.h); `spectrum` (kSpectralBins
+    // values, or empty) is its colour for spectral mode, whose RGB the light carries.
+    void add_light(const AnalyticLight &light, std::vector<double> spectrum = {});
     // Spectral mode's colour: U (kSpectralBins x 3) lifts RGB emission to the bins, W
     // (3 x kSpectralBins) takes a spectrum (illuminant folded in) to linear sRGB.
     void set_spectral(std::vector<double> U, std::vector<double> W);
@@ -98,7 +109,7 @@ class RenderScene {
     const Camera &camera() const { return camera_; }
     const Environment &environment() const { return environment_; }
     const Material *material_of(int mesh) const;
-    bool has_lights() const { return environment_.active() || !lights_.empty(); }
+    bool has_lights() const { return environment_.active() || !lights_.empty() || !analytic_.empty(); }
     // The most channels any material's BSDF produces (sizes per-thread buffers).
     int max_channels() const { return max_channels_; }
 
@@ -115,7 +126,8 @@ class RenderScene {
 
     // Radiance a surface emits at `hit` towards direction `w` (unit, away from the surface).
     void emitted(const SurfaceHit &hit, const Vec3 &w, double rgb[3]) const;
-    // Light sampling from point `ref`: an area light or the environment.
+    // Light sampling from point `ref`: one emitter strategy chosen uniformly among the
+    // environment, the area lights (then a triangle by power) and each analytic light.
     EmitterSample sample_emitter(const Vec3 &ref, double u0, double u1, double u2) const;
     // Density with which sample_emitter(ref) would have produced the emitter point `hit`.
     double emitter_pdf(const Vec3 &ref, const SurfaceHit &hit) const;
@@ -123,11 +135,22 @@ class RenderScene {
     double environment_pdf(const Vec3 &d) const;
     // The environment radiance arriving from direction d, and environment_pdf(d), in one lookup.
     void environment_radiance(const Vec3 &d, double rgb[3], double &pdf) const;
+    // Soft suns (directional lights with an angular diameter) a ray leaving the scene can
+    // find: soft_light(i, d, ...) gives the i-th one's radiance and sample_emitter's density
+    // (selection included) in direction d; false outside its cone.
+    std::size_t soft_lights() const { return soft_.size(); }
+    // `spectrum`: the light's spectral colour (to scale by `factor`), or null.
+    bool soft_light(std::size_t i, const Vec3 &d, double rgb[3], double &pdf, const double *&spectrum,
+                    double &factor) const;
 
   private:
     struct Mesh;
     void fill_hit(int mesh, uint32_t prim, double b1, double b2, SurfaceHit &hit) const;
     double env_selection() const;
+    double area_selection() const;
+    // An area light chosen by power with u0, a point on it with (u1, u2); p_area: the
+    // probability of the area-light strategy.
+    EmitterSample sample_area(const Vec3 &ref, double u0, double u1, double u2, double p_area) const;
 
     struct Embree;
     std::unique_ptr<Embree> embree_;
@@ -139,6 +162,10 @@ class RenderScene {
     std::vector<std::pair<int, uint32_t>> lights_;
     Distribution1D light_choice_;
     std::vector<std::vector<double>> light_prob_; // per mesh, per triangle (empty if not emissive)
+    std::vector<AnalyticLight> analytic_;
+    std::vector<std::vector<double>> analytic_spectra_; // per analytic light: kSpectralBins or empty
+    std::vector<std::size_t> soft_;   // indices into analytic_ of the soft suns
+    std::size_t strategies_ = 0;      // environment + area lights + analytic lights
     int max_channels_ = 3;
     std::vector<double> U_, W_;
     bool spectral_capable_ = true;
