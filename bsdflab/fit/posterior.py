@@ -10,6 +10,7 @@ full model through the adding-doubling solver (``[model] kind``, bsdflab.fit.ful
 """
 from __future__ import annotations
 
+import abc
 import copy
 
 import numpy as np
@@ -22,7 +23,63 @@ from bsdflab.fit.parameters import ALL_NAMES
 _LOG_2PI = float(np.log(2.0 * np.pi))
 
 
-class LogPosterior:
+class GaussianPosterior(abc.ABC):
+    """Priors + the Gaussian likelihood above, vectorised over parameter sets. A subclass
+    sets ``free``, ``config`` (its ``priors``), ``dataset``, ``_base`` (every parameter's
+    fixed value, NaN where free), ``_free_cols``, ``_noise_col`` and ``evaluations``, and
+    gives the model's values for full parameter rows (``_model_values``)."""
+
+    @property
+    def ndim(self) -> int:
+        return len(self.free)
+
+    def full(self, x) -> np.ndarray:
+        """All parameters (P, all names) from free values (P, ndim)."""
+        x = np.atleast_2d(np.asarray(x, float))
+        out = np.repeat(self._base[None, :], len(x), axis=0)
+        out[:, self._free_cols] = x
+        return out
+
+    @abc.abstractmethod
+    def _model_values(self, full: np.ndarray) -> np.ndarray:
+        """The forward model's values (P, rows) for full parameter rows (P, all names)."""
+
+    def predict(self, x) -> np.ndarray:
+        """Model values (P, rows) for free values (P, ndim)."""
+        return self._model_values(self.full(x))
+
+    def log_prior(self, x) -> np.ndarray:
+        x = np.atleast_2d(np.asarray(x, float))
+        lp = np.zeros(len(x))
+        for j, name in enumerate(self.free):
+            lp += self.config.priors[name].logpdf(x[:, j])
+        return lp
+
+    def pointwise_log_likelihood(self, x) -> np.ndarray:
+        """log likelihood of every row, (P, rows) (PSIS-LOO needs it per observation)."""
+        full = self.full(x)
+        m = self._model_values(full)
+        self.evaluations += len(full)
+        s = full[:, self._noise_col:self._noise_col + 1] * self.dataset.sigma[None, :]
+        r = (self.dataset.reflectance[None, :] - m) / s
+        return -0.5 * (r * r + 2.0 * np.log(s) + _LOG_2PI)
+
+    def log_likelihood(self, x) -> np.ndarray:
+        ll = np.sum(self.pointwise_log_likelihood(x), axis=1)
+        return np.where(np.isfinite(ll), ll, -np.inf)
+
+    def __call__(self, x) -> np.ndarray:
+        """log posterior of free values (P, ndim) -> (P,); -inf outside the support."""
+        x = np.atleast_2d(np.asarray(x, float))
+        lp = self.log_prior(x)
+        out = np.full(len(x), -np.inf)
+        ok = np.isfinite(lp)
+        if np.any(ok):
+            out[ok] = lp[ok] + self.log_likelihood(x[ok])
+        return out
+
+
+class LogPosterior(GaussianPosterior):
     def __init__(self, dataset: Dataset, config: FitConfig):
         self.dataset, self.config = dataset, config
         self.free = config.free
@@ -42,50 +99,8 @@ class LogPosterior:
         self._noise_col = ALL_NAMES.index("noise_scale")
         self.evaluations = 0
 
-    @property
-    def ndim(self) -> int:
-        return len(self.free)
-
-    def full(self, x) -> np.ndarray:
-        """All parameters (P, len(ALL_NAMES)) in ALL_NAMES order from free values (P, ndim)."""
-        x = np.atleast_2d(np.asarray(x, float))
-        out = np.repeat(self._base[None, :], len(x), axis=0)
-        out[:, self._free_cols] = x
-        return out
-
-    def predict(self, x) -> np.ndarray:
-        """Model values (P, rows) for free values (P, ndim)."""
-        return self.model.evaluate(self.full(x))
-
-    def log_prior(self, x) -> np.ndarray:
-        x = np.atleast_2d(np.asarray(x, float))
-        lp = np.zeros(len(x))
-        for j, name in enumerate(self.free):
-            lp += self.config.priors[name].logpdf(x[:, j])
-        return lp
-
-    def pointwise_log_likelihood(self, x) -> np.ndarray:
-        """log likelihood of every row, (P, rows) (PSIS-LOO needs it per observation)."""
-        full = self.full(x)
-        m = self.model.evaluate(full)
-        self.evaluations += len(full)
-        s = full[:, self._noise_col:self._noise_col + 1] * self.dataset.sigma[None, :]
-        r = (self.dataset.reflectance[None, :] - m) / s
-        return -0.5 * (r * r + 2.0 * np.log(s) + _LOG_2PI)
-
-    def log_likelihood(self, x) -> np.ndarray:
-        ll = np.sum(self.pointwise_log_likelihood(x), axis=1)
-        return np.where(np.isfinite(ll), ll, -np.inf)
-
-    def __call__(self, x) -> np.ndarray:
-        """log posterior of free values (P, ndim) -> (P,); -inf outside the support."""
-        x = np.atleast_2d(np.asarray(x, float))
-        lp = self.log_prior(x)
-        out = np.full(len(x), -np.inf)
-        ok = np.isfinite(lp)
-        if np.any(ok):
-            out[ok] = lp[ok] + self.log_likelihood(x[ok])
-        return out
+    def _model_values(self, full: np.ndarray) -> np.ndarray:
+        return self.model.evaluate(full)
 
     def with_data(self, dataset: Dataset) -> LogPosterior:
         """The same posterior (priors, forward model: an emulator is shared) for other values

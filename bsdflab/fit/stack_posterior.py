@@ -19,6 +19,7 @@ from bsdflab.fit import parameters as P
 from bsdflab.fit.config import SamplerSettings
 from bsdflab.fit.data import Dataset
 from bsdflab.fit.instrument import BY_NAME as INSTRUMENT
+from bsdflab.fit.posterior import GaussianPosterior
 from bsdflab.fit.priors import Prior
 from bsdflab.fit.stack_config import StackConfig
 from bsdflab.fit.stack_forward import StackForward
@@ -75,7 +76,7 @@ def concatenate(datasets, names=None) -> Dataset:
                    cat("reflectance"), cat("sigma"), [c for d in datasets for c in d.comments], cat("phi_deg"), series)
 
 
-class StackPosterior:
+class StackPosterior(GaussianPosterior):
     def __init__(self, datasets, config: StackConfig):
         """``datasets``: one Dataset per [[dataset]] entry, in the config's order."""
         datasets = list(datasets)
@@ -106,6 +107,7 @@ class StackPosterior:
             raise ValueError(f"[sampler] walkers must be at least twice the number of free parameters "
                              f"({2 * len(self.free)}), got {config.sampler.walkers}")
         self.col = {n: i for i, n in enumerate(names)}
+        self._noise_col = self.col["noise_scale"]
         self._base = np.array([fixed.get(n, np.nan) for n in names])
         self._free_cols = np.array([self.col[n] for n in self.free], dtype=int)
         self._lo = np.array([domains[n].lo for n in names])
@@ -114,22 +116,11 @@ class StackPosterior:
         self.dataset = concatenate(datasets, [spec.name for spec in config.datasets])
         self.evaluations = 0
 
-    @property
-    def ndim(self) -> int:
-        return len(self.free)
-
-    def full(self, x) -> np.ndarray:
-        """All parameters (P, len(names)) from free values (P, ndim)."""
-        x = np.atleast_2d(np.asarray(x, float))
-        out = np.repeat(self._base[None, :], len(x), axis=0)
-        out[:, self._free_cols] = x
-        return out
-
     def named(self, x) -> dict[str, np.ndarray]:
         full = self.full(x)
         return {n: full[:, i] for i, n in enumerate(self.config.names)}
 
-    def _predict_full(self, full: np.ndarray) -> np.ndarray:
+    def _model_values(self, full: np.ndarray) -> np.ndarray:
         inside = np.all(np.isfinite(full) & np.where(self._lo_open, full > self._lo, full >= self._lo)
                         & (full <= self._hi), axis=1)
         out = np.full((len(full), len(self.dataset)), np.nan)
@@ -150,38 +141,6 @@ class StackPosterior:
             parts.append(model.evaluate(value, scale, inst("background"), inst("angle_offset_deg"),
                                         inst("acceptance_deg"), inst("bandwidth_nm")))
         out[inside] = np.concatenate(parts, axis=1)
-        return out
-
-    def predict(self, x) -> np.ndarray:
-        """Model values (P, rows of all datasets) for free values (P, ndim)."""
-        return self._predict_full(self.full(x))
-
-    def log_prior(self, x) -> np.ndarray:
-        x = np.atleast_2d(np.asarray(x, float))
-        lp = np.zeros(len(x))
-        for j, name in enumerate(self.free):
-            lp += self.config.priors[name].logpdf(x[:, j])
-        return lp
-
-    def pointwise_log_likelihood(self, x) -> np.ndarray:
-        full = self.full(x)
-        m = self._predict_full(full)
-        self.evaluations += len(full)
-        s = full[:, self.col["noise_scale"]][:, None] * self.dataset.sigma[None, :]
-        r = (self.dataset.reflectance[None, :] - m) / s
-        return -0.5 * (r * r + 2.0 * np.log(s) + _LOG_2PI)
-
-    def log_likelihood(self, x) -> np.ndarray:
-        ll = np.sum(self.pointwise_log_likelihood(x), axis=1)
-        return np.where(np.isfinite(ll), ll, -np.inf)
-
-    def __call__(self, x) -> np.ndarray:
-        x = np.atleast_2d(np.asarray(x, float))
-        lp = self.log_prior(x)
-        out = np.full(len(x), -np.inf)
-        ok = np.isfinite(lp)
-        if np.any(ok):
-            out[ok] = lp[ok] + self.log_likelihood(x[ok])
         return out
 
     def with_data(self, dataset: Dataset) -> StackPosterior:
