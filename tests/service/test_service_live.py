@@ -94,13 +94,21 @@ def test_table_and_render_end_to_end(server, tmp_path):
 
 def test_sigkill_mid_job_then_restart_completes_it(tmp_path):
     """The job is re-queued by the next server and completes; nothing half-written is left."""
-    request = {**SMALL_TABLE, "grid": {"n_theta_i": 3, "n_theta_o": 4, "n_phi": 3},
-               "min_samples": 512, "max_samples": 512}
+    # long enough to be killed mid-way after the store records its start (tens of seconds)
+    request = {**SMALL_TABLE, "grid": {"n_theta_i": 4, "n_theta_o": 5, "n_phi": 3},
+               "min_samples": 8192, "max_samples": 8192}
     first = ServiceProcess(tmp_path)
     try:
         job = httpx.post(f"{first.url}/v1/tables", json=request, timeout=60).json()
         wait_state(first.url, job["id"], ("running",))
-        while httpx.get(f"{first.url}/v1/jobs/{job['id']}").json()["progress"] == 0:
+        # until the store has recorded the start (``started``): a crash counts a start only
+        # for a job the store shows running (its live progress can come first)
+        deadline = time.monotonic() + 300
+        while True:
+            seen = httpx.get(f"{first.url}/v1/jobs/{job['id']}").json()
+            if seen["progress"] > 0 and seen["started"] is not None:
+                break
+            assert seen["state"] in ("queued", "running") and time.monotonic() < deadline, seen
             time.sleep(0.02)
         workers = first.children()
         assert workers, "the server runs its jobs in worker processes"
