@@ -70,7 +70,8 @@ class Reader:
         return True
 
     def read(self, path: str, spec) -> list[Spectrum]:
-        raise NotImplementedError(f"the {self.name} format gives a dataset, not spectra")
+        # the long CSV (``long``) is read whole by read_dataset; it has no spectra to give
+        raise ValueError(f"the {self.name} format gives a dataset, not spectra: import it as the fit's data")
 
 
 def head_text(path: str, size: int = 4096) -> str:
