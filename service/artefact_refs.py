@@ -37,28 +37,31 @@ _HASH = re.compile(r"[0-9a-f]{64}")
 
 
 MISPLACED = ('a stored file named by hash ({"type": "table", "measured" or "merl", "hash": ...}) is accepted '
-             'only where a model goes: a request\'s "model", or a layered model\'s "base" or "interfaces"')
-MODEL_KEYS = ("model",)                                # a request's keys that hold a model
-NESTED_MODELS = {"layered": ("base", "interfaces")}    # a model's keys that hold models
+             'only where a model goes: a request\'s "model" (a render\'s "options.material"), a layered '
+             'model\'s "base" or "interfaces", or a tabulated material\'s "model"')
+MODEL_SLOTS = (("model",),)                            # where a request holds a model (key paths)
+RENDER_SLOTS = (("options", "material"),)              # a render's material (bsdflab.scenes.material_spec)
+NESTED_MODELS = {"layered": ("base", "interfaces"),    # a model's keys that hold models
+                 "tabulated": ("model",)}
 
 
 def refuse() -> None:
     raise HTTPException(422, REFUSED)
 
 
-def resolve(value: Any, stored_file, max_refs: int | None = None) -> Any:
+def resolve(value: Any, stored_file, max_refs: int | None = None, slots=MODEL_SLOTS) -> Any:
     """``value`` (a request's JSON) with every ``{"type": t, "hash": h}`` where a model goes
     checked against the store (``stored_file(t, h)``: a Path, or None when the store has no
     such file): a table becomes the store's file, a measured file keeps its hash (its model
     finds it in the store folder, bsdflab.measured.store, so no path enters the request, an
     error or a table file). A reference anywhere else is refused without being looked up,
     as is any path-bearing field (422, one message each) and more than ``max_refs``
-    references."""
+    references. ``slots``: the key paths where the request holds a model."""
     check.nesting("the request", value)   # without recursion: the walk below recurses
     walk = _Walk(stored_file, max_refs)
     if not isinstance(value, dict):
         return walk.plain(value)
-    return {k: walk.model(v) if k in MODEL_KEYS else walk.plain(v) for k, v in value.items()}
+    return {k: walk.slot(v, (k,), slots) for k, v in value.items()}
 
 
 class _Walk:
@@ -76,6 +79,17 @@ class _Walk:
                 refuse()   # a path is refused as a path, wherever it is
             raise HTTPException(422, MISPLACED)
         return {k: self.plain(_no_path(k, v)) for k, v in value.items()}
+
+    def slot(self, value: Any, path: tuple[str, ...], slots) -> Any:
+        """``value`` at key path ``path`` of the request: a model at a slot, plain elsewhere."""
+        if path in slots:
+            return self.model(value)
+        deeper = {s[len(path)] for s in slots if len(s) > len(path) and s[:len(path)] == path}
+        if not deeper or not isinstance(value, dict) or (isinstance(value.get("type"), str)
+                                                         and value["type"] in STORED):
+            return self.plain(value)
+        return {k: self.slot(_no_path(k, v), (*path, k), slots) if k in deeper else self.plain(_no_path(k, v))
+                for k, v in value.items()}
 
     def model(self, value: Any) -> Any:
         if not isinstance(value, dict):

@@ -46,7 +46,8 @@ KEY = Depends(require_key)
 ClientDep = Annotated[Client, Depends(require_key)]
 
 
-def model_spec(spec: dict[str, Any], jobs: JobService) -> dict[str, Any]:
+def model_spec(spec: dict[str, Any], jobs: JobService, slots=artefact_refs.MODEL_SLOTS) -> dict[str, Any]:
     """A request's model spec with tables and measured files named by hash checked in the
-    store; any server path refused (bsdflab.service.artefact_refs)."""
-    return artefact_refs.resolve(spec, jobs.stored_file, jobs.settings.limit_store_refs)
+    store; any server path refused (bsdflab.service.artefact_refs). ``slots``: where the
+    request holds a model (a render: its ``options.material``)."""
+    return artefact_refs.resolve(spec, jobs.stored_file, jobs.settings.limit_store_refs, slots)

@@ -1,7 +1,9 @@
 """A render request checked at submission as far as its worker would check it: the scene's
-materials are valid models and its shapes fit the caps, so a bad option is a 422 now, not
-a failed job later (a reflectance of -1, 10^9 subdivisions). Meshes are sized, not built:
-building one in the web process cost up to 1.4 s and 612 MB per request."""
+materials are valid models (a tabulated one also a valid table request) and its shapes fit
+the caps, so a bad option is a 422 now, not a failed job later (a reflectance of -1, 10^9
+subdivisions). Meshes are sized, not built: building one in the web process cost up to
+1.4 s and 612 MB per request. Stored files (tables, measured files) were found in the store
+when their hash was resolved; they are not loaded here."""
 from __future__ import annotations
 
 from typing import Any
@@ -10,18 +12,41 @@ from bsdflab.bsdfs.base import from_dict
 from bsdflab.jobs.render import build_scene
 from bsdflab.render.build import TABULATED
 from bsdflab.render.geometry import mesh_size
+from bsdflab.tables.request import TableRequest
+
+STORED = ("table", "measured", "merl")   # checked by the store (bsdflab.service.artefact_refs)
+OWN = ("object", "skin", "head")          # the scenes' materials a dict options.material replaces
+
+
+def _stored(value: Any) -> bool:
+    """Whether a model dict names a stored file anywhere (building it would load the file)."""
+    if isinstance(value, dict):
+        return value.get("type") in STORED or any(_stored(v) for v in value.values())
+    if isinstance(value, list):
+        return any(_stored(v) for v in value)
+    return False
 
 
 def _model(d: dict[str, Any]) -> None:
-    from_dict(d["model"] if d.get("type") == TABULATED else d)   # a table's model, not the table
+    if _stored(d):
+        return
+    if d.get("type") == TABULATED:
+        TableRequest.from_dict(d)   # the model, the grid, the target and the method
+    else:
+        from_dict(d)
 
 
 def check(request: dict[str, Any]) -> None:
     """ValueError naming the problem when the normalised render ``request`` would fail."""
     scene = build_scene(request)
-    for material in scene.materials.values():
+    own = isinstance(request["options"].get("material"), dict)
+    for name, material in scene.materials.items():
         for d in (material.bsdf, material.gap_bsdf):
             if d is not None:
-                _model(d)
+                try:
+                    _model(d)
+                except ValueError as e:
+                    where = "options.material" if own and name in OWN else f"material {name!r}"
+                    raise ValueError(f"{where}: {e}") from None
     for shape in scene.shapes:
         mesh_size(shape.geometry)   # parameters and size checked, nothing built: the worker builds

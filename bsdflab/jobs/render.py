@@ -60,7 +60,12 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
         out["max_depth"] = check.integer("max_depth", out["max_depth"], 1, 1024)
     if request.get("lights"):
         out["lights"] = [light.to_dict() for light in lights_of(request["lights"])]
-    scene = build_scene(out)   # the scene's own checks (options, materials)
+    try:
+        scene = build_scene(out)   # the scene's own checks (options, materials)
+    except ValueError as e:
+        if isinstance(options.get("material"), dict) and str(e).startswith("material"):
+            raise ValueError(f"options.{e}") from None   # the request's field
+        raise
     out["max_depth"] = scene.max_depth
     _canonical(out)            # options must be plain JSON
     return out

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from bsdflab.presets import preset
 from bsdflab.render import Material, Scene, Shape
+from bsdflab.scenes.material_spec import custom_bsdf
 from bsdflab.scenes.snake import (
     GAP_BSDF,
     THICKNESS_JITTER,
@@ -23,6 +24,7 @@ from bsdflab.scenes.snake import (
     orbit_camera,
     sky,
     soft_box,
+    table_grid,
     tabulated,
 )
 
@@ -40,14 +42,23 @@ TORUS_SCALES = {"scales_per_unit_u": 46.0, "scales_around": 16, **_SCALE_SHAPE, 
 
 def _layered(name: str, material: str) -> dict:
     if material not in ("table", "direct"):
-        raise ValueError(f"material must be 'table' or 'direct', got {material!r}")
+        raise ValueError(f"material must be 'table', 'direct' or a dict (a material of one's own), got {material!r}")
     model = preset(name).to_dict()
     return tabulated(model) if material == "table" else model
 
 
-def ablation_material(variant: str, scales: dict, material: str = "table") -> Material:
+def ablation_material(variant: str, scales: dict, material: str | dict = "table") -> Material:
+    """The object's material. ``material`` "table" or "direct" chooses how the layered
+    variants' preset is evaluated; a dict (bsdflab.scenes.material_spec) replaces the
+    object's BSDF in every variant, which then chooses the scales (all but "diffuse") and
+    the dark gaps between them ("full")."""
     if variant not in VARIANTS:
         raise ValueError(f"unknown variant {variant!r}; known: {', '.join(VARIANTS)}")
+    own = custom_bsdf(material, table_grid())
+    if own is not None:
+        if variant == "diffuse":
+            return Material(own)
+        return Material(own, dict(scales), dict(GAP_BSDF) if variant == "full" else None)
     if variant == "diffuse":
         return Material(preset("xenopeltis-diffuse").to_dict())
     if variant == "diffuse+bump":
@@ -74,7 +85,7 @@ def object_geometry(obj: str) -> tuple[dict, dict, list[float]]:
 
 
 def object_scene(obj: str = "sphere", variant: str = "full", width: int = 640, height: int = 360,
-                 material: str = "table", max_depth: int = 8) -> Scene:
+                 material: str | dict = "table", max_depth: int = 8) -> Scene:
     geometry, scales, centre = object_geometry(obj)
     target = [0.0, centre[1] if obj == "sphere" else 1.0, 0.0]
     distance = 62.0 if obj == "sphere" else 58.0
@@ -85,19 +96,19 @@ def object_scene(obj: str = "sphere", variant: str = "full", width: int = 640, h
     return Scene(camera, shapes, materials, sky(), max_depth=max_depth, name=f"{obj}-{variant}")
 
 
-def sphere(variant: str = "full", width: int = 640, height: int = 360, material: str = "table",
+def sphere(variant: str = "full", width: int = 640, height: int = 360, material: str | dict = "table",
            max_depth: int = 8) -> Scene:
     """A sphere on the ground in one ablation variant (diffuse, diffuse+bump, thin-film+bump, full)."""
     return object_scene("sphere", variant, width, height, material, max_depth)
 
 
-def torus(variant: str = "full", width: int = 640, height: int = 360, material: str = "table",
+def torus(variant: str = "full", width: int = 640, height: int = 360, material: str | dict = "table",
           max_depth: int = 8) -> Scene:
     """A torus on the ground in one ablation variant (diffuse, diffuse+bump, thin-film+bump, full)."""
     return object_scene("torus", variant, width, height, material, max_depth)
 
 
-def ablation_row(obj: str = "sphere", width: int = 320, height: int = 240, material: str = "table",
+def ablation_row(obj: str = "sphere", width: int = 320, height: int = 240, material: str | dict = "table",
                  max_depth: int = 8) -> list[tuple[str, Scene]]:
     """The four variants of one object, as (label, scene) pairs for a contact sheet."""
     return [(variant, object_scene(obj, variant, width, height, material, max_depth)) for variant in VARIANTS]

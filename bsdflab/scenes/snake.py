@@ -84,10 +84,16 @@ def tabulated(model: dict, thickness_jitter: float = THICKNESS_JITTER, film_nm: 
     return {"type": "tabulated", "model": model, "grid": table_grid(thickness_jitter, film_nm), "rel_error": 0.02}
 
 
-def snake_bsdf(material: str = "table", thickness_jitter: float = THICKNESS_JITTER) -> dict:
+def snake_bsdf(material: str | dict = "table", thickness_jitter: float = THICKNESS_JITTER) -> dict:
     """The body's BSDF dict: "table" tabulates the xenopeltis preset, "direct" evaluates
     it by PFMC at every hit (slow, for validation); a preset name gives that preset,
-    tabulated when it is a layered (PFMC) model."""
+    tabulated when it is a layered (PFMC) model; a dict is a material of one's own
+    (bsdflab.scenes.material_spec)."""
+    from bsdflab.scenes.material_spec import custom_bsdf
+
+    own = custom_bsdf(material, table_grid(thickness_jitter))
+    if own is not None:
+        return own
     if material not in MATERIAL_CHOICES:
         raise ValueError(f"unknown material {material!r}; choose one of: {', '.join(MATERIAL_CHOICES)}")
     if material == "direct":
@@ -99,7 +105,7 @@ def snake_bsdf(material: str = "table", thickness_jitter: float = THICKNESS_JITT
 
 
 # -- the scene ----------------------------------------------------------------------------------------
-def snake(width: int = 640, height: int = 360, material: str = "table", scales: bool = True,
+def snake(width: int = 640, height: int = 360, material: str | dict = "table", scales: bool = True,
           eyes: bool = True, max_depth: int = 8, soft_box: bool = True, **shape) -> Scene:
     """The snake scene. ``shape`` overrides snake geometry parameters (SNAKE_DEFAULTS,
     e.g. ``segments=400``). ``soft_box=False`` leaves the soft box out (for lights of one's

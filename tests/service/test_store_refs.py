@@ -45,7 +45,11 @@ def hashes(client, tmp_path_factory):
 
 
 def _misplaced(ref):
-    return [("/v1/renders", {"scene": "sphere", "options": {"material": ref}, "width": 4, "height": 4, "spp": 1}),
+    # a render's options.material is a model's place (tests/service/test_render_material.py); a
+    # parameter of the material's model is not
+    material = {"type": "tabulated", "model": {"type": "diffuse", "reflectance": ref}}
+    return [("/v1/renders", {"scene": "sphere", "options": {"material": material}, "width": 4, "height": 4,
+                             "spp": 1}),
             ("/v1/renders", {"scene": "sphere", "options": {"variant": ref}, "width": 4, "height": 4, "spp": 1}),
             ("/v1/bsdf/eval", {"model": {"type": "roughconductor", "alpha": ref}, **ANGLES}),
             ("/v1/bsdf/eval", {"preset": "xenopeltis", "overrides": {"film_thickness_nm": ref}, **ANGLES}),

@@ -1,0 +1,63 @@
+"""A scene's ``material`` option as a BSDF dict: the object scenes (sphere, torus) and the
+snake take a name ("table", "direct", for the snake a preset name) or any material of
+one's own, as a dict:
+
+- a BSDF dict (``BSDF.to_dict`` form, e.g. ``{"type": "diffuse", "reflectance": 0.5}``),
+  evaluated directly at every hit;
+- a preset and its keyword overrides, ``{"preset": "xenopeltis", "overrides": {...}}``
+  (overrides optional), evaluated directly;
+- ``{"type": "tabulated", "model": <either of the above>, ...}``: the model's table (the
+  table request's fields, bsdflab.tables.request: ``grid`` (default: the scenes' table
+  grid), ``rel_error`` (default 0.02), ``method`` (default "auto": adding-doubling
+  wherever it covers the model), ...), made once and then read from the table cache;
+- a stored file, ``{"type": "table" | "measured" | "merl", ...}`` (over HTTP: named by
+  its hash, bsdflab.service.artefact_refs).
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from bsdflab.presets import preset
+from bsdflab.util import args as check
+
+TABULATED = "tabulated"
+PRESET_KEYS = frozenset({"preset", "overrides"})
+TABLE_REL_ERROR = 0.02   # the scenes' own tables' target (bsdflab.scenes.snake.tabulated)
+
+
+def model_dict(spec: Any, where: str = "material") -> dict[str, Any]:
+    """A model dict from a BSDF dict or a ``{"preset": ..., "overrides": ...}`` form."""
+    if not isinstance(spec, dict):
+        raise ValueError(f"{where} must be a dict (a BSDF dict, or a preset and overrides), "
+                         f"got {check.brief(spec)}")
+    if "preset" in spec:
+        unknown = sorted(map(str, set(spec) - PRESET_KEYS))
+        if unknown:
+            raise ValueError(f"{where}: a preset form takes 'preset' and 'overrides' only, not "
+                             f"{', '.join(unknown)}")
+        overrides = spec.get("overrides") or {}
+        if not isinstance(overrides, dict):
+            raise ValueError(f"{where}.overrides must be a dict of the preset's keyword parameters")
+        try:
+            return preset(spec["preset"], **overrides).to_dict()
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"{where}: {e}") from None
+    if not isinstance(spec.get("type"), str):
+        raise ValueError(f"{where} needs a 'type' (a BSDF dict) or a 'preset'")
+    return dict(spec)
+
+
+def custom_bsdf(material: Any, grid: dict[str, Any]) -> dict[str, Any] | None:
+    """The BSDF dict of a dict ``material`` (None for a name: the scene's own choices);
+    ``grid``: a tabulated material's default table grid. ValueError naming the field."""
+    if isinstance(material, str):
+        return None
+    if not isinstance(material, dict):
+        raise ValueError(f"material must be a name or a dict (a BSDF dict, a preset and overrides, or "
+                         f'{{"type": "tabulated", "model": ...}}), got {check.brief(material)}')
+    if material.get("type") != TABULATED:
+        return model_dict(material)
+    if "model" not in material:
+        raise ValueError('material: a tabulated material needs "model" (a BSDF dict, or a preset and overrides)')
+    return {"grid": grid, "rel_error": TABLE_REL_ERROR, **material,
+            "model": model_dict(material["model"], "material.model")}
