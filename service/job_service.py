@@ -12,6 +12,7 @@ server died under it) counts one, and the third such start fails it.
 from __future__ import annotations
 
 import logging
+import os
 import threading
 from pathlib import Path
 from typing import Any
@@ -24,6 +25,7 @@ from bsdflab.service.auth import ANONYMOUS, Client
 from bsdflab.service.errors import cut_message
 from bsdflab.service.settings import Settings
 from bsdflab.service.store import JobStore
+from bsdflab.tables import cache as table_cache
 
 log = logging.getLogger("bsdflab.service")
 TABULATE = "tabulate"
@@ -37,6 +39,11 @@ class JobService:
         self.artefact_dir.mkdir(parents=True, exist_ok=True)
         self.store = JobStore(settings.db_path)
         measured_store.add_folder(self.artefact_dir)   # uploads by hash, here and in the workers started next
+        # One table cache for the CLI, table jobs and render jobs (BSDFLAB_CACHE_DIR, default
+        # the CLI's): the workers started next and the renders' tables find it by the variable.
+        self.table_dir: Path = table_cache.cache_dir(settings.cache_dir)
+        self.table_dir.mkdir(parents=True, exist_ok=True)
+        os.environ[table_cache.ENV_VAR] = str(self.table_dir)
         self.executor = make_executor(settings.executor, settings.workers)
         self._handles: dict[str, JobHandle] = {}
         self._lock = threading.Lock()
@@ -57,17 +64,22 @@ class JobService:
         row = self.store.artefact(content_hash, kind)
         if row is None:
             return None
-        if all((self.artefact_dir / name).is_file() for name in row["result"].get("files", {}).values()):
+        folder = self.folder(kind)
+        if all((folder / name).is_file() for name in row["result"].get("files", {}).values()):
             return row["result"]
         return None
 
+    def folder(self, kind: str) -> Path:
+        """Where a kind's files live: tables in the table cache, the rest in the artefacts."""
+        return self.table_dir if kind == TABULATE else self.artefact_dir
+
     def table(self, content_hash: str) -> dict[str, Any] | None:
         """A table's result by its hash: the stored record, or a table file in the store that
-        another job made (a render's), described from its header; None otherwise."""
+        another job made (a render's, the CLI's), described from its header; None otherwise."""
         result = self.cached(TABULATE, content_hash)
         if result is not None:
             return result
-        path = self.artefact_dir / f"{content_hash}.exr"
+        path = self.table_dir / f"{content_hash}.exr"
         if path.is_file():
             try:
                 return {"hash": content_hash, "files": {"exr": path.name}, **tabulate_kind.describe(path)}
@@ -78,7 +90,7 @@ class JobService:
     def table_file(self, content_hash: str) -> Path | None:
         """The store's file of the table ``content_hash`` (how HTTP requests name tables)."""
         result = self.table(content_hash)
-        return None if result is None else self.artefact_dir / result["files"]["exr"]
+        return None if result is None else self.table_dir / result["files"]["exr"]
 
     def stored_file(self, model_type: str, content_hash: str) -> Path | None:
         """The store's file of a model named by hash over HTTP: a table, or an uploaded
@@ -90,7 +102,7 @@ class JobService:
     def adopt(self, kind: str, content_hash: str, request: dict[str, Any]) -> dict[str, Any] | None:
         """A result whose files exist without a stored record (built by another job, e.g. a
         render's table): record and return it."""
-        result = get_kind(kind).existing(request, self.artefact_dir)
+        result = get_kind(kind).existing(request, self.folder(kind))
         if result is not None:
             self.store.put_artefact(content_hash, kind, request, result)
         return result
@@ -126,7 +138,7 @@ class JobService:
         return "" if job is None else f"; job {job['id']} is {job['state']}"
 
     def _start(self, row: dict[str, Any]) -> None:
-        handle = self.executor.submit(row["kind"], row["request"], self.artefact_dir)
+        handle = self.executor.submit(row["kind"], row["request"], self.folder(row["kind"]))
         with self._lock:
             self._handles[row["id"]] = handle
 

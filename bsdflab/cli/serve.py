@@ -16,6 +16,8 @@ def register(sub) -> None:
     p.add_argument("--host", default=None, help="address to listen on (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=None, help="port (default 8000; 0 picks a free one)")
     p.add_argument("--data-dir", default=None, help="job store and artefacts (default: the user data folder)")
+    p.add_argument("--cache-dir", default=None, help="the table cache, shared with bsdflab tabulate and render "
+                                                     "(default: $BSDFLAB_CACHE_DIR or the user cache)")
     p.add_argument("--workers", type=int, default=None,
                    help="job worker processes (default: cores - 1, at most 4)")
     p.add_argument("--log-level", default=None, choices=("critical", "error", "warning", "info", "debug"),
@@ -32,7 +34,8 @@ def run(args: argparse.Namespace) -> int:
     from bsdflab.service.server import bounded_protocol
 
     overrides = {k: v for k, v in (("host", args.host), ("port", args.port), ("data_dir", args.data_dir),
-                                   ("workers", args.workers), ("log_level", args.log_level)) if v is not None}
+                                   ("cache_dir", args.cache_dir), ("workers", args.workers),
+                                   ("log_level", args.log_level)) if v is not None}
     try:
         settings = Settings(**overrides)
     except ValidationError as e:

@@ -9,21 +9,28 @@ plus ``"lights": [...]`` (light dicts, bsdflab.render.lights) added to the scene
 only when non-empty (so requests without lights keep their keys).
 
 Artefacts in ``out_dir`` (a content-addressed folder): ``<key>.exr`` and ``<key>.png``.
-Tables the scene's materials need are built into, or reused from, the same folder (it is
-their table cache), so a table asked for on its own and one a render needs are one file.
+Tables the scene's materials need are built into, or reused from, the table cache
+(``bsdflab.tables.cache.cache_dir()``: ``BSDFLAB_CACHE_DIR`` or the CLI's), by the table
+request's method ("auto" unless the material says: adding-doubling wherever it covers the
+model), so a table made by ``bsdflab tabulate``, a table job or an earlier render is one
+file. The summary's ``tables`` entry (JSON) lists them: each table's hash, method,
+``from_cache`` (reused, not made) and ``target_met``.
 """
 from __future__ import annotations
 
 import hashlib
+import json
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from bsdflab._version import __version__
 from bsdflab.render import render, write_exr, write_png
+from bsdflab.render.build import TABULATED, table_request
 from bsdflab.render.lights import lights_of
 from bsdflab.render.render import MAX_SPP
 from bsdflab.scenes import SCENES, scene
+from bsdflab.tables.cache import cache_dir, get
 from bsdflab.tables.file_format import canonical_json
 from bsdflab.util import args as check
 from bsdflab.util.progress import monitored
@@ -121,13 +128,35 @@ def run(request: dict[str, Any], out_dir: Path, progress, cancelled, runner=None
             progress(0.5 + 0.5 * fraction if tabulated else fraction)
 
     scene = build_scene(request)
+    tables_dir = cache_dir()
     with monitored(staged, cancelled):
+        tables = scene_tables(scene, tables_dir)
         result = render(scene, spp=request["spp"], seed=request["seed"], progress=False,
-                        cache_dir=out_dir, runner=runner)
+                        cache_dir=tables_dir, runner=runner)
     summary = {k2: str(v) for k2, v in result.summary().items()}
+    if tables:
+        summary["tables"] = json.dumps(tables)
     write_png(png, result.mean)
     write_exr(exr, result.mean, summary)
     return {"hash": k, "files": names, "from_cache": False, "summary": summary}
+
+
+def scene_tables(scene, folder: Path) -> list[dict[str, Any]]:
+    """The tables ``scene``'s materials need, each read from the cache ``folder`` or made
+    into it (once per table): hash, method, whether it was reused, whether it met its
+    target. The render then reads them from the cache."""
+    found: dict[str, dict[str, Any]] = {}
+    for material in scene.materials.values():
+        for d in (material.bsdf, material.gap_bsdf):
+            if not (isinstance(d, dict) and d.get("type") == TABULATED):
+                continue
+            table_req = table_request(d)   # an RGB render (as the job renders)
+            k = table_req.key()
+            if k not in found:
+                table, _, hit = get(table_req, cache=folder)
+                found[k] = {"hash": k, "method": table_req.method, "from_cache": bool(hit),
+                            "target_met": bool(table.accuracy()["target_met"])}
+    return list(found.values())
 
 
 def exr_attributes(path: str | Path) -> dict[str, str]:

@@ -37,11 +37,7 @@ def resolve_bsdf(d: dict[str, Any], progress: bool = False, cache_dir=None, spec
     a path; an RGB render keeps the RGB table (3 channels: 27x less work per lookup)."""
     if d.get("type") != TABULATED:
         return from_dict(d)
-    if "wavelengths" in d:
-        raise ValueError("a tabulated BSDF's channels follow the render (RGB or spectral): drop 'wavelengths'")
-    model = from_dict(d["model"]) if isinstance(d.get("model"), dict) else None
-    wavelengths = DEFAULT_WAVELENGTHS if spectral and model is not None and not _spectrally_flat(model) else None
-    request = TableRequest.from_dict(d, wavelengths=wavelengths)
+    request = table_request(d, spectral)
     table, path, hit = get(request, cache=cache_dir, progress=progress)
     accuracy = table.accuracy()
     if not accuracy["target_met"]:
@@ -49,6 +45,16 @@ def resolve_bsdf(d: dict[str, Any], progress: bool = False, cache_dir=None, spec
     log.info("table %s %s by %s (%s)", path, "reused from the cache" if hit else "tabulated", request.method,
              request.method_note)
     return TableBSDF(table, path=None if path is None else str(path))  # the file: what Dask ships
+
+
+def table_request(d: dict[str, Any], spectral: bool = False) -> TableRequest:
+    """The table request of a ``{"type": "tabulated", ...}`` material in a render that is
+    ``spectral`` or not (see ``resolve_bsdf``)."""
+    if "wavelengths" in d:
+        raise ValueError("a tabulated BSDF's channels follow the render (RGB or spectral): drop 'wavelengths'")
+    model = from_dict(d["model"]) if isinstance(d.get("model"), dict) else None
+    wavelengths = DEFAULT_WAVELENGTHS if spectral and model is not None and not _spectrally_flat(model) else None
+    return TableRequest.from_dict(d, wavelengths=wavelengths)
 
 
 def _spectrally_flat(model: BSDF) -> bool:

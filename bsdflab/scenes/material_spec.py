@@ -13,6 +13,7 @@ one's own, as a dict:
 - a stored file, ``{"type": "table" | "measured" | "merl", ...}`` (over HTTP: named by
   its hash, bsdflab.service.artefact_refs).
 """
+
 from __future__ import annotations
 
 from typing import Any
@@ -22,19 +23,17 @@ from bsdflab.util import args as check
 
 TABULATED = "tabulated"
 PRESET_KEYS = frozenset({"preset", "overrides"})
-TABLE_REL_ERROR = 0.02   # the scenes' own tables' target (bsdflab.scenes.snake.tabulated)
+TABLE_REL_ERROR = 0.02  # the scenes' own tables' target (bsdflab.scenes.snake.tabulated)
 
 
 def model_dict(spec: Any, where: str = "material") -> dict[str, Any]:
     """A model dict from a BSDF dict or a ``{"preset": ..., "overrides": ...}`` form."""
     if not isinstance(spec, dict):
-        raise ValueError(f"{where} must be a dict (a BSDF dict, or a preset and overrides), "
-                         f"got {check.brief(spec)}")
+        raise ValueError(f"{where} must be a dict (a BSDF dict, or a preset and overrides), got {check.brief(spec)}")
     if "preset" in spec:
         unknown = sorted(map(str, set(spec) - PRESET_KEYS))
         if unknown:
-            raise ValueError(f"{where}: a preset form takes 'preset' and 'overrides' only, not "
-                             f"{', '.join(unknown)}")
+            raise ValueError(f"{where}: a preset form takes 'preset' and 'overrides' only, not {', '.join(unknown)}")
         overrides = spec.get("overrides") or {}
         if not isinstance(overrides, dict):
             raise ValueError(f"{where}.overrides must be a dict of the preset's keyword parameters")
@@ -53,11 +52,17 @@ def custom_bsdf(material: Any, grid: dict[str, Any]) -> dict[str, Any] | None:
     if isinstance(material, str):
         return None
     if not isinstance(material, dict):
-        raise ValueError(f"material must be a name or a dict (a BSDF dict, a preset and overrides, or "
-                         f'{{"type": "tabulated", "model": ...}}), got {check.brief(material)}')
+        raise ValueError(
+            f"material must be a name or a dict (a BSDF dict, a preset and overrides, or "
+            f'{{"type": "tabulated", "model": ...}}), got {check.brief(material)}'
+        )
     if material.get("type") != TABULATED:
         return model_dict(material)
     if "model" not in material:
         raise ValueError('material: a tabulated material needs "model" (a BSDF dict, or a preset and overrides)')
-    return {"grid": grid, "rel_error": TABLE_REL_ERROR, **material,
-            "model": model_dict(material["model"], "material.model")}
+    return {
+        "grid": grid,
+        "rel_error": TABLE_REL_ERROR,
+        **material,
+        "model": model_dict(material["model"], "material.model"),
+    }

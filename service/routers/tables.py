@@ -73,5 +73,5 @@ def get_table(key: Hash, jobs: JobsDep, client: ClientDep) -> TableInfo:
             responses={**NOT_FOUND, 200: {"content": {"image/x-exr": {}}, "description": "the table file"}})
 def get_table_file(key: Hash, jobs: JobsDep, client: ClientDep) -> FileResponse:
     result = _found(jobs, key, client)
-    return FileResponse(jobs.artefact_dir / result["files"]["exr"], media_type="image/x-exr",
+    return FileResponse(jobs.table_dir / result["files"]["exr"], media_type="image/x-exr",
                         filename=f"{key}.exr")

@@ -17,7 +17,8 @@ LONG_TABLE = {"preset": "xenopeltis-thin-film", "grid": {"n_theta_i": 12, "n_the
 
 
 def make_client(tmp_path, **settings) -> TestClient:
-    defaults = {"data_dir": tmp_path, "executor": "threads", "workers": 1, "limit_directions": 500,
+    defaults = {"data_dir": tmp_path, "cache_dir": tmp_path / "tables", "executor": "threads", "workers": 1,
+                "limit_directions": 500,
                 "limit_body_bytes": 64 << 10, "limit_queue": 3, "limit_table_cells": 50_000,
                 "progress_interval_s": 0.05}
     return TestClient(create_app(Settings(**{**defaults, **settings})))

@@ -29,13 +29,15 @@ class ServiceProcess:
     """``bsdflab serve`` in a subprocess; ``url`` once it answers /healthz."""
 
     def __init__(self, data_dir: Path, workers: int = 1, env: dict[str, str] | None = None,
-                 log_level: str = "warning"):
+                 log_level: str = "warning", cache_dir: Path | None = None):
+        """``cache_dir``: the table cache (default ``data_dir/tables``: never the user's)."""
         self.data_dir, self.port = data_dir, free_port()
+        self.cache_dir = cache_dir if cache_dir is not None else data_dir / "tables"
         self.url = f"http://127.0.0.1:{self.port}"
         self.log = open(data_dir / f"server-{self.port}.log", "w")
         self.process = subprocess.Popen(
             [*bsdflab_command(), "serve", "--port", str(self.port), "--data-dir", str(data_dir),
-             "--workers", str(workers), "--log-level", log_level],
+             "--cache-dir", str(self.cache_dir), "--workers", str(workers), "--log-level", log_level],
             stdout=self.log, stderr=subprocess.STDOUT, env={**os.environ, **(env or {})})
         self._wait_healthy()
 
