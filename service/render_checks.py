@@ -10,9 +10,8 @@ from typing import Any
 
 from bsdflab.bsdfs.base import from_dict
 from bsdflab.jobs.render import build_scene
-from bsdflab.render.build import TABULATED
+from bsdflab.render.build import TABULATED, table_request
 from bsdflab.render.geometry import mesh_size
-from bsdflab.tables.request import TableRequest
 
 STORED = ("table", "measured", "merl")   # checked by the store (bsdflab.service.artefact_refs)
 OWN = ("object", "skin", "head")          # the scenes' materials a dict options.material replaces
@@ -31,7 +30,7 @@ def _model(d: dict[str, Any]) -> None:
     if _stored(d):
         return
     if d.get("type") == TABULATED:
-        TableRequest.from_dict(d)   # the model, the grid, the target and the method
+        table_request(d)   # the model, the grid, the target and the method, as the worker asks
     else:
         from_dict(d)
 

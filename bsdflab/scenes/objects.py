@@ -55,6 +55,8 @@ def ablation_material(variant: str, scales: dict, material: str | dict = "table"
     if variant not in VARIANTS:
         raise ValueError(f"unknown variant {variant!r}; known: {', '.join(VARIANTS)}")
     own = custom_bsdf(material, table_grid())
+    if own is None and material not in ("table", "direct"):   # refused in every variant, not only the layered
+        raise ValueError(f"material must be 'table', 'direct' or a dict (a material of one's own), got {material!r}")
     if own is not None:
         if variant == "diffuse":
             return Material(own)

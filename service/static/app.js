@@ -29,11 +29,15 @@ function headers() {
   return h;
 }
 
-async function api(path, body, signal) {
+export async function api(path, body, signal, retries = 3) {
   const response = await fetch(path, {
     method: body === undefined ? "GET" : "POST", headers: headers(),
     body: body === undefined ? undefined : JSON.stringify(body), signal,
   });
+  if (response.status === 429 && retries > 0) {   // busy: again after the server's Retry-After
+    await new Promise((ok) => setTimeout(ok, 1000 * Math.min(30, +response.headers.get("Retry-After") || 1)));
+    return api(path, body, signal, retries - 1);
+  }
   const data = await response.json().catch(() => ({}));
   if (!response.ok) {
     const detail = typeof data.detail === "string" ? data.detail : JSON.stringify(data.detail);
@@ -92,7 +96,7 @@ function applyPreset(name) {
     : "this material has no single adjustable film: showing the slider values";
 }
 
-function modelSpec() {
+export function modelSpec() {
   const preset = state.presets[state.preset];
   const overrides = {};
   for (const param of MODEL_PARAMS) {
@@ -291,12 +295,24 @@ const LIGHTS = {
   "spot": { type: "spot", position: [0, 120, 0], direction: [0, -1, 0], intensity: 30000, cutoff_angle_deg: 30 },
 };
 
+// "edited": the material on the controls (tabulated when layered: a table per hit, not walks)
+export function editedMaterial() {
+  const spec = modelSpec();
+  return state.presets[state.preset].model.type === "layered" ? { type: "tabulated", model: spec } : spec;
+}
+
+function renderMaterial(scene) {
+  const choice = $("material").value;
+  if (choice === "edited") return editedMaterial();
+  return scene === "sphere" && !["table", "direct"].includes(choice) ? { preset: choice } : choice;
+}
+
 async function startRender(event) {
   event.preventDefault();
   const [width, height] = $("size").value.split("x").map(Number);
   const scene = $("scene").value;
   const request = { scene, width, height, spp: +$("spp").value,
-    options: scene === "sphere" ? { variant: $("variant").value } : { material: $("material").value } };
+    options: { ...(scene === "sphere" ? { variant: $("variant").value } : {}), material: renderMaterial(scene) } };
   const light = LIGHTS[$("light").value];
   if (light) request.lights = [light];
   $("render-button").disabled = true;
@@ -357,7 +373,6 @@ async function main() {
   $("quality").addEventListener("change", scheduleUpdate);
   $("scene").addEventListener("change", () => {
     $("variant-box").hidden = $("scene").value !== "sphere";
-    $("material-box").hidden = $("scene").value !== "snake";
   });
   $("render-form").addEventListener("submit", startRender);
   $("cancel-button").addEventListener("click", cancelRender);

@@ -72,7 +72,7 @@ def test_table_and_render_end_to_end(server, tmp_path):
     info = httpx.get(f"{url}/v1/tables/{job['hash']}").json()
     table_file = httpx.get(f"{url}{info['links']['file']}")
     assert table_file.status_code == 200
-    assert sha256(table_file.content) == sha256((server.data_dir / "artefacts" / f"{job['hash']}.exr").read_bytes())
+    assert sha256(table_file.content) == sha256((server.cache_dir / f"{job['hash']}.exr").read_bytes())
     (tmp_path / "t.exr").write_bytes(table_file.content)
     table = read_table(tmp_path / "t.exr")             # verifies the file's content hash
     np.testing.assert_array_equal(table.values, direct_table(SMALL_TABLE).values)
@@ -190,6 +190,7 @@ def test_page_in_chromium(server, tmp_path):
 
         page.select_option("#scene", "sphere")
         page.select_option("#variant", "diffuse")
+        page.select_option("#material", "table")   # the variant's own base colour (test_render_material_live.py)
         page.select_option("#size", "160x90")
         page.select_option("#spp", "4")
         page.click("#render-button")
