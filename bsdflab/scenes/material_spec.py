@@ -19,11 +19,14 @@ from __future__ import annotations
 from typing import Any
 
 from bsdflab.presets import preset
+from bsdflab.scenes.snake import THICKNESS_JITTER, table_grid
+from bsdflab.tables.table_bsdf import default_film_thickness
 from bsdflab.util import args as check
 
 TABULATED = "tabulated"
 PRESET_KEYS = frozenset({"preset", "overrides"})
 TABLE_REL_ERROR = 0.02  # the scenes' own tables' target (bsdflab.scenes.snake.tabulated)
+STORED = ("table", "measured", "merl")  # files: not loaded to choose a grid
 
 
 def model_dict(spec: Any, where: str = "material") -> dict[str, Any]:
@@ -46,9 +49,22 @@ def model_dict(spec: Any, where: str = "material") -> dict[str, Any]:
     return dict(spec)
 
 
-def custom_bsdf(material: Any, grid: dict[str, Any]) -> dict[str, Any] | None:
-    """The BSDF dict of a dict ``material`` (None for a name: the scene's own choices);
-    ``grid``: a tabulated material's default table grid. ValueError naming the field."""
+def _stored(value: Any) -> bool:
+    if isinstance(value, dict):
+        return value.get("type") in STORED or any(_stored(v) for v in value.values())
+    return isinstance(value, list) and any(_stored(v) for v in value)
+
+
+def default_grid(model: dict[str, Any], jitter: float = THICKNESS_JITTER) -> dict[str, Any]:
+    """The scenes' table grid with thickness nodes spanning the scales' jitter about the
+    model's own film thickness (none without a film, or for a stored file)."""
+    film = -1.0 if _stored(model) else default_film_thickness(model)
+    return table_grid(jitter, film) if film > 0 else table_grid(0.0)
+
+
+def custom_bsdf(material: Any, jitter: float = THICKNESS_JITTER) -> dict[str, Any] | None:
+    """The BSDF dict of a dict ``material`` (None for a name: the scene's own choices); a
+    tabulated one without a ``grid`` gets ``default_grid``. ValueError naming the field."""
     if isinstance(material, str):
         return None
     if not isinstance(material, dict):
@@ -60,9 +76,6 @@ def custom_bsdf(material: Any, grid: dict[str, Any]) -> dict[str, Any] | None:
         return model_dict(material)
     if "model" not in material:
         raise ValueError('material: a tabulated material needs "model" (a BSDF dict, or a preset and overrides)')
-    return {
-        "grid": grid,
-        "rel_error": TABLE_REL_ERROR,
-        **material,
-        "model": model_dict(material["model"], "material.model"),
-    }
+    model = model_dict(material["model"], "material.model")
+    grid = material["grid"] if "grid" in material else default_grid(model, jitter)
+    return {"rel_error": TABLE_REL_ERROR, **material, "grid": grid, "model": model}

@@ -91,7 +91,7 @@ def snake_bsdf(material: str | dict = "table", thickness_jitter: float = THICKNE
     (bsdflab.scenes.material_spec)."""
     from bsdflab.scenes.material_spec import custom_bsdf
 
-    own = custom_bsdf(material, table_grid(thickness_jitter))
+    own = custom_bsdf(material, thickness_jitter)
     if own is not None:
         return own
     if material not in MATERIAL_CHOICES:
