@@ -61,7 +61,9 @@ class LibrarySettings(BaseSettings):
     max_spp: Size = Field(1 << 20, description="samples per pixel of one render")
     threads: int | None = Field(None, ge=1, description="threads of the C++ core (read by the core itself when "
                                                         "it loads; default: all cores)")
-    cache_dir: Path | None = Field(None, description="the table cache folder (default: the user cache)")
+    cache_dir: Path | None = Field(None, description="the table cache folder, one for the CLI, the Python API and "
+                                                   "bsdflab serve's table and render jobs (serve --cache-dir; "
+                                                   "default: the user cache)")
     table_key: SecretStr | None = Field(None, description="key that signs and verifies table files "
                                                           "(bsdflab.tables.signing)")
     mitsuba_variant: str | None = Field(None, description="force the Mitsuba variant of the cross-checks "
