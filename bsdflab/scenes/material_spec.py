@@ -18,8 +18,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from bsdflab.presets import preset
-from bsdflab.scenes.snake import THICKNESS_JITTER, table_grid
+from bsdflab.presets import FILM_THICKNESS_NM, preset
+from bsdflab.tables.data import TableGrid
 from bsdflab.tables.table_bsdf import default_film_thickness
 from bsdflab.util import args as check
 
@@ -55,16 +55,24 @@ def _stored(value: Any) -> bool:
     return isinstance(value, list) and any(_stored(v) for v in value)
 
 
-def default_grid(model: dict[str, Any], jitter: float = THICKNESS_JITTER) -> dict[str, Any]:
+def table_grid(thickness_jitter: float, film_nm: float = FILM_THICKNESS_NM) -> dict:
+    """The scenes' modest table grid, its thickness nodes spanning the scales' film-thickness
+    jitter (none without jitter)."""
+    nodes = (film_nm * (1 - thickness_jitter), film_nm, film_nm * (1 + thickness_jitter))
+    return TableGrid(8, 16, 9, nodes if thickness_jitter > 0 else ()).to_dict()
+
+
+def default_grid(model: dict[str, Any], jitter: float) -> dict[str, Any]:
     """The scenes' table grid with thickness nodes spanning the scales' jitter about the
     model's own film thickness (none without a film, or for a stored file)."""
     film = -1.0 if _stored(model) else default_film_thickness(model)
     return table_grid(jitter, film) if film > 0 else table_grid(0.0)
 
 
-def custom_bsdf(material: Any, jitter: float = THICKNESS_JITTER) -> dict[str, Any] | None:
+def custom_bsdf(material: Any, jitter: float) -> dict[str, Any] | None:
     """The BSDF dict of a dict ``material`` (None for a name: the scene's own choices); a
-    tabulated one without a ``grid`` gets ``default_grid``. ValueError naming the field."""
+    tabulated one without a ``grid`` gets ``default_grid`` (``jitter``: the scales' film
+    thickness jitter). ValueError naming the field."""
     if isinstance(material, str):
         return None
     if not isinstance(material, dict):

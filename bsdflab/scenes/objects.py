@@ -53,7 +53,7 @@ def ablation_material(variant: str, scales: dict, material: str | dict = "table"
     the dark gaps between them ("full")."""
     if variant not in VARIANTS:
         raise ValueError(f"unknown variant {variant!r}; known: {', '.join(VARIANTS)}")
-    own = custom_bsdf(material)
+    own = custom_bsdf(material, THICKNESS_JITTER)
     if own is None and material not in ("table", "direct"):   # refused in every variant, not only the layered
         raise ValueError(f"material must be 'table', 'direct' or a dict (a material of one's own), got {material!r}")
     if own is not None:

@@ -22,7 +22,7 @@ import numpy as np
 from bsdflab.presets import FILM_THICKNESS_NM, PRESETS, preset
 from bsdflab.render import Camera, Environment, Material, Scene, Shape
 from bsdflab.render.curves import SNAKE_DEFAULTS, layout_of, snake_eyes
-from bsdflab.tables import TableGrid
+from bsdflab.scenes.material_spec import custom_bsdf, table_grid
 
 GROUND_RGB = [0.37, 0.35, 0.32]        # warm grey, albedo ~0.35
 GAP_BSDF = {"type": "diffuse", "reflectance": [0.02, 0.018, 0.016]}
@@ -74,12 +74,6 @@ def orbit_camera(target, distance: float, azimuth_deg: float, elevation_deg: flo
 
 
 # -- materials ------------------------------------------------------------------------------------
-def table_grid(thickness_jitter: float = THICKNESS_JITTER, film_nm: float = FILM_THICKNESS_NM) -> dict:
-    """A modest table grid whose thickness nodes span the scales' film-thickness jitter."""
-    nodes = (film_nm * (1 - thickness_jitter), film_nm, film_nm * (1 + thickness_jitter))
-    return TableGrid(8, 16, 9, nodes if thickness_jitter > 0 else ()).to_dict()
-
-
 def tabulated(model: dict, thickness_jitter: float = THICKNESS_JITTER, film_nm: float = FILM_THICKNESS_NM) -> dict:
     return {"type": "tabulated", "model": model, "grid": table_grid(thickness_jitter, film_nm), "rel_error": 0.02}
 
@@ -89,8 +83,6 @@ def snake_bsdf(material: str | dict = "table", thickness_jitter: float = THICKNE
     it by PFMC at every hit (slow, for validation); a preset name gives that preset,
     tabulated when it is a layered (PFMC) model; a dict is a material of one's own
     (bsdflab.scenes.material_spec)."""
-    from bsdflab.scenes.material_spec import custom_bsdf
-
     own = custom_bsdf(material, thickness_jitter)
     if own is not None:
         return own
