@@ -12,6 +12,7 @@ from bsdflab.bsdfs.base import from_dict
 from bsdflab.jobs.render import build_scene
 from bsdflab.render.build import TABULATED, table_request
 from bsdflab.render.geometry import mesh_size
+from bsdflab.tables.data import TableGrid
 
 STORED = ("table", "measured", "merl")   # checked by the store (bsdflab.service.artefact_refs)
 OWN = ("object", "skin", "head")          # the scenes' materials a dict options.material replaces
@@ -26,26 +27,37 @@ def _stored(value: Any) -> bool:
     return False
 
 
-def _model(d: dict[str, Any]) -> None:
-    if _stored(d):
-        return
-    if d.get("type") == TABULATED:
-        table_request(d)   # the model, the grid, the target and the method, as the worker asks
-    else:
-        from_dict(d)
+def _model(d: dict[str, Any]) -> int:
+    """The model checked; the cells of its table (both lobes; 0 when it is not tabulated)."""
+    tabulated = d.get("type") == TABULATED
+    if not _stored(d):   # a stored file is not loaded here
+        if tabulated:
+            table_request(d)   # as the worker asks: the model, the grid, the target, the method
+        else:
+            from_dict(d)
+    if not tabulated:
+        return 0
+    grid = d.get("grid")
+    if not isinstance(grid, dict):
+        raise ValueError("grid must be a dict with n_theta_i, n_theta_o, n_phi, thickness_nm")
+    g = TableGrid.from_dict(grid)
+    return 2 * max(1, len(g.thickness_nm)) * g.n_theta_i * g.n_theta_o * g.n_phi
 
 
-def check(request: dict[str, Any]) -> None:
-    """ValueError naming the problem when the normalised render ``request`` would fail."""
+def check(request: dict[str, Any]) -> int:
+    """ValueError naming the problem when the normalised render ``request`` would fail;
+    else the cells of the largest table its materials need (for BSDFLAB_LIMIT_TABLE_CELLS)."""
+    cells = 0
     scene = build_scene(request)
     own = isinstance(request["options"].get("material"), dict)
     for name, material in scene.materials.items():
         for d in (material.bsdf, material.gap_bsdf):
             if d is not None:
                 try:
-                    _model(d)
+                    cells = max(cells, _model(d))
                 except ValueError as e:
                     where = "options.material" if own and name in OWN else f"material {name!r}"
                     raise ValueError(f"{where}: {e}") from None
     for shape in scene.shapes:
         mesh_size(shape.geometry)   # parameters and size checked, nothing built: the worker builds
+    return cells

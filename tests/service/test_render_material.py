@@ -156,6 +156,19 @@ def test_too_many_references_are_refused_before_any_lookup(client, table_hash):
     assert r.status_code == 422 and "BSDFLAB_LIMIT_STORE_REFS" in r.text, r.text
 
 
+@pytest.mark.parametrize("model", [DIFFUSE, {"type": "measured", "hash": None}])
+def test_a_tabulated_materials_grid_is_held_to_the_table_cell_limit(client, measured_hash, model):
+    """As a table job's (BSDFLAB_LIMIT_TABLE_CELLS, 50 000 here), also for a stored file's
+    table. Mutation caught: render_checks without the cells (202, a 4.6 M-cell job)."""
+    if model["type"] == "measured":
+        model = {**model, "hash": measured_hash}
+    grid = {"n_theta_i": 64, "n_theta_o": 128, "n_phi": 280}
+    r = render(client, {"type": "tabulated", "model": model, "grid": grid})
+    cancel(client, r)
+    assert r.status_code == 422 and "BSDFLAB_LIMIT_TABLE_CELLS" in r.text, r.text
+    no_path(client, r)
+
+
 def test_a_render_reuses_the_table_a_table_job_made(client):
     """The table job and the render's tabulated material are one request (model, grid,
     target, method auto, RGB): one file in the one cache. The render's summary names it
