@@ -12,7 +12,6 @@ server died under it) counts one, and the third such start fails it.
 from __future__ import annotations
 
 import logging
-import os
 import threading
 from pathlib import Path
 from typing import Any
@@ -26,6 +25,7 @@ from bsdflab.service.errors import cut_message
 from bsdflab.service.settings import Settings
 from bsdflab.service.store import JobStore
 from bsdflab.tables import cache as table_cache
+from bsdflab.util.settings import hand_down
 
 log = logging.getLogger("bsdflab.service")
 TABULATE = "tabulate"
@@ -43,7 +43,7 @@ class JobService:
         # the CLI's): the workers started next and the renders' tables find it by the variable.
         self.table_dir: Path = table_cache.cache_dir(settings.cache_dir)
         self.table_dir.mkdir(parents=True, exist_ok=True)
-        os.environ[table_cache.ENV_VAR] = str(self.table_dir)
+        hand_down("cache_dir", self.table_dir)
         self.executor = make_executor(settings.executor, settings.workers)
         self._handles: dict[str, JobHandle] = {}
         self._lock = threading.Lock()

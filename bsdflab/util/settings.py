@@ -11,6 +11,7 @@ that changes the environment sees the change at the next call.
 """
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 from typing import Annotated
@@ -26,6 +27,13 @@ _SUFFIX = {"": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}
 def variable(field: str) -> str:
     """The environment variable of settings field ``field``."""
     return PREFIX + field.upper()
+
+
+def hand_down(field: str, value) -> None:
+    """Set field ``field``'s variable in this process's environment, so the processes it
+    starts next (a server's job workers) and the library's settings read ``value``: how a
+    command-line option (``bsdflab serve --cache-dir``) reaches them."""
+    os.environ[variable(field)] = str(value)
 
 
 def _size(value, info: ValidationInfo):

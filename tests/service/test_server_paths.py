@@ -76,7 +76,7 @@ def test_a_table_is_named_by_its_hash(served):
     r = client.post("/v1/bsdf/eval", json={"model": {"type": "table", "hash": key}, **ANGLES})
     assert r.status_code == 200, r.text
     wi, wo = directions_from_angles(ANGLES["theta_i"], ANGLES["theta_o"], [180])
-    direct = TableBSDF(path=str(client.app.state.settings.artefact_dir / f"{key}.exr")).eval(wi, wo)
+    direct = TableBSDF(path=str(client.app.state.jobs.table_dir / f"{key}.exr")).eval(wi, wo)
     np.testing.assert_array_equal(r.json()["values"], direct)
     lobe = client.post("/v1/bsdf/lobe", json={"model": {"type": "table", "hash": key}, "points": 5,
                                               "resolution": 5}).json()

@@ -118,7 +118,7 @@ def test_sigkill_mid_job_then_restart_completes_it(tmp_path):
     while any(alive(pid) for pid in workers):
         assert time.monotonic() < end, f"worker processes {workers} outlived the killed server"
         time.sleep(0.05)
-    artefact = tmp_path / "artefacts" / f"{job['hash']}.exr"
+    artefact = tmp_path / "tables" / f"{job['hash']}.exr"   # the server's table cache (ServiceProcess)
     time.sleep(1.0)   # a worker that outlived its server would go on and write the table
     assert not artefact.exists(), "the job finished before the kill: make it longer"
     second = ServiceProcess(tmp_path)
