@@ -71,7 +71,7 @@ def _emcee_fit():
     "from the prior N(430 nm, 10), N(1.83, 0.02)",
     statistic="sum z^2 over datasets x 2 parameters (max |z| in the message)",
     tolerance=TOLERANCE,
-    effort=effort({"datasets": 3, "steps": 400}, {"datasets": 12, "steps": 600}, {"datasets": 48, "steps": 600}),
+    effort=effort({"datasets": 4, "steps": 400}, {"datasets": 12, "steps": 600}, {"datasets": 48, "steps": 600}),
     make_model=_emcee_fit,
     seed=71,
 )

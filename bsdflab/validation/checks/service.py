@@ -133,14 +133,16 @@ def fuzz(url: str, examples: int) -> dict:
             counts["5xx"] += response.status_code >= 500
             try:
                 case.validate_response(response, excluded_checks=[positive_data_acceptance])
-            except Exception as e:  # noqa: BLE001 -- collected and reported together
+            except BaseException as e:  # noqa: BLE001 -- an exception group; collected, reported together
                 failures.append(f"{operation.label}: {str(e)[:600]}")
                 raise
 
         before = len(failures)
         try:
             check()
-        except Exception as e:  # noqa: BLE001 -- hypothesis re-raises the first failure, recorded above
+        except (KeyboardInterrupt, SystemExit):
+            raise
+        except BaseException as e:  # noqa: BLE001 -- schemathesis raises exception groups; recorded above
             if len(failures) == before:  # not a response check: the sample itself could not run
                 failures.append(f"{operation.label}: {type(e).__name__}: {str(e)[:600]}")
 
