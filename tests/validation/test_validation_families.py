@@ -196,3 +196,10 @@ def test_job_request_families_are_normalised():
         normalise({"families": ["nope"]})
     with pytest.raises(ValueError, match="non-empty list"):
         normalise({"families": "fit"})
+
+
+def test_results_schema_names_every_family():
+    from bsdflab.validation import FAMILIES, SCHEMA_PATH
+
+    schema = json.loads(SCHEMA_PATH.read_text())
+    assert schema["$defs"]["check"]["properties"]["family"]["enum"] == list(FAMILIES)
