@@ -3,6 +3,7 @@ from bsdflab.validation.checks import (  # noqa: F401
     approximations,
     basic,
     coverage,
+    cycles,
     export,
     films,
     fit,
