@@ -4,7 +4,7 @@ service runs it (``register_kind("validate", "bsdflab.validation.job")``).
 Request (normalised)::
 
     {"level": "quick" | "standard" | "full", "only": null | "<glob or substring>",
-     "families": null | ["<family>", ...], "benchmarks": false}
+     "families": ["<family>", ...] (absent: all), "benchmarks": false}
 
 Artefacts in ``out_dir`` (content-addressed): ``<key>.json`` (the results document,
 bsdflab/validation/results.schema.json) and ``<key>.html`` (the self-contained report).
@@ -61,10 +61,12 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
     benchmarks = request.get("benchmarks", False)
     if not isinstance(benchmarks, bool):
         raise ValueError("benchmarks must be true or false")
-    out = {"level": level, "only": only, "families": normalise_families(request.get("families")),
-           "benchmarks": benchmarks}
+    out = {"level": level, "only": only, "benchmarks": benchmarks}
+    families = normalise_families(request.get("families"))
+    if families is not None:  # absent when all: the keys of requests without families stay as they were
+        out["families"] = families
     if not _selected(out):
-        raise ValueError(f"only={only!r} in families {out['families'] or 'all'} matches no check; names look "
+        raise ValueError(f"only={only!r} in families {families or 'all'} matches no check; names look "
                          f"like {', '.join(REGISTRY.names()[:3])}")
     return out
 
