@@ -7,6 +7,8 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict, field_validator, model_validator
 from pydantic.json_schema import SkipJsonSchema
 
+from bsdflab.validation.registry import FAMILIES
+
 
 def _integral(value):
     """JSON Schema counts 3.0 as an integer; a bool or a string is not one."""
@@ -311,7 +313,15 @@ class ValidationRequest(Request):
     level: Literal["quick", "standard", "full"] = Field("quick", description="effort, as bsdflab validate --level")
     only: Annotated[str, Field(min_length=1, max_length=200)] | None = Field(
         None, description="only checks whose name matches this glob or contains it", examples=["tables/"])
+    families: Annotated[list[Literal[FAMILIES]], Field(min_length=1, max_length=len(FAMILIES))] | None = Field(
+        None, description="only checks of these families (GET /v1/validations/families lists them)",
+        examples=[["solvers", "coverage"]])
     benchmarks: bool = Field(False, description="also run the benchmarks (minutes)")
+
+
+class ValidationFamily(BaseModel):
+    name: str
+    checks: int = Field(description="checks registered in this family")
 
 
 class ValidationInfo(BaseModel):

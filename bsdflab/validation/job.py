@@ -4,7 +4,7 @@ service runs it (``register_kind("validate", "bsdflab.validation.job")``).
 Request (normalised)::
 
     {"level": "quick" | "standard" | "full", "only": null | "<glob or substring>",
-     "benchmarks": false}
+     "families": ["<family>", ...] (absent: all), "benchmarks": false}
 
 Artefacts in ``out_dir`` (content-addressed): ``<key>.json`` (the results document,
 bsdflab/validation/results.schema.json) and ``<key>.html`` (the self-contained report).
@@ -22,16 +22,30 @@ from bsdflab import __version__
 from bsdflab.util.files import write_atomically
 from bsdflab.util.progress import JobCancelled
 from bsdflab.validation.html import render_html
-from bsdflab.validation.registry import LEVELS, REGISTRY
+from bsdflab.validation.registry import FAMILIES, LEVELS, REGISTRY
 from bsdflab.validation.report import load_checks, results_document
 from bsdflab.validation.runner import run_check
 
-FIELDS = {"level", "only", "benchmarks"}
+FIELDS = {"level", "only", "families", "benchmarks"}
 
 
 def _selected(request: dict[str, Any]):
     load_checks()
-    return REGISTRY.select(request["only"])
+    return REGISTRY.select(request["only"], request.get("families"))
+
+
+def normalise_families(families) -> list[str] | None:
+    """None (every family) or the named families, deduplicated in registry order; an unknown
+    name is a ValueError that lists the valid ones."""
+    if families is None:
+        return None
+    if isinstance(families, str) or not isinstance(families, (list, tuple)) or not families:
+        raise ValueError(f"families must be a non-empty list of family names: {', '.join(FAMILIES)}")
+    unknown = [f for f in families if f not in FAMILIES]
+    if unknown:
+        raise ValueError(f"unknown validation families {', '.join(map(repr, unknown))}; "
+                         f"valid: {', '.join(FAMILIES)}")
+    return [f for f in FAMILIES if f in families]
 
 
 def normalise(request: dict[str, Any]) -> dict[str, Any]:
@@ -48,8 +62,12 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
     if not isinstance(benchmarks, bool):
         raise ValueError("benchmarks must be true or false")
     out = {"level": level, "only": only, "benchmarks": benchmarks}
+    families = normalise_families(request.get("families"))
+    if families is not None:  # absent when all: the keys of requests without families stay as they were
+        out["families"] = families
     if not _selected(out):
-        raise ValueError(f"only={only!r} matches no check; names look like {', '.join(REGISTRY.names()[:3])}")
+        raise ValueError(f"only={only!r} in families {families or 'all'} matches no check; names look "
+                         f"like {', '.join(REGISTRY.names()[:3])}")
     return out
 
 

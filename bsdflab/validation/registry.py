@@ -15,8 +15,14 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 LEVELS = ("quick", "standard", "full")
-FAMILIES = ("basic", "rough", "films", "layered", "tables", "renderer")
+FAMILIES = ("basic", "rough", "films", "layered", "tables", "renderer", "solvers", "coverage", "fit",
+            "measured", "export", "service")
 KINDS = ("check", "study")  # a study reports numbers (e.g. colour errors) without a limit
+
+
+class SkipCheck(Exception):  # noqa: N818 -- a verdict, not an error
+    """Raised by a check's ``run`` when what it needs is absent at run time (e.g. a
+    Blender interpreter): the row is "skipped" with this message."""
 
 
 @dataclass
@@ -121,11 +127,17 @@ class Registry:
     def names(self) -> list[str]:
         return list(self._checks)
 
-    def select(self, pattern: str | None = None) -> list[Check]:
-        """Checks whose name matches the glob ``pattern`` (or contains it as a substring)."""
+    def select(self, pattern: str | None = None, families=None) -> list[Check]:
+        """Checks whose name matches the glob ``pattern`` (or contains it as a substring),
+        of the ``families`` named (None: all)."""
+        chosen = [c for c in self if families is None or c.family in families]
         if not pattern:
-            return list(self)
-        return [c for c in self if fnmatch.fnmatch(c.name, pattern) or pattern in c.name]
+            return chosen
+        return [c for c in chosen if fnmatch.fnmatch(c.name, pattern) or pattern in c.name]
+
+    def families(self) -> dict[str, int]:
+        """Checks per family, every family listed (in FAMILIES order)."""
+        return {f: sum(c.family == f for c in self) for f in FAMILIES}
 
 
 REGISTRY = Registry()

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from bsdflab.validation.registry import LEVELS, Check, Context, Figure
+from bsdflab.validation.registry import LEVELS, Check, Context, Figure, SkipCheck
 
 STATUSES = ("pass", "fail", "error", "skipped", "study")
 
@@ -86,6 +86,8 @@ def run_check(check: Check, level: str = "quick") -> CheckResult:
     try:
         ctx.model = check.make_model() if check.make_model is not None else None
         out = check.run(ctx)
+    except SkipCheck as e:
+        return CheckResult(check, level, "skipped", message=str(e), duration_s=time.perf_counter() - start)
     except Exception:  # the report shows the failure; the run goes on
         return CheckResult(check, level, "error", message=traceback.format_exc(limit=6),
                            figures=ctx.figures, duration_s=time.perf_counter() - start)

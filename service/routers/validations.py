@@ -13,11 +13,12 @@ from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep
 from bsdflab.service.errors import ERRORS, NOT_FOUND
 from bsdflab.service.job_service import JobService
 from bsdflab.service.routers.tables import QUEUED
-from bsdflab.service.schemas import HASH_PATTERN, ValidationInfo, ValidationRequest
+from bsdflab.service.schemas import HASH_PATTERN, ValidationFamily, ValidationInfo, ValidationRequest
 from bsdflab.service.settings import limit_variable
 from bsdflab.service.views import job_info
 from bsdflab.validation.job import benchmark_level
-from bsdflab.validation.registry import LEVELS
+from bsdflab.validation.registry import LEVELS, REGISTRY
+from bsdflab.validation.report import load_checks
 
 router = APIRouter(prefix="/v1/validations", tags=["validations"], route_class=ThreadedBody)
 Hash = Annotated[str, Path(pattern=HASH_PATTERN, description="the report's content hash (64 hex digits)")]
@@ -44,8 +45,8 @@ def _info(jobs: JobService, h: str, request: dict[str, Any], result: dict[str, A
 @router.post("", response_model=ValidationInfo, responses={**QUEUED, **ERRORS},
              summary="Run the validation checks (or get the existing report)")
 def create_validation(body: ValidationRequest, jobs: JobsDep, settings: SettingsDep, client: ClientDep):
-    """The checks of ``bsdflab validate`` at ``level`` (those whose name matches ``only``)
-    as a job: 202 with the job, or 200 with the report when this request ran before."""
+    """The checks of ``bsdflab validate`` at ``level`` (those of ``families`` whose name
+    matches ``only``) as a job: 202 with the job, or 200 with the report when this request ran before."""
     if LEVELS.index(body.level) > LEVELS.index(settings.limit_validation_level):
         raise HTTPException(422, f"level {body.level!r} is above this server's limit of "
                                  f"{settings.limit_validation_level!r} ({limit_variable('limit_validation_level')})")
@@ -61,6 +62,13 @@ def create_validation(body: ValidationRequest, jobs: JobsDep, settings: Settings
     row, _ = jobs.submit(KIND, request, key, client)
     info = job_info(jobs.job(row["id"]))
     return JSONResponse(info.model_dump(mode="json"), status_code=202, headers={"Location": info.links["self"]})
+
+
+@router.get("/families", response_model=list[ValidationFamily], summary="The check families a request may name")
+def list_families() -> list[ValidationFamily]:
+    """Every family of checks (``families`` of POST /v1/validations), with its number of checks."""
+    load_checks()
+    return [ValidationFamily(name=f, checks=n) for f, n in REGISTRY.families().items()]
 
 
 @router.get("/{key}", response_model=ValidationInfo, responses=NOT_FOUND, summary="A report's state and summary")

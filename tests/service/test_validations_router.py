@@ -62,3 +62,33 @@ def test_benchmarks_are_under_the_level_cap(tmp_path):
     with make_client(tmp_path, limit_validation_level="quick") as capped:
         r = capped.post("/v1/validations", json={**ONE, "benchmarks": True})
         assert r.status_code == 422 and "benchmarks" in r.text and "BSDFLAB_LIMIT_VALIDATION_LEVEL" in r.text, r.text
+
+
+def test_families_are_listed_and_select_checks(client):
+    """GET /v1/validations/families lists every family with its checks; a request naming
+    families runs only theirs (with ``only`` narrowing further)."""
+    from bsdflab.validation import FAMILIES
+
+    listed = client.get("/v1/validations/families")
+    assert listed.status_code == 200
+    assert [f["name"] for f in listed.json()] == list(FAMILIES)
+    assert all(f["checks"] > 0 for f in listed.json()), listed.json()
+    r = client.post("/v1/validations", json={"level": "quick", "families": ["tables"], "only": "diffuse-exact"})
+    assert r.status_code == 202, r.text
+    job = wait_job(client, r.json()["id"], timeout=300)
+    assert job["state"] == "done", job
+    info = client.get(job["links"]["artefact"]).json()
+    assert info["request"]["families"] == ["tables"] and info["summary"]["total"] == 1
+
+
+@pytest.mark.parametrize("body", [{"families": ["nope"]}, {"families": []}, {"families": "tables"}])
+def test_unknown_families_are_422_listing_the_valid_ones(client, body):
+    r = client.post("/v1/validations", json=body)
+    assert r.status_code == 422, r.text
+    if body["families"] == ["nope"]:
+        assert "solvers" in r.text and "coverage" in r.text and "service" in r.text, r.text
+
+
+def test_families_and_only_that_match_nothing_are_422(client):
+    r = client.post("/v1/validations", json={"families": ["fit"], "only": "tables/"})
+    assert r.status_code == 422 and "matches no check" in r.text, r.text

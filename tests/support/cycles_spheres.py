@@ -15,45 +15,12 @@ import os
 import numpy as np
 
 from bsdflab.export.blender import blender_script, run_bpy
-
-SETTINGS = '''
-import os, json, math
-cfg = json.loads(os.environ["BSDFLAB_SPHERES"])
-scene.render.resolution_x = scene.render.resolution_y = cfg["size"]
-scene.cycles.samples = cfg["spp"]
-scene.cycles.use_adaptive_sampling = False
-scene.cycles.pixel_filter_type = "BOX"
-scene.cycles.filter_width = cfg.get("filter_width", 0.01)
-scene.render.threads_mode = "FIXED"
-scene.render.threads = 2
-'''
-LOOP = SETTINGS + '''
-scene.cycles.seed = cfg["seed"]
-for i, d in enumerate(cfg["thicknesses"]):
-    bsdf.inputs["Thin Film Thickness"].default_value = d
-    scene.render.filepath = os.path.join(cfg["folder"], f"sphere_{i}.exr")
-    bpy.ops.render.render(write_still=True)
-'''
-
-
-def render_spheres(params: dict, thicknesses, folder: str, size: int = 48, spp: int = 4, seed: int = 0) -> np.ndarray:
-    """Cycles images (T, size, size, 3) of the sphere for each film thickness (nm)."""
-    from bsdflab.render.image_io import read_exr
-
-    env = dict(os.environ, BSDFLAB_SPHERES=json.dumps({"size": size, "spp": spp, "seed": seed, "folder": folder,
-                                                        "thicknesses": [float(d) for d in thicknesses]}))
-    run_bpy(blender_script(params, "cycles-check") + LOOP, env=env)
-    return np.stack([read_exr(os.path.join(folder, f"sphere_{i}.exr"))[..., :3] for i in range(len(thicknesses))])
-
-
-def pixel_cosines(size: int) -> np.ndarray:
-    """cos theta between the view direction and the sphere's normal at each pixel centre
-    (size, size); NaN off the sphere."""
-    c = (np.arange(size) + 0.5) / size * 2.0 - 1.0
-    r2 = c[None, :] ** 2 + c[:, None] ** 2
-    with np.errstate(invalid="ignore"):
-        return np.where(r2 < 1.0, np.sqrt(1.0 - r2), np.nan)
-
+from bsdflab.validation.checks.cycles import (  # noqa: F401 -- the report's Cycles check's sphere, one implementation
+    LOOP,
+    SETTINGS,
+    pixel_cosines,
+    render_spheres,
+)
 
 # The same sphere seen in perspective, as both renderers' cameras can hold it: a pinhole at
 # distance DIST on the axis, full field of view FOV_DEG (square image), pixels box-filtered.

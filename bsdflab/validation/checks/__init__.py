@@ -1,2 +1,17 @@
 """The registered checks, one module per model family (importing registers them)."""
-from bsdflab.validation.checks import approximations, basic, films, layered, renderer, rough, tables  # noqa: F401
+from bsdflab.validation.checks import (  # noqa: F401
+    approximations,
+    basic,
+    coverage,
+    cycles,
+    export,
+    films,
+    fit,
+    layered,
+    measured,
+    renderer,
+    rough,
+    service,
+    solvers,
+    tables,
+)
