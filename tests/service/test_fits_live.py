@@ -12,7 +12,7 @@ import httpx2 as httpx
 import pytest
 from playwright import sync_api as playwright
 
-from support.service_process import ServiceProcess
+from support.service_process import ServiceProcess, follow_events
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 DATA = Path(__file__).resolve().parents[2] / "examples" / "fit" / "data.csv"
@@ -28,6 +28,24 @@ def server(tmp_path_factory):
     s = ServiceProcess(tmp_path_factory.mktemp("fits-live"))
     yield s
     s.stop()
+
+
+def test_a_fit_over_http_in_a_worker_process(server):
+    """Upload, submit and follow a fit's server-sent events on the real server (jobs in
+    worker processes, which register the kind by name): the progress never goes back, the
+    last event is done, and the study's summary is the fit of the uploaded rows."""
+    up = httpx.post(f"{server.url}/v1/fits/datasets", params={"name": "data.csv"}, content=DATA.read_bytes(),
+                    headers={"Content-Type": "application/octet-stream"}, timeout=60)
+    assert up.status_code == 200, up.text
+    body = {"config": {**CONFIG, "sampler": {**CONFIG["sampler"], "seed": 9}},
+            "data": [{"hash": up.json()["hash"], "name": "data.csv"}]}
+    r = httpx.post(f"{server.url}/v1/fits", json=body, timeout=60)
+    assert r.status_code == 202, r.text
+    events = follow_events(server.url, r.json()["id"], timeout=600)
+    progress = [job["progress"] for name, job in events if name == "progress"]
+    assert progress == sorted(progress) and events[-1][0] == "done", events
+    summary = httpx.get(f"{server.url}/v1/fits/{events[-1][1]['hash']}/files/summary.json", timeout=30).json()
+    assert summary["rows"] == up.json()["summary"]["rows"] == 189 and summary["sampler"] == "emcee"
 
 
 def test_a_fit_from_the_page(server):
