@@ -212,3 +212,19 @@ def test_artefact_names_cannot_leave_the_study(client, long_hash):
         r = client.get(f"/v1/fits/{h}/files/{name}")
         assert r.status_code in (404, 422), (name, r.status_code, r.text)
         assert LONG not in r.content and b"SQLite" not in r.content
+
+
+def test_fit_data_counts_against_the_upload_quota(tmp_path):
+    """Fit data share the measured uploads' storage quota (one count per key): the long CSV
+    fits, the wide CSV then passes the quota (413 naming it), the same bytes again cost
+    nothing, and the upload gate covers the path. Mutation caught: no quota check in
+    fit_uploads (the wide CSV answers 200)."""
+    from bsdflab.service.upload_gate import UPLOAD_PATHS
+
+    assert "/v1/fits/datasets" in UPLOAD_PATHS
+    with make_client(tmp_path, limit_upload_storage_per_key=len(LONG) + len(WIDE) // 2) as c:
+        assert upload(c, LONG, "data.csv").status_code == 200
+        assert upload(c, LONG, "again.csv").status_code == 200   # already stored: free
+        r = upload(c, WIDE, "angles.csv")
+        assert r.status_code == 413 and "BSDFLAB_LIMIT_UPLOAD_STORAGE_PER_KEY" in r.text, r.text
+        assert c.get("/v1/fits/datasets").json()["datasets"][0]["summary"]["bytes"] == len(LONG)
