@@ -228,3 +228,30 @@ def test_fit_data_counts_against_the_upload_quota(tmp_path):
         r = upload(c, WIDE, "angles.csv")
         assert r.status_code == 413 and "BSDFLAB_LIMIT_UPLOAD_STORAGE_PER_KEY" in r.text, r.text
         assert c.get("/v1/fits/datasets").json()["datasets"][0]["summary"]["bytes"] == len(LONG)
+
+
+def test_a_fit_never_shows_another_tenants_job(tmp_path):
+    """Bob, who knows the hash of alice's running fit, gets 404 naming no job, cannot cancel
+    it, and does not see her uploads listed; alice sees and cancels it."""
+    from fastapi.testclient import TestClient
+
+    from bsdflab.service import Settings, create_app
+
+    alice, bob = {"X-API-Key": "a" * 32}, {"X-API-Key": "b" * 32}
+    keys = {"alice": {"key": "a" * 32}, "bob": {"key": "b" * 32}}
+    settings = Settings(data_dir=tmp_path, executor="threads", workers=1, api_keys=keys, progress_interval_s=0.05)
+    with TestClient(create_app(settings)) as c:
+        up = c.post("/v1/fits/datasets", params={"name": "data.csv"}, content=LONG,
+                    headers={**alice, "Content-Type": "application/octet-stream"}).json()
+        config = _with(["sampler", "max_steps"], 1 << 18)
+        job = c.post("/v1/fits", json={"config": config, "data": [{"hash": up["hash"], "name": "data.csv"}]},
+                     headers=alice).json()
+        try:
+            seen = c.get(f"/v1/fits/{job['hash']}", headers=bob)
+            assert seen.status_code == 404 and job["id"] not in seen.text, seen.text
+            assert c.delete(f"/v1/jobs/{job['id']}", headers=bob).status_code == 404
+            assert c.get("/v1/fits/datasets", headers=bob).json()["datasets"] == []
+            assert job["id"] in c.get(f"/v1/fits/{job['hash']}", headers=alice).text
+        finally:
+            assert c.delete(f"/v1/jobs/{job['id']}", headers=alice).status_code == 200
+        assert wait_job(c, job["id"], timeout=300, headers=alice)["state"] == "cancelled"
