@@ -18,6 +18,7 @@ from bsdflab.service.routers import (
     bsdf,
     catalog,
     docs,
+    fits,
     jobs,
     measured,
     meta,
@@ -28,7 +29,7 @@ from bsdflab.service.routers import (
     validations,
 )
 from bsdflab.service.settings import Settings
-from bsdflab.service.upload_gate import UploadGate
+from bsdflab.service.upload_gate import UPLOAD_PATHS, UploadGate
 from bsdflab.util import native_output
 
 DESCRIPTION = """BSDF queries, thin-film spectra, tables and renders from bsdflab's Python API.
@@ -67,7 +68,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.metrics.bind(app)
     errors.install(app)
     app.add_middleware(errors.BodyLimit, limit=settings.limit_body_bytes,
-                       routes={"/v1/measured": ("limit_measured_bytes", settings.limit_measured_bytes)})
+                       routes={path: ("limit_measured_bytes", settings.limit_measured_bytes)
+                               for path in UPLOAD_PATHS})
     app.add_middleware(UploadGate, settings=settings,                       # after the key, before the body
                        stored_bytes=lambda client: app.state.jobs.store.upload_bytes(client))
     app.add_middleware(errors.HeadAsGet)
@@ -79,7 +81,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(page.router)
     app.include_router(docs.router)
     register_kind("validate", "bsdflab.validation.job")   # a layer above bsdflab.jobs: registered by name
-    for module in (catalog, bsdf, thinfilm, tables, measured, renders, validations, jobs):
+    register_kind("fit", "bsdflab.fit.job")
+    for module in (catalog, bsdf, thinfilm, tables, measured, renders, validations, fits, jobs):
         app.include_router(module.router, dependencies=[KEY], responses=KEY_ERRORS)
     app.mount("/static", StaticFiles(directory=page.STATIC_DIR), name="static")
     if not clients:

@@ -334,6 +334,53 @@ class ValidationInfo(BaseModel):
     links: dict[str, str]
 
 
+FIT_EXAMPLE = {
+    "config": {"parameters": {"film_thickness_nm": {"prior": "normal", "mean": 430.0, "sd": 10.0},
+                              "film_ior": {"prior": "normal", "mean": 1.83, "sd": 0.02}},
+               "model": {"thickness_nodes": 1},
+               "sampler": {"walkers": 8, "max_steps": 200, "check_every": 50, "map_starts": 1},
+               "appearance": {"draws": 4, "renders": 0, "angles_deg": [0, 30]}},
+    "data": [{"hash": "0" * 64, "name": "data.csv"}]}
+
+
+class FitFile(Request):
+    hash: Annotated[str, Field(pattern=HASH_PATTERN, description="an upload's hash (POST /v1/fits/datasets)")]
+    name: Annotated[str, Field(min_length=1, max_length=128, description="the file's name as the readers see "
+                                                                         "it: its suffix tells the format, an "
+                                                                         "angle in it places the curve")]
+
+
+class FitRequest(Request):
+    model_config = whole(FIT_EXAMPLE, exclusive=False)
+    config: dict[str, Any] = Field(description="the fit's TOML (docs/fit_data.md) as JSON: [parameters], "
+                                               "[sampler], [model], [appearance]")
+    data: Annotated[list[FitFile], Field(min_length=1, max_length=256)] = Field(
+        description="the uploaded data files: one long CSV, or spectra files with an import sidecar")
+    sidecar: dict[str, Any] | None = Field(None, description="the import sidecar's TOML as JSON (wide CSV, "
+                                                             "instrument spectra; docs/fit_data.md)")
+
+
+class FitInfo(BaseModel):
+    hash: str
+    state: Literal["queued", "running", "done", "failed", "cancelled"]
+    request: dict[str, Any]
+    job: JobInfo | None
+    summary: dict[str, Any] | None = Field(description="rows, free parameters, sampler, convergence, posterior "
+                                                       "mean, MAP and warnings (summary.json has everything)")
+    files: list[str] | None = Field(description="the study's files: GET /v1/fits/{hash}/files/{name}")
+    links: dict[str, str]
+
+
+class FitDataInfo(BaseModel):
+    hash: str = Field(description="SHA-256 of the file's bytes: name it in a fit's data as {\"hash\", \"name\"}")
+    format: str = Field(description="the format the readers found (long, wide, procspec, ...)")
+    summary: dict[str, Any] = Field(description="bytes, and rows (long CSV), curves (spectra) or lines (wide CSV)")
+
+
+class FitDataList(BaseModel):
+    datasets: list[FitDataInfo]
+
+
 class Health(BaseModel):
     status: Literal["ok"]
 

@@ -73,6 +73,11 @@ class Settings(LibrarySettings):
     limit_render_samples: int = Field(1 << 28, ge=1, description="width x height x spp of one render")
     limit_validation_level: Literal["quick", "standard", "full"] = Field(
         "standard", description="the highest validation level a request may ask for (full: hours)")
+    limit_fit_walker_steps: int = Field(1 << 21, ge=1, description="walkers x max_steps of one fit (emcee)")
+    limit_fit_live_points: int = Field(2000, ge=4, description="live points of one fit (nested sampling)")
+    limit_fit_emulator_solves: int = Field(1 << 14, ge=1, description="emulator_nodes ^ free parameters of one "
+                                                                      "fit of the full model")
+    limit_fit_files: int = Field(64, ge=1, description="uploaded data files of one fit")
     limit_event_streams_per_key: int = Field(8, ge=1, description="open progress streams (GET /v1/jobs/{id}/events) "
                                              "of one client key")
     limit_queue: int = Field(64, ge=1, description="queued + running jobs")

@@ -1,4 +1,5 @@
-"""Uploads bounded before their bodies are read (ASGI middleware on ``POST /v1/measured``).
+"""Uploads bounded before their bodies are read (ASGI middleware on ``POST /v1/measured`` and
+``POST /v1/fits/datasets``).
 
 Per client key: at most ``BSDFLAB_LIMIT_UPLOADS_PER_KEY`` uploads at once, and stored
 uploads of at most ``BSDFLAB_LIMIT_UPLOAD_STORAGE_PER_KEY`` bytes (the body's declared size
@@ -17,7 +18,7 @@ from bsdflab.service.auth import ANONYMOUS
 from bsdflab.service.errors import reply
 from bsdflab.service.settings import limit_variable
 
-PATH = "/v1/measured"
+UPLOAD_PATHS = ("/v1/measured", "/v1/fits/datasets")   # measured files and fit data: one set of limits
 # A refused upload's body is not read: the connection closes after the answer, so the
 # server does not parse (on its event loop) the megabytes the client goes on sending.
 CLOSE = {"Connection": "close"}
@@ -36,7 +37,7 @@ class UploadGate:
         self.in_flight = 0
 
     async def __call__(self, scope, receive, send):
-        if scope["type"] != "http" or scope["method"] != "POST" or scope["path"].rstrip("/") != PATH:
+        if scope["type"] != "http" or scope["method"] != "POST" or scope["path"].rstrip("/") not in UPLOAD_PATHS:
             return await self.app(scope, receive, send)
         s = self.settings
         name = scope.get("state", {}).get("client", ANONYMOUS).name

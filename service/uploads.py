@@ -52,10 +52,14 @@ def upload(jobs, data: bytes, fmt: str, client: str, quota: int | None = None) -
     """Check and store ``data`` as a ``fmt`` file; its record ``{"hash", "format", "summary"}``.
     ValueError with the reader's message (the file called "the upload") when it does not read;
     413 when a file new to ``client`` would take its stored bytes past ``quota``."""
-    with _LOCKS_LOCK:
-        lock = _CLIENT_LOCKS[client]   # one per configured key (and the anonymous client)
-    with lock:
+    with client_lock(client):
         return _upload(jobs, data, fmt, client, quota)
+
+
+def client_lock(client: str) -> threading.Lock:
+    """The lock that orders ``client``'s uploads of every kind (measured and fit data)."""
+    with _LOCKS_LOCK:
+        return _CLIENT_LOCKS[client]   # one per configured key (and the anonymous client)
 
 
 def _upload(jobs, data: bytes, fmt: str, client: str, quota: int | None) -> dict[str, Any]:

@@ -5,7 +5,7 @@ from typing import Any
 
 from bsdflab.service.schemas import JobInfo
 
-KIND_PATHS = {"tabulate": "tables", "render": "renders", "validate": "validations"}
+KIND_PATHS = {"tabulate": "tables", "render": "renders", "validate": "validations", "fit": "fits"}
 
 
 def job_links(row: dict[str, Any]) -> dict[str, str]:

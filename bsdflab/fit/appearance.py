@@ -28,6 +28,7 @@ from bsdflab.fit.forward import ForwardModel
 from bsdflab.fit.parameters import ALL_NAMES, FORWARD_NAMES
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
 from bsdflab.spectra.colour_weights import rgb_colourspace
+from bsdflab.util.progress import stop_if_cancelled
 
 _FORWARD_COLS = [ALL_NAMES.index(n) for n in FORWARD_NAMES]
 
@@ -152,8 +153,10 @@ def full_colour(values: np.ndarray, angles_deg) -> AppearancePosterior:
 
 
 def _bar(items, show: bool, desc: str):
-    if not show:
-        return items
-    from tqdm import tqdm
+    if show:
+        from tqdm import tqdm
 
-    return tqdm(items, desc=desc, unit="solve", leave=False)
+        items = tqdm(items, desc=desc, unit="solve", leave=False)
+    for item in items:
+        stop_if_cancelled(desc)
+        yield item

@@ -34,6 +34,7 @@ from bsdflab.fit.data import Dataset
 from bsdflab.fit.forward import parameter_sets
 from bsdflab.fit.full_forward import SolverForwardModel
 from bsdflab.fit.parameters import ALL_NAMES, parameter
+from bsdflab.util.progress import report_progress, stop_if_cancelled
 
 ALBEDO_NODES = (0.2, 0.5, 0.8)
 # a study sets this around building its posterior: a progress bar over the grid's solves
@@ -122,7 +123,10 @@ class EmulatedForward:
             from tqdm import tqdm
 
             nodes = tqdm(nodes, total=math.prod(shape), desc="emulator solves", unit="node", leave=False)
-        for idx in nodes:
+        total = math.prod(shape)
+        for done, idx in enumerate(nodes):
+            report_progress("emulator", done / total)
+            stop_if_cancelled("the emulator build")
             for k, rho in enumerate(albedos):
                 v = self.base.copy()
                 v[self._cols] = [a.nodes[i] for a, i in zip(self.axes, idx)]

@@ -24,6 +24,7 @@ import numpy as np
 from bsdflab.fit.posterior import LogPosterior
 from bsdflab.fit.sampling import MapResult
 from bsdflab.util.extras import require
+from bsdflab.util.progress import stop_if_cancelled
 
 dynesty = require("dynesty", "fit")
 
@@ -94,6 +95,7 @@ def run_nested(logpost: LogPosterior, live_points: int = 200, seed: int = 0, dlo
         return np.array([p.ppf(x) for p, x in zip(priors, u)], dtype=float)
 
     def loglike(x):
+        stop_if_cancelled("nested sampling")
         v = float(logpost.log_likelihood(np.asarray(x)[None, :])[0])
         return v if np.isfinite(v) else FLOOR
 

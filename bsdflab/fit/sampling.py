@@ -17,6 +17,7 @@ from scipy import optimize
 from bsdflab.fit.config import SamplerSettings
 from bsdflab.fit.posterior import LogPosterior
 from bsdflab.util.extras import require
+from bsdflab.util.progress import report_progress, stop_if_cancelled
 
 emcee = require("emcee", "fit")
 
@@ -88,6 +89,7 @@ def find_map(logpost: LogPosterior, starts: int, rng: np.random.Generator, progr
     eye = np.eye(len(scale)) * FD_STEP
 
     def value_and_gradient(z):
+        stop_if_cancelled("the MAP search")   # a start is up to 500 iterations: check each one
         pts = np.vstack([z, z + eye, z - eye]) * scale
         v = -logpost(pts)
         f0, fp, fm = v[0], v[1:1 + len(z)], v[1 + len(z):]
@@ -102,7 +104,8 @@ def find_map(logpost: LogPosterior, starts: int, rng: np.random.Generator, progr
         from tqdm import tqdm
 
         order = tqdm(order, desc="MAP starts", unit="start", leave=False)
-    for i in order:
+    for done, i in enumerate(order):
+        report_progress("MAP", done / starts)
         res = optimize.minimize(value_and_gradient, pool[i] / scale, jac=True, method="L-BFGS-B",
                                 bounds=bounds, options={"maxiter": 500, "ftol": 1e-12, "gtol": 1e-8})
         optima.append((res.x * scale, float(-res.fun)))
@@ -164,6 +167,8 @@ def run_sampler(logpost: LogPosterior, settings: SamplerSettings, progress: bool
     converged, old_tau = False, None
     for _ in sampler.sample(p0, iterations=settings.max_steps, progress=progress):
         n = sampler.iteration
+        report_progress("sampling", n / settings.max_steps)   # the cap: converging earlier jumps to the end
+        stop_if_cancelled("sampling")
         if n % settings.check_every:
             continue
         tau = sampler.get_autocorr_time(tol=0)

@@ -54,6 +54,13 @@ def cancel_requested() -> bool:
     return monitor is not None and bool(monitor.cancelled())
 
 
+def stop_if_cancelled(what: str) -> None:
+    """Raise ``JobCancelled`` when the active monitor asks the work to stop (Python loops
+    call this once per step: a cancel then waits at most one step)."""
+    if cancel_requested():
+        raise JobCancelled(f"{what} cancelled")
+
+
 def run_with_progress(job, show: bool, unit: str, desc: str) -> None:
     """Run the job on a worker thread (the core releases the GIL) while the main thread
     draws the progress bar; Ctrl-C cancels the job, waits for it to stop and re-raises.

@@ -1,0 +1,110 @@
+"""Fit data files uploaded over HTTP (``POST /v1/fits/datasets``), stored by content hash.
+
+A file is read under the name the client gives (its suffix and contents tell the format,
+bsdflab.fit.readers) before it enters the store as ``<sha256>.fitdata``: the fit's long CSV
+and instrument spectra (Ocean Optics .ProcSpec, OceanView and Avantes text, JCAMP-DX, ...)
+are read whole; a wide CSV only as text, since its delimiter, decimal mark and wavelength
+column may come from the sidecar that the fit request carries (it is read whole then).
+A reader's complaint names the file by the client's name, its line and column, never a
+server folder. A .ProcSpec is a zip: its members may inflate to at most ``MAX_INFLATED``
+bytes. Uploads count against the same per-key quotas as measured files (bsdflab.service.uploads).
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import tempfile
+import zipfile
+from pathlib import Path
+from typing import Any
+
+from fastapi import HTTPException
+
+from bsdflab.fit.job import SUFFIX, check_name
+from bsdflab.service import uploads
+from bsdflab.service.upload_gate import quota_message
+from bsdflab.util.files import write_atomically
+
+KIND = "fitdata"
+MAX_INFLATED = 64 << 20     # bytes a .ProcSpec's members may inflate to (a zip bomb stops here)
+MAX_MEMBERS = 64
+TEXT_ONLY = ("wide",)        # formats whose reading needs the fit request's sidecar
+
+
+def check_zip(path: str, name: str) -> None:
+    """A zip's declared sizes (zipfile never inflates a member past its declared size)."""
+    try:
+        with zipfile.ZipFile(path) as z:
+            infos = z.infolist()
+    except (zipfile.BadZipFile, OSError, EOFError) as e:
+        raise ValueError(f"{name}: not a readable zip archive ({type(e).__name__})") from None
+    if len(infos) > MAX_MEMBERS:
+        raise ValueError(f"{name}: the archive has {len(infos)} members, more than {MAX_MEMBERS}")
+    inflated = sum(i.file_size for i in infos)
+    if inflated > MAX_INFLATED:
+        raise ValueError(f"{name}: the archive inflates to {inflated} bytes, more than the limit of {MAX_INFLATED}")
+
+
+def read_check(path: str, name: str) -> dict[str, Any]:
+    """Read the file at ``path`` (named ``name``) as the fit would; its summary. ValueError
+    with the reader's message otherwise."""
+    from bsdflab.fit.readers import ImportSpec, reader_for
+
+    if name.lower().endswith(".procspec"):
+        check_zip(path, name)
+    reader = reader_for(path)
+    spec = ImportSpec(source="the upload")
+    if reader.long:
+        dataset = reader.read_dataset(path, spec)
+        return {"format": reader.name, "rows": len(dataset)}
+    if reader.name in TEXT_ONLY:
+        with open(path, encoding="utf-8", errors="strict") as f:
+            lines = sum(1 for _ in f)
+        return {"format": reader.name, "lines": lines}
+    spectra = reader.read(path, spec)
+    return {"format": reader.name, "curves": len(spectra), "points": int(sum(len(s.value) for s in spectra))}
+
+
+def upload(jobs, data: bytes, name: str, client: str, quota: int | None = None) -> dict[str, Any]:
+    """Check and store one fit data file; its record ``{"hash", "format", "summary"}``.
+    ValueError naming the file, line and column when it does not read; 413 past the quota."""
+    with uploads.client_lock(client):
+        return _upload(jobs, data, check_name("name", name), client, quota)
+
+
+def _upload(jobs, data: bytes, name: str, client: str, quota: int | None) -> dict[str, Any]:
+    h = hashlib.sha256(data).hexdigest()
+    if quota is not None and not jobs.store.uploaded(h, client):
+        stored = jobs.store.upload_bytes(client)
+        if stored + len(data) > quota:
+            raise HTTPException(413, quota_message(client, stored, len(data), quota))
+    found = jobs.store.artefact(h, KIND)
+    target = jobs.artefact_dir / f"{h}{SUFFIX}"
+    if found is not None and target.is_file():
+        jobs.store.put_upload(h, KIND, client, {"name": name}, found["result"])
+        return found["result"]
+    if jobs.store.artefact(h) is not None:   # the same bytes stored as another kind (a measured file)
+        raise ValueError(f"{name}: these bytes are stored as another kind of upload; they are not fit data")
+    folder = tempfile.mkdtemp(dir=jobs.artefact_dir, prefix=".fitupload-")
+    try:
+        path = os.path.join(folder, name)
+        Path(path).write_bytes(data)
+        try:
+            summary = read_check(path, name)
+        except UnicodeDecodeError as e:
+            raise ValueError(f"{name}: not UTF-8 text (byte {e.start + 1})") from None
+        except ValueError as e:
+            raise ValueError(str(e).replace(folder + os.sep, "").replace(folder, "")) from None
+        write_atomically(target, lambda tmp: shutil.copyfile(path, tmp), suffix=SUFFIX)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    result = {"hash": h, "format": summary["format"], "summary": {"bytes": len(data), **summary},
+              "files": {"file": target.name}}
+    jobs.store.put_upload(h, KIND, client, {"name": name}, result)
+    return jobs.store.artefact(h, KIND)["result"]
+
+
+def stored(jobs, content_hash: str) -> bool:
+    row = jobs.store.artefact(content_hash, KIND)
+    return row is not None and (jobs.artefact_dir / f"{content_hash}{SUFFIX}").is_file()

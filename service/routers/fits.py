@@ -1,0 +1,138 @@
+"""/v1/fits: a fitting study (bsdflab.fit, as ``bsdflab fit``) as a job, its data files uploaded
+by hash (``POST /v1/fits/datasets``) and the study folder's files as artefacts by name.
+Cancel with ``DELETE /v1/jobs/{id}``; the queue limits and shares of every job apply."""
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, HTTPException, Path, Query, Request
+from fastapi.responses import FileResponse, JSONResponse
+from starlette.concurrency import run_in_threadpool
+
+from bsdflab.fit import job as fit_job
+from bsdflab.service import fit_uploads
+from bsdflab.service.bodies import ThreadedBody
+from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep
+from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
+from bsdflab.service.job_service import JobService
+from bsdflab.service.routers.tables import QUEUED
+from bsdflab.service.schemas import HASH_PATTERN, FitDataInfo, FitDataList, FitInfo, FitRequest
+from bsdflab.service.views import job_info
+
+router = APIRouter(prefix="/v1/fits", tags=["fits"], route_class=ThreadedBody)
+Hash = Annotated[str, Path(pattern=HASH_PATTERN, description="the fit's content hash (64 hex digits)")]
+FileName = Annotated[str, Path(pattern=r"^[A-Za-z0-9][A-Za-z0-9._-]{0,127}$", description="a file of the study")]
+KIND = "fit"
+DATASETS = "/v1/fits/datasets"
+BODY = {"requestBody": {"required": True, "content": {"application/octet-stream": {
+    "schema": {"type": "string", "format": "binary"}}}}}
+MEDIA = {".json": "application/json", ".png": "image/png", ".csv": "text/csv", ".md": "text/markdown",
+         ".nc": "application/x-netcdf"}
+
+
+def _links(h: str, names: list[str] | None) -> dict[str, str]:
+    links = {"self": f"/v1/fits/{h}"}
+    for name in names or ():
+        links[name] = f"/v1/fits/{h}/files/{name}"
+    return links
+
+
+def _info(jobs: JobService, h: str, request: dict[str, Any], result: dict[str, Any] | None, client) -> FitInfo:
+    job = jobs.visible(jobs.store.latest_for(KIND, h), client)   # never another tenant's job
+    live = jobs.job(job["id"]) if job is not None else None
+    if result is None and live is None:
+        raise HTTPException(404, f"no fit {h}")
+    names = None if result is None else sorted(result["files"])
+    return FitInfo(hash=h, state="done" if result is not None else live["state"], request=request,
+                   job=job_info(live) if live else None, summary=None if result is None else result["summary"],
+                   files=names, links=_links(h, names))
+
+
+def check_limits(settings, request: dict[str, Any]) -> None:
+    """422 naming the limit when the fit's work passes one (as a render's pixels)."""
+    config = fit_job.config_of(request)
+    over_limit(settings, "limit_fit_files", len(request["data"]), "the number of data files")
+    s = config.sampler
+    if s.kind == "emcee":
+        over_limit(settings, "limit_fit_walker_steps", s.walkers * s.max_steps, "[sampler] walkers x max_steps")
+    else:
+        over_limit(settings, "limit_fit_live_points", s.live_points, "[sampler] live_points")
+    if config.model.kind == "full" and config.model.emulator_nodes:
+        solves = config.model.emulator_nodes ** len(config.free)
+        over_limit(settings, "limit_fit_emulator_solves", solves, "[model] emulator_nodes ^ free parameters")
+    ap = config.appearance
+    over_limit(settings, "limit_render_samples", ap.renders * ap.render_size ** 2 * ap.render_spp,
+               "[appearance] renders x render_size^2 x render_spp")
+    over_limit(settings, "limit_render_pixels", (ap.renders + 1) * ap.render_size ** 2,
+               "[appearance] (renders + 1) x render_size^2")
+
+
+@router.post("/datasets", response_model=FitDataInfo, responses=ERRORS, openapi_extra=BODY,
+             summary="Upload a data file for fits (long CSV, wide CSV, .ProcSpec, ...)")
+async def upload_dataset(request: Request, jobs: JobsDep, client: ClientDep, settings: SettingsDep,
+                         name: Annotated[str, Query(min_length=1, max_length=128, description=(
+                             "the file's name (its suffix tells the format: .csv, .ProcSpec, ...)"))]
+                         ) -> FitDataInfo:
+    """The raw file as the body (``application/octet-stream``, at most
+    ``BSDFLAB_LIMIT_MEASURED_BYTES``), read by bsdflab.fit's readers (422 naming the file,
+    line and column) and stored under its SHA-256. The per-key upload limits and storage
+    quota of measured files apply to both together."""
+    data = await request.body()
+    result = await run_in_threadpool(fit_uploads.upload, jobs, data, name, client.name,
+                                     settings.limit_upload_storage_per_key)
+    return FitDataInfo(hash=result["hash"], format=result["format"], summary=result["summary"])
+
+
+@router.get("/datasets", response_model=FitDataList, summary="The fit data files this client uploaded")
+def list_datasets(jobs: JobsDep, client: ClientDep, limit: Annotated[int, Query(ge=1, le=1000)] = 100
+                  ) -> FitDataList:
+    rows = jobs.store.uploads_of(fit_uploads.KIND, None if client.admin else client.name, limit)
+    return FitDataList(datasets=[FitDataInfo(hash=r["result"]["hash"], format=r["result"]["format"],
+                                             summary=r["result"]["summary"]) for r in rows])
+
+
+@router.post("", response_model=FitInfo, responses={**QUEUED, **ERRORS},
+             summary="Fit a model to uploaded data (or get the existing study)")
+def create_fit(body: FitRequest, jobs: JobsDep, settings: SettingsDep, client: ClientDep):
+    """The config is checked first (422 naming the TOML section and key), then the limits,
+    then the data (422 naming the upload, file, line and column); 202 with the job, or 200
+    with the study when this exact request ran before."""
+    request, key = jobs.prepare(KIND, body.model_dump())
+    check_limits(settings, request)
+    found = jobs.cached(KIND, key) or jobs.adopt(KIND, key, request)
+    if found is not None:
+        return _info(jobs, key, request, found, client)
+    for i, item in enumerate(request["data"]):
+        if not fit_uploads.stored(jobs, item["hash"]):
+            raise HTTPException(422, f"data[{i}].hash: no uploaded fit data file {item['hash']} "
+                                     f"(upload it with POST {DATASETS})")
+    fit_job.load_dataset(request, jobs.artefact_dir)   # what the worker would refuse, refused now (422)
+    row, _ = jobs.submit(KIND, request, key, client)
+    info = job_info(jobs.job(row["id"]))
+    return JSONResponse(info.model_dump(mode="json"), status_code=202, headers={"Location": info.links["self"]})
+
+
+@router.get("/{key}", response_model=FitInfo, responses=NOT_FOUND, summary="A fit's state, summary and files")
+def get_fit(key: Hash, jobs: JobsDep, client: ClientDep) -> FitInfo:
+    row = jobs.store.artefact(key, KIND)
+    if row is not None:
+        return _info(jobs, key, row["request"], jobs.cached(KIND, key), client)
+    job = jobs.visible(jobs.store.latest_for(KIND, key), client)
+    if job is None:
+        raise HTTPException(404, f"no fit {key}")
+    return _info(jobs, key, job["request"], None, client)
+
+
+@router.get("/{key}/files/{name}", response_class=FileResponse, responses=NOT_FOUND,
+            summary="A file of the study folder (summary.json, material.json, corner.png, ...)")
+def get_file(key: Hash, name: FileName, jobs: JobsDep, client: ClientDep) -> FileResponse:
+    """Only the names the study wrote (``files`` of ``GET /v1/fits/{hash}``) are served."""
+    result = jobs.cached(KIND, key)
+    if result is None:
+        raise HTTPException(404, f"no finished fit {key}{jobs.job_hint(KIND, key, client)}")
+    relative = result["files"].get(name)
+    if relative is None:
+        raise HTTPException(404, f"fit {key} has no file {name!r}; its files: {', '.join(sorted(result['files']))}")
+    suffix = name[name.rfind("."):] if "." in name else ""
+    return FileResponse(jobs.artefact_dir / relative, media_type=MEDIA.get(suffix, "application/octet-stream"),
+                        filename=name)
