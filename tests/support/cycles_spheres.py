@@ -42,7 +42,7 @@ def render_perspective(params: dict, folder: str, size: int, spp: int, seeds=(0,
     """Cycles images (len(seeds), size, size, 3) of the exported sphere in perspective."""
     from bsdflab.render.image_io import read_exr
 
-    env = dict(os.environ, BSDFLAB_SPHERES=json.dumps({"size": size, "spp": spp, "seeds": list(seeds),
+    env = dict(os.environ, CYCLES_CHECK_SPHERES=json.dumps({"size": size, "spp": spp, "seeds": list(seeds),
                                                         "folder": folder, "fov": FOV_DEG, "dist": DIST,
                                                         "filter_width": 1.0}))
     run_bpy(blender_script(params, "cycles-persp") + PERSPECTIVE, env=env)

@@ -18,7 +18,7 @@ from bsdflab.validation.registry import REGISTRY, Outcome, SkipCheck, effort
 
 SETTINGS = """
 import os, json, math
-cfg = json.loads(os.environ["BSDFLAB_SPHERES"])
+cfg = json.loads(os.environ["CYCLES_CHECK_SPHERES"])
 scene.render.resolution_x = scene.render.resolution_y = cfg["size"]
 scene.cycles.samples = cfg["spp"]
 scene.cycles.use_adaptive_sampling = False
@@ -54,7 +54,7 @@ def render_spheres(params: dict, thicknesses, folder: str, size: int = 48, spp: 
     from bsdflab.render.image_io import read_exr
 
     cfg = {"size": size, "spp": spp, "seed": seed, "folder": folder, "thicknesses": [float(d) for d in thicknesses]}
-    run_bpy(blender_script(params, "cycles-check") + LOOP, env=dict(os.environ, BSDFLAB_SPHERES=json.dumps(cfg)))
+    run_bpy(blender_script(params, "cycles-check") + LOOP, env=dict(os.environ, CYCLES_CHECK_SPHERES=json.dumps(cfg)))
     return np.stack([read_exr(os.path.join(folder, f"sphere_{i}.exr"))[..., :3] for i in range(len(thicknesses))])
 
 
