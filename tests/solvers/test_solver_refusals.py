@@ -3,7 +3,7 @@ with a ValueError naming its gap code (bsdflab.solvers.adding_doubling.GAPS;
 docs/solvers.md, "Solved and refused"): never a crash, never a non-finite value.
 
 The enumeration: every top (smooth, smooth + film, GGX, GGX + film, Beckmann multiscatter,
-an index-matched rough top, a roughness below the validated range) on every base
+a roughness below the validated range) on every base
 (Lambertian, smooth conductor + film, rough conductor, smooth and rough dielectric to water,
 spectral and RGB measured files, a MERL file, a table); every interior interface (smooth
 matched, with a film, unmatched; rough, with and without a film: Layered refuses a matched
