@@ -19,7 +19,9 @@ and the light that entered the stack solved; for a transmissive stack with a smo
 and a smooth dielectric base (``Solution.two_sided``) also transmission both ways and
 reflection from below (the stack's four operators by the adding equations). A rough top
 or rough base of a transmissive stack: pairs with wi.z < 0 or wo.z < 0 raise ValueError
-naming it (an opaque stack's are zero, its value).
+naming it (an opaque stack's are zero, its value). Every other stack ``Layered`` accepts
+is solved or refused with a ValueError naming its code in ``GAPS`` (docs/solvers.md,
+"Solved and refused").
 
 Validated range (tests/solvers, docs/solvers.md): alpha in [1e-3, 1] for rough
 interfaces and bases (ValueError outside); Henyey-Greenstein |g| <= 0.95 (ValueError
