@@ -19,7 +19,9 @@ and the light that entered the stack solved; for a transmissive stack with a smo
 and a smooth dielectric base (``Solution.two_sided``) also transmission both ways and
 reflection from below (the stack's four operators by the adding equations). A rough top
 or rough base of a transmissive stack: pairs with wi.z < 0 or wo.z < 0 raise ValueError
-naming it (an opaque stack's are zero, its value).
+naming it (an opaque stack's are zero, its value). Every other stack ``Layered`` accepts
+is solved or refused with a ValueError naming its code in ``GAPS`` (docs/solvers.md,
+"Solved and refused").
 
 Validated range (tests/solvers, docs/solvers.md): alpha in [1e-3, 1] for rough
 interfaces and bases (ValueError outside); Henyey-Greenstein |g| <= 0.95 (ValueError
@@ -46,6 +48,39 @@ DEFAULT_THIN_DEPTH = 2.0 ** -16
 DEFAULT_ORDER_TOLERANCE = 1e-6
 DEFAULT_FINE_STEP = 0.25
 PHASES = ("isotropic", "hg")
+# Bases (by their registry tag, ``type_name``: bsdflab.measured lies above this layer) the
+# solver takes its operators from (cosine transforms of their eval, or their delta
+# weights); spectral ``measured`` files are isotropic by the reader's check.
+BASES = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric", "measured")
+RGB_BASES = ("merl",)  # and RGB measured files
+
+# Every stack ``bsdflab.Layered`` accepts is either solved or refused with one of these
+# reasons, by code (docs/solvers.md, "Solved and refused"; tests/solvers/
+# test_solver_refusals.py enumerates the combinations). The stack-wide ones are raised by
+# ``check_model`` (so by ``solve``); the exit ones by ``Solution.eval`` for the pairs
+# they concern (reflection from above stays solved).
+GAPS = {
+    "not-layered": "the solver solves bsdflab.Layered stacks",
+    "alpha-range": f"outside the solver's validated roughness range [{ALPHA_RANGE[0]}, {ALPHA_RANGE[1]}]",
+    "phase-kind": "only isotropic and Henyey-Greenstein slabs have Fourier coefficients here "
+                  "(von Mises-Fisher is not implemented)",
+    "hg-range": f"beyond the validated |g| <= {MAX_G} (the nodes needed grow as 6 / (1 - |g|))",
+    "smooth-interior-unmatched": "the adding-doubling solver needs smooth interior interfaces index-matched "
+                                 "(rough or film-coated matched ones are solved; an unmatched one would need "
+                                 "its own critical cosines and Fresnel operator: not implemented)",
+    "rgb-base": "the base answers in RGB only and the solver works per wavelength (MERL files, RGB .bsdf "
+                "files; PFMC remains the path)",
+    "base-kind": "the solver takes its operators from Diffuse, Conductor, RoughConductor, Dielectric, "
+                 "RoughDielectric and spectral Measured bases only",
+    "rough-exit": "transmission and reflection from below through a rough top or onto a rough base would need "
+                  "that boundary's product integration at the exit (not implemented): for pairs with wi.z < 0 "
+                  "or wo.z < 0 use the model's own eval (PFMC)",
+}
+
+
+def refusal(code: str, detail: str) -> ValueError:
+    """The ValueError of gap ``code``: what in the model, then why (``GAPS``)."""
+    return ValueError(f"adding-doubling refuses [{code}]: {detail}: {GAPS[code]}")
 
 
 def nodes_for_g(g: float) -> int:
@@ -150,10 +185,9 @@ class Solution:
     def _pairs(self, wi, wo) -> tuple[np.ndarray, np.ndarray]:
         a, b = check.direction_pair(wi, wo)
         if self._transmits and not self.two_sided and np.any((a[:, 2] < 0) | (b[:, 2] < 0)):
-            raise ValueError(f"adding-doubling solves transmission and reflection from below only for a "
-                             f"smooth top and a smooth dielectric base; this stack transmits through "
-                             f"{one_sided_reason(self.model)}, so for pairs with wi.z < 0 or wo.z < 0 "
-                             f"use the model's own eval (PFMC)")
+            raise refusal("rough-exit", f"this stack transmits through {one_sided_reason(self.model)}, and "
+                                        f"adding-doubling solves transmission and reflection from below only "
+                                        f"for a smooth top and a smooth dielectric base")
         return a, b
 
     def eval(self, wi, wo, scattered_only: bool = False) -> np.ndarray:
@@ -252,38 +286,39 @@ def solve(model: Layered, wavelengths=None, nodes: int = DEFAULT_NODES, orders: 
 
 
 def check_model(model) -> None:
-    """ValueError naming why ``model`` is outside what this solver solves (its validated
-    range): not a ``Layered`` stack, a roughness outside ALPHA_RANGE, a phase function
-    other than isotropic or Henyey-Greenstein with |g| <= MAX_G, or a smooth interior
-    interface between unequal indices. (Transmissive stacks are solved for reflection
-    from above only: ``Solution.eval`` refuses their other pairs.)"""
+    """ValueError naming why ``model`` is outside what this solver solves (``model_gap``;
+    the exit gap of a transmissive stack is ``Solution.eval``'s, per pair)."""
+    gap = model_gap(model)
+    if gap is not None:
+        raise refusal(*gap)
+
+
+def model_gap(model) -> tuple[str, str] | None:
+    """(code, detail) of the first stack-wide gap of ``model`` (``GAPS``), or None."""
     if not isinstance(model, Layered):
-        raise ValueError(f"model must be a Layered stack, got {type(model).__name__}")
+        return "not-layered", f"model must be a Layered stack, got {type(model).__name__}"
     for name, part in [(f"interfaces[{i}]", m) for i, m in enumerate(model.interfaces)] + [("base", model.base)]:
         alpha = getattr(part, "alpha", None)
         if alpha is not None and not ALPHA_RANGE[0] <= alpha <= ALPHA_RANGE[1]:
-            raise ValueError(f"{name}.alpha must be in [{ALPHA_RANGE[0]}, {ALPHA_RANGE[1]}] for the "
-                             f"adding-doubling solver (its validated range), got {alpha}")
-    for i, part in enumerate(model.interfaces[1:], start=1):
-        ext, inside = (getattr(part, k, None) for k in ("ext_ior", "int_ior"))
-        if (getattr(part, "alpha", None) is None and isinstance(ext, (int, float))
-                and isinstance(inside, (int, float)) and abs(ext - inside) > 1e-9 * max(ext, inside)):
-            raise ValueError(f"interfaces[{i}] is a smooth interior interface between different indices "
-                             f"({ext} above, {inside} below): the adding-doubling solver needs smooth "
-                             f"interior interfaces index-matched (rough or film-coated matched ones are solved)")
+            return "alpha-range", f"{name}.alpha must be in [{ALPHA_RANGE[0]}, {ALPHA_RANGE[1]}], got {alpha}"
     for i, s in enumerate(model.slabs):
         if s.phase.type not in PHASES:
-            raise ValueError(f"slabs[{i}].phase must be one of {', '.join(PHASES)} for the "
-                             f"adding-doubling solver, got {s.phase.type!r}")
+            return "phase-kind", f"slabs[{i}].phase must be one of {', '.join(PHASES)}, got {s.phase.type!r}"
         g = s.phase.g if s.phase.type == "hg" else 0.0
         if abs(g) > MAX_G:
-            raise ValueError(f"slabs[{i}].phase.g must be in [-{MAX_G}, {MAX_G}] for the "
-                             f"adding-doubling solver (its validated range), got {g}")
+            return "hg-range", f"slabs[{i}].phase.g must be in [-{MAX_G}, {MAX_G}], got {g}"
     media = media_indices(model)
-    for j, part in enumerate(model.interfaces[1:], start=1):  # the core's rule (adding_doubling.cpp)
+    for j, part in enumerate(model.interfaces[1:], start=1):  # the core's rule (adding_doubling_boundaries.cpp)
         if not part.lobes & Lobe.SMOOTH and abs(media[j] - media[j + 1]) > 1e-9 * media[j]:
-            raise ValueError(f"interfaces[{j}] is smooth between unequal indices ({media[j]} and "
-                             f"{media[j + 1]}): the adding-doubling solver needs it index-matched")
+            return "smooth-interior-unmatched", (f"interfaces[{j}] is a smooth interior interface between "
+                                                 f"different indices ({media[j]} above, {media[j + 1]} below)")
+    base = model.base
+    kind = getattr(base, "type_name", None)
+    if kind in RGB_BASES or (kind == "measured" and not base.spectral):
+        return "rgb-base", f"the base is a {kind!r} model that stores RGB"
+    if kind not in BASES:
+        return "base-kind", f"the base is a {kind or type(base).__name__!r} model"
+    return None
 
 
 def one_sided_reason(model: Layered) -> str:

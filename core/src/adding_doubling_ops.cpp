@@ -133,19 +133,19 @@ Op inverse_one_minus(const Op &a, const Grid &g) {
     return r;
 }
 
-Op reflect_over(const Layer &top, const Op &R, const Grid &g) {
+Op reflect_over(const LayerOperators &top, const Op &R, const Grid &g) {
     // Rt + Tu (I - R Rb)^-1 R Td
     Op inner = inverse_one_minus(mul(R, top.Rb, g), g);
     Op path = mul(top.Tu, mul(inner, mul(R, top.Td, g), g), g);
     return add(top.Rt, path);
 }
 
-Layer add_layers(const Layer &a, const Layer &b, const Grid &g) {
+LayerOperators add_layers(const LayerOperators &a, const LayerOperators &b, const Grid &g) {
     // Downward radiance between the two per unit incident from above: (I - a.Rb b.Rt)^-1 a.Td;
     // upward radiance there per unit incident from below: (I - b.Rt a.Rb)^-1 b.Tu.
     Op down = mul(inverse_one_minus(mul(a.Rb, b.Rt, g), g), a.Td, g);
     Op up = mul(inverse_one_minus(mul(b.Rt, a.Rb, g), g), b.Tu, g);
-    Layer r;
+    LayerOperators r;
     r.Rt = add(a.Rt, mul(a.Tu, mul(b.Rt, down, g), g));
     r.Td = mul(b.Td, down, g);
     r.Rb = add(b.Rb, mul(b.Td, mul(a.Rb, up, g), g));

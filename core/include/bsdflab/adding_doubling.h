@@ -85,7 +85,6 @@ class AddingDoubling {
     std::shared_ptr<AddingDoubling> with_top(std::shared_ptr<const BSDF> top) const;
 
   private:
-    struct Boundary;
     struct Inner;  // the reflection of everything below a rough top, per (channel, order)
     // Two-sided queries (two_sided()): zero-weight extra cosines (inside the first slab for
     // directions above the stack, inside the last for directions below) and, per pair, the
@@ -97,6 +96,10 @@ class AddingDoubling {
     void solve(const std::vector<double> &out_cos, const std::vector<double> &in_cos,
                std::vector<double> &values, const Queries *two_sided = nullptr) const;
     void eval_two_sided(const double *wi, const double *wo, std::size_t n, double *out) const;
+    // Whether the media on either side of boundary j have one index.
+    bool index_matched(std::size_t j) const;
+    // The quadrature weights W of order m on a grid of N cosines (0 on the extras).
+    std::vector<double> order_weights(int m, std::size_t N) const;
 
     std::vector<double> wavelengths_;
     std::vector<std::shared_ptr<const BSDF>> boundaries_;

@@ -26,7 +26,7 @@ struct Op {
     std::vector<double> K;  // N x N row-major, or empty
 };
 
-struct Layer {
+struct LayerOperators {
     Op Rt, Td, Rb, Tu;  // reflection from the top / bottom, transmission down / up
 };
 
@@ -34,9 +34,9 @@ Op mul(const Op &a, const Op &b, const Grid &g);           // a after b
 Op add(const Op &a, const Op &b);
 Op inverse_one_minus(const Op &a, const Grid &g);          // (I - a)^-1
 // Reflection from the top of `top` lying on a medium whose reflection from above is R.
-Op reflect_over(const Layer &top, const Op &R, const Grid &g);
+Op reflect_over(const LayerOperators &top, const Op &R, const Grid &g);
 // The layer `a` lying on the layer `b`: all four operators of the pair (the adding equations).
-Layer add_layers(const Layer &a, const Layer &b, const Grid &g);
+LayerOperators add_layers(const LayerOperators &a, const LayerOperators &b, const Grid &g);
 // A homogeneous up-down symmetric layer (Rt = Rb = R, Td = Tu = T) stacked on itself.
 void double_symmetric(Op &R, Op &T, const Grid &g);
 

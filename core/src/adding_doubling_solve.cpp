@@ -1,0 +1,88 @@
+// AddingDoubling::solve: the grid, then the named parts of adding_doubling_parts.h in
+// order (boundary operators, the top's, slabs, adding, spectral interpolation, query
+// values), one task per (channel, order).
+#include <mutex>
+#include "adding_doubling_parts.h"
+#include "bsdflab/parallel.h"
+
+namespace bsdflab {
+
+using ad::Grid;
+using ad::Op;
+
+void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector<double> &in_cos,
+                           std::vector<double> &values, const Queries *two_sided) const {
+    const int C = channels(), M = orders_;
+    const int n = static_cast<int>(mu_.size());
+    const std::size_t Qo = out_cos.size(), Qi = in_cos.size(), K = slabs_.size();
+    // The grid: nodes, then (smooth top) the query cosines inside the first slab.
+    std::vector<double> grid(mu_);
+    std::vector<int> xo(Qo), xi(Qi);
+    if (two_sided) {
+        grid.insert(grid.end(), two_sided->cosines.begin(), two_sided->cosines.end());
+    } else if (smooth_top_) {
+        std::vector<double> all(out_cos);
+        all.insert(all.end(), in_cos.begin(), in_cos.end());
+        std::vector<int> index;
+        const std::vector<double> extras = ad::distinct(all, index);
+        for (std::size_t q = 0; q < Qo; ++q) xo[q] = n + index[q];
+        for (std::size_t q = 0; q < Qi; ++q) xi[q] = n + index[Qo + q];
+        grid.insert(grid.end(), extras.begin(), extras.end());
+    }
+    const ad::Sizes s{C, M, half_samples_, n, grid.size()};
+    const std::size_t N = s.N;
+    auto order_grid = [&](int m) { return Grid{n, static_cast<int>(N), order_weights(m, N)}; };
+    // A rough top's queries never enter below it: what lies there is solved once per
+    // solver (and shared with with_top copies).
+    std::unique_lock<std::mutex> lock(inner_->mutex, std::defer_lock);
+    if (!smooth_top_) lock.lock();
+    const bool cached = !smooth_top_ && inner_->ready;
+
+    std::vector<ad::BoundaryOperators> below(K + 1);
+    std::vector<ad::SlabOperators> slabs;
+    if (!cached) {
+        for (std::size_t j = 1; j <= K; ++j)
+            below[j] = ad::boundary_operators(*boundaries_[j], j < K, index_matched(j), grid, s);
+        slabs.reserve(K);
+        for (std::size_t j = 0; j < K; ++j) slabs.emplace_back(slabs_[j], grid, settings_, M);
+    }
+    const ad::TopOperators top = ad::top_operators(*boundaries_[0], smooth_top_, grid, mu_, w_, breaks_,
+                                                   in_cos, out_cos, settings_, s);
+    if (!smooth_top_ && !cached) {
+        const std::vector<int> solved = ad::solved_channels(C, settings_.spectral_stride);
+        inner_->R.assign(static_cast<std::size_t>(C) * M, Op());
+        parallel_for_each(solved.size() * M, [&](std::size_t t) {
+            int c = solved[t / M], m = static_cast<int>(t % M);
+            inner_->R[static_cast<std::size_t>(c) * M + m] =
+                ad::inner_reflection(below, slabs, s, c, m, order_grid(m));
+        });
+        ad::interpolate_channels(inner_->R, wavelengths_, solved, M);
+        inner_->ready = true;
+    }
+
+    if (two_sided) {
+        const std::size_t P = two_sided->op.size();
+        values.assign(static_cast<std::size_t>(C) * M * P, 0.0);
+        parallel_for_each(static_cast<std::size_t>(C) * M, [&](std::size_t task) {
+            const int c = static_cast<int>(task / M), m = static_cast<int>(task % M);
+            const ad::LayerOperators S = ad::stack_operators(top, below, slabs, s, c, m, order_grid(m));
+            ad::two_sided_values(S, two_sided->op, two_sided->row, two_sided->col, n, N, &values[task * P]);
+        });
+        return;
+    }
+    values.assign(static_cast<std::size_t>(C) * M * Qo * Qi, 0.0);
+    parallel_for_each(static_cast<std::size_t>(C) * M, [&](std::size_t task) {
+        const int c = static_cast<int>(task / M), m = static_cast<int>(task % M);
+        const Grid g = order_grid(m);
+        const Op R = smooth_top_ ? ad::inner_reflection(below, slabs, s, c, m, g) : inner_->R[task];
+        if (R.D.empty() && R.K.empty()) return;
+        // The stack's reflection under the top, its internal reflections included.
+        Op Y = ad::mul(ad::inverse_one_minus(ad::mul(R, top.rb(s, c, m), g), g), R, g);
+        double *V = &values[task * Qo * Qi];
+        if (smooth_top_) return ad::smooth_top_values(Y, xo, xi, N, V);
+        ad::rough_top_values(Y, ad::kernel_at(top.Td, N, Qi, C, M, c, m),
+                             ad::kernel_at(top.Tu, Qo, N, C, M, c, m), g, N, Qo, Qi, V);
+    });
+}
+
+} // namespace bsdflab

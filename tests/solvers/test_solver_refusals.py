@@ -1,0 +1,187 @@
+"""Every stack bsdflab.Layered (PFMC) accepts is either solved by adding-doubling or refused
+with a ValueError naming its gap code (bsdflab.solvers.adding_doubling.GAPS;
+docs/solvers.md, "Solved and refused"): never a crash, never a non-finite value.
+
+The enumeration: every top (smooth, smooth + film, GGX, GGX + film, Beckmann multiscatter,
+a roughness below the validated range) on every base
+(Lambertian, smooth conductor + film, rough conductor, smooth and rough dielectric to water,
+spectral and RGB measured files, a MERL file, a table); every interior interface (smooth
+matched, with a film, unmatched; rough, with and without a film: Layered refuses a matched
+rough one) over an opaque, a smooth and a rough transmissive base; every slab phase
+(isotropic, HG, HG beyond the range, von Mises-Fisher, non-scattering). A stack counts only
+where PFMC itself evaluates it. Each solved stack is queried with all four kinds of pairs
+(reflection from above and below, transmission down and up, grazing ones included): values
+finite, and those of an opaque stack below it exactly 0. The expected outcome is stated here
+from the configuration, not read from the solver."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+import bsdflab as bl
+from bsdflab.measured import export_model
+from bsdflab.measured.merl import DIMS, merl_bytes
+from bsdflab.solvers import solve
+from bsdflab.solvers.adding_doubling import GAPS
+from bsdflab.tables import TableBSDF
+from bsdflab.testing import spherical_directions
+from tests.support.tables import valid_table
+
+WL = [450.0, 550.0, 650.0]
+FILM = [{"material": 1.83, "thickness_nm": 300.0}]
+ISO = bl.Slab(1.0, sigma_a=0.2, sigma_s=1.0)
+
+# name -> (top, rough, expected stack-wide gap or None)
+TOPS = {
+    "smooth": (lambda: bl.Dielectric(1.5, 1.0), False, None),
+    "smooth film": (lambda: bl.Dielectric(1.5, 1.0, film=FILM), False, None),
+    "ggx 0.2": (lambda: bl.RoughDielectric(0.2, 1.5, 1.0), True, None),
+    "ggx 0.1 film": (lambda: bl.RoughDielectric(0.1, 1.5, 1.0, film=FILM), True, None),
+    "beckmann 0.4 multiscatter": (
+        lambda: bl.RoughDielectric(0.4, 1.5, 1.0, distribution="beckmann", multiscatter=True),
+        True,
+        None,
+    ),
+    "ggx 5e-4 (below range)": (lambda: bl.RoughDielectric(5e-4, 1.5, 1.0), True, "alpha-range"),
+}
+
+
+def _bases(folder):
+    spectral, rgb, merl = folder / "cu_spec.bsdf", folder / "cu_rgb.bsdf", folder / "grey.binary"
+    cu = bl.RoughConductor(alpha=0.3, material="Cu")
+    export_model(cu, spectral, wavelengths=WL, n_theta_i=6, resolution=16, error_points=200)
+    export_model(cu, rgb, n_theta_i=6, resolution=16, error_points=200)
+    merl.write_bytes(merl_bytes(np.full((3, *DIMS), 0.1)))
+    # name -> (base, transmissive, rough, expected stack-wide gap or None)
+    return {
+        "diffuse": (lambda: bl.Diffuse(0.5), False, False, None),
+        "conductor film": (lambda: bl.Conductor(material="Au", ext_ior=1.5, film=FILM), False, False, None),
+        "roughconductor": (lambda: bl.RoughConductor(0.3, material="Cu", ext_ior=1.5), False, True, None),
+        "dielectric to water": (lambda: bl.Dielectric(1.33, 1.5), True, False, None),
+        "roughdielectric to water": (lambda: bl.RoughDielectric(0.3, 1.33, 1.5), True, True, None),
+        "measured spectral": (lambda: bl.Measured(spectral), False, True, None),
+        "measured rgb": (lambda: bl.Measured(rgb), False, True, "rgb-base"),
+        "merl": (lambda: bl.Merl(merl), False, True, "rgb-base"),
+        "table": (lambda: TableBSDF(valid_table()), False, True, "base-kind"),
+    }
+
+
+# name -> (interface below slab 0 (top of slab 1), its lower index, expected gap or None)
+INTERIORS = {
+    "smooth matched": (lambda: bl.Dielectric(1.5, 1.5), 1.5, None),
+    "smooth matched film": (lambda: bl.Dielectric(1.5, 1.5, film=FILM), 1.5, None),
+    "smooth unmatched": (lambda: bl.Dielectric(1.3, 1.5), 1.3, "smooth-interior-unmatched"),
+    "rough film": (lambda: bl.RoughDielectric(0.4, 1.3, 1.5, film=FILM), 1.3, None),
+    "rough unmatched": (lambda: bl.RoughDielectric(0.5, 2.0, 1.5), 2.0, None),
+}
+INTERIOR_BASES = {  # lower index -> base; transmissive, rough
+    "diffuse": (lambda n: bl.Diffuse(0.5), False, False),
+    "dielectric to air": (lambda n: bl.Dielectric(1.0, n), True, False),
+    "roughdielectric to air": (lambda n: bl.RoughDielectric(0.3, 1.0, n), True, True),
+}
+PHASES = {
+    "isotropic": (bl.Slab(1.0, sigma_a=0.2, sigma_s=1.0), None),
+    "hg 0.6": (bl.Slab(1.0, sigma_a=0.2, sigma_s=1.0, phase={"type": "hg", "g": 0.6}), None),
+    "hg -0.3": (bl.Slab(1.0, sigma_a=0.2, sigma_s=1.0, phase={"type": "hg", "g": -0.3}), None),
+    "hg 0.97 (beyond range)": (bl.Slab(1.0, sigma_a=0.2, sigma_s=1.0, phase={"type": "hg", "g": 0.97}), "hg-range"),
+    "vmf": (bl.Slab(1.0, sigma_a=0.2, sigma_s=1.0, phase={"type": "vmf", "kappa": 5.0}), "phase-kind"),
+    "clear": (bl.Slab(1.0, sigma_a=0.2, sigma_s=0.0), None),
+}
+
+
+def pairs():
+    """(kind, wi, wo) for the four kinds, a grazing direction (87 deg) in each."""
+    up = spherical_directions(np.radians([20.0, 87.0, 55.0]), [0.0, 1.0, 2.5])
+    wo = spherical_directions(np.radians([40.0, 30.0, 87.0]), [2.0, 0.3, 4.0])
+    flip = np.array([1.0, 1.0, -1.0])
+    return {"above": (up, wo), "down": (up * flip, wo), "up": (up, wo * flip), "below": (up * flip, wo * flip)}
+
+
+def pfmc_accepts(model) -> bool:
+    """Whether PFMC evaluates the stack (what the solver owes an answer for)."""
+    try:
+        model.estimate(*pairs()["above"], wavelengths=WL, samples=4)
+    except ValueError:
+        return False
+    return True
+
+
+def check(model, expected: set, transmissive: bool, rough_exit: bool, scatters: bool = True) -> str:
+    """Solve ``model`` (or see it refused) and check the outcome against ``expected`` (the
+    gap codes it may be refused with; empty: it must be solved). Returns the outcome.
+    ``scatters`` False: every path is specular, so eval (no delta lobes) is 0 everywhere."""
+    assert pfmc_accepts(model)
+    try:
+        sol = solve(model, WL, nodes=8, fine_step=1.0)
+    except ValueError as e:
+        code = re.search(r"\[([a-z-]+)\]", str(e))
+        assert code and code.group(1) in expected, f"refused with an unexpected reason: {e}"
+        assert GAPS[code.group(1)] in str(e)
+        return f"refused [{code.group(1)}]"
+    assert not expected, f"solved, but expected a refusal {expected}"
+    for kind, (wi, wo) in pairs().items():
+        if kind != "above" and transmissive and rough_exit:
+            with pytest.raises(ValueError, match=r"\[rough-exit\]"):
+                sol.eval(wi, wo)
+            continue
+        v = sol.eval(wi, wo)
+        assert v.shape == (len(wi), len(WL)) and np.all(np.isfinite(v)), kind
+        if not scatters:
+            assert np.all(v == 0.0), f"{kind}: a purely specular stack has no eval"
+        elif kind == "above" or transmissive:
+            assert np.all(v >= 0) and np.any(v > 0), kind
+        else:
+            assert np.all(v == 0.0), f"an opaque stack's {kind} pairs must be 0"
+    return "solved"
+
+
+@pytest.fixture(scope="module")
+def bases(tmp_path_factory):
+    return _bases(tmp_path_factory.mktemp("bases"))
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_01_every_top_on_every_base(bases):
+    outcomes = {}
+    for tname, (top, top_rough, top_gap) in TOPS.items():
+        for bname, (base, transmissive, base_rough, base_gap) in bases.items():
+            model = bl.Layered([top()], [ISO], base())
+            if not pfmc_accepts(model):
+                outcomes[tname, bname] = "not accepted by PFMC"
+                continue
+            expected = {g for g in (top_gap, base_gap) if g}
+            outcomes[tname, bname] = check(model, expected, transmissive, top_rough or base_rough)
+    for key, outcome in outcomes.items():
+        print(key, outcome)
+    assert sum(o == "solved" for o in outcomes.values()) >= 30
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+@pytest.mark.parametrize("interior", list(INTERIORS))
+@pytest.mark.parametrize("top", ["smooth", "ggx 0.2"])
+def test_02_interior_interfaces(interior, top):
+    make, n_below, gap = INTERIORS[interior]
+    for base, transmissive, base_rough in INTERIOR_BASES.values():
+        model = bl.Layered([TOPS[top][0](), make()], [ISO, ISO], base(n_below))
+        check(model, {gap} - {None}, transmissive, TOPS[top][1] or base_rough)
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+@pytest.mark.parametrize("phase", list(PHASES))
+def test_03_slab_phases(phase):
+    slab, gap = PHASES[phase]
+    for base, transmissive in ((bl.Diffuse(0.5), False), (bl.Dielectric(1.0, 1.5), True)):
+        model = bl.Layered([bl.Dielectric(1.5, 1.0)], [slab], base)
+        check(model, {gap} - {None}, transmissive, False, scatters=slab.sigma_s > 0 or not transmissive)
+
+
+def test_04_not_layered_and_conductor_tops():
+    """A model that is no stack is refused by code; a conductor top is refused by Layered
+    itself (PFMC does not accept it either)."""
+    with pytest.raises(ValueError, match=r"\[not-layered\]"):
+        solve(bl.Diffuse(0.5), WL)
+    with pytest.raises(ValueError, match="interfaces\\[0\\] must be a dielectric"):
+        bl.Layered([bl.Conductor(material="Au")], [ISO], bl.Diffuse(0.5))
