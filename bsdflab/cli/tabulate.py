@@ -90,6 +90,7 @@ def _report(args, request, fetched) -> int:
     print(f"method        {request.method} ({request.method_note})")
     print(f"grid          {grid.n_theta_i} x {grid.n_theta_o} x {grid.n_phi}, lobes {', '.join(table.lobes)}, "
           f"thickness nodes {list(grid.thickness_nm) or 'model default'}")
+    print(f"parts         {', '.join(table.lobes)}: light {table.sides()}")
     accuracy, lines = describe_accuracy(table)
     for label, text in lines:
         print(f"{label:<13} {text}")

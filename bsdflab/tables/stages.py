@@ -3,9 +3,10 @@ bsdflab.tables.tabulate runs them; the work units of bsdflab.tables.units run th
 block on a runner).
 
 For layered (PFMC) models the top interface's own reflection is left out of the table
-(`split_direct`: the core tabulates the model's scattered part) and re-evaluated exactly at
-lookup: it is the sharpest feature and is known in closed form, so the table only holds
-the smoother multiply-scattered light.
+(`split_direct`: the core tabulates the model's scattered part; for light from below, the
+base's own reflection likewise) and re-evaluated exactly at lookup: it is the sharpest
+feature and is known in closed form, so the table only holds the smoother
+multiply-scattered light.
 
 Effort adapts per cell in two stages (core/include/bsdflab/tabulation.h has the details):
 
@@ -48,7 +49,7 @@ from bsdflab._version import __version__
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.lobes import Lobe
 from bsdflab.tables.channels import table_channels
-from bsdflab.tables.data import LOBES, TableData, TableGrid
+from bsdflab.tables.data import LOBES, TWO_SIDED_LOBES, TableData, TableGrid
 from bsdflab.tables.file_format import canonical_json
 from bsdflab.util import args as check
 from bsdflab.util.progress import run_with_progress
@@ -228,8 +229,10 @@ def _check_model(model) -> None:
 
 
 def lobes_of(model: BSDF) -> tuple[str, ...]:
-    """The table's lobes for ``model``: reflection, and transmission when it transmits."""
-    return LOBES if model.lobes & Lobe.TRANSMISSION else LOBES[:1]
+    """The table's lobes for ``model``: reflection; for a model that transmits also
+    transmission, and reflection and transmission of light from below (a two-sided table:
+    the walks start below as readily as above)."""
+    return TWO_SIDED_LOBES if model.lobes & Lobe.TRANSMISSION else LOBES[:1]
 
 
 def _splits(model: BSDF) -> bool:
