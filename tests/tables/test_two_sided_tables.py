@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 
 import bsdflab as bl
-from bsdflab.tables import TableBSDF, TableGrid, read_table, tabulate, write_table
-from bsdflab.tables import file_format
+from bsdflab.tables import TableBSDF, TableGrid, file_format, read_table, tabulate, write_table
 from bsdflab.tables.data import TWO_SIDED_LOBES
 from bsdflab.testing import bsdf_chi2, sidak_z_limit
 
