@@ -121,3 +121,18 @@ def test_05_a_version_2_file_still_reads(tmp_path, pfmc_table):
     np.testing.assert_array_equal(then.eval(wi, wo), now.eval(wi, wo))
     below = wi * [1, 1, -1]
     assert np.all(then.eval(below, wo) == 0) and np.all(now.eval(below, wo) > 0)
+
+
+def test_06_rgl_export_writes_reflection_and_refuses_the_other_parts(tmp_path, ad_table):
+    """The RGL format carries reflection of light from above only: asking for any other
+    part is a ValueError saying so; the default writes reflection and lists what it left out."""
+    from bsdflab.measured.rgl import export_table
+    from bsdflab.measured.rgl_file import read_rgl
+
+    tb = TableBSDF(ad_table)
+    for part in TWO_SIDED_LOBES[1:]:
+        with pytest.raises(ValueError, match=f"RGL format carries only reflection .* cannot carry {part}"):
+            export_table(tb, tmp_path / "x.bsdf", parts=["reflection", part])
+    assert not (tmp_path / "x.bsdf").exists()
+    report = export_table(tb, tmp_path / "r.bsdf", n_theta_i=2, resolution=4, ndf_resolution=4, error_points=0)
+    assert report.bytes > 0 and "parts_left_out" in str(read_rgl(tmp_path / "r.bsdf").description)
