@@ -136,3 +136,39 @@ def test_06_rgl_export_writes_reflection_and_refuses_the_other_parts(tmp_path, a
     assert not (tmp_path / "x.bsdf").exists()
     report = export_table(tb, tmp_path / "r.bsdf", n_theta_i=2, resolution=4, ndf_resolution=4, error_points=0)
     assert report.bytes > 0 and "parts_left_out" in str(read_rgl(tmp_path / "r.bsdf").description)
+
+
+def test_07_units_on_a_runner_give_the_same_two_sided_table():
+    """The work units a runner (Dask) runs split a two-sided PFMC table's cells like any
+    other: the same values, errors and walks as one job, bit for bit."""
+    from bsdflab.util.runners import LocalRunner
+
+    rough_base = bl.Layered([bl.Dielectric(1.5, N_ABOVE)], [bl.Slab(1.0, sigma_a=0.2, sigma_s=1.0)],
+                            bl.RoughDielectric(0.3, N_BELOW, 1.5))  # PFMC: AD refuses a rough base
+    runner = LocalRunner()
+    runner.workers = lambda: 3
+    grid = TableGrid(2, 3, 3)
+    kw = dict(rel_error=0.2, min_samples=32, max_samples=64, seed=5, progress=False)
+    one, units = tabulate(rough_base, grid, **kw), tabulate(rough_base, grid, runner=runner, **kw)
+    assert one.two_sided and one.meta.get("method", "pfmc") == "pfmc"
+    for name in ("values", "stderr", "samples"):
+        np.testing.assert_array_equal(getattr(units, name), getattr(one, name))
+
+
+def test_08_a_rough_base_is_added_exactly_below_and_sampled():
+    """A rough base's own reflection of light from below is left out of the table and
+    added at lookup: with a black slab (nothing scattered back), the table's reflection
+    from below is the base's own, to float precision; sampling from below (the base's
+    glossy lobe in the mixture) follows the pdf (chi-square)."""
+    base = bl.RoughDielectric(0.3, N_BELOW, 1.5)
+    black = bl.Layered([bl.Dielectric(1.5, N_ABOVE)], [bl.Slab(1.0, sigma_a=50.0, sigma_s=0.0)], base)
+    table = tabulate(black, TableGrid(3, 4, 3), rel_error=0.2, min_samples=16, max_samples=16, progress=False)
+    tb = TableBSDF(table, film_lookup=False)
+    rng = np.random.default_rng(2)
+    mu_i, mu_o = -rng.uniform(0.1, 1, 50), -rng.uniform(0.1, 1, 50)
+    wi = np.stack([np.sqrt(1 - mu_i**2), np.zeros(50), mu_i], axis=-1)
+    phi = rng.uniform(0, 2 * np.pi, 50)
+    wo = np.stack([np.sqrt(1 - mu_o**2) * np.cos(phi), np.sqrt(1 - mu_o**2) * np.sin(phi), mu_o], axis=-1)
+    np.testing.assert_allclose(tb.eval(wi, wo), base.eval(wi, wo), rtol=1e-6, atol=1e-12)
+    test = bsdf_chi2(tb, wi[0], sample_count=200_000, seed=3)
+    assert test.run(), test.message
