@@ -27,6 +27,9 @@ from bsdflab.solvers import solve
 from bsdflab.solvers.adding_doubling import Settings, check_model, one_sided_reason
 from bsdflab.tables.channels import table_channels
 from bsdflab.tables.data import DEFAULT_REL_ERROR, LOBES, TWO_SIDED_LOBES, TableData, TableGrid
+from bsdflab.tables.stages import by_part
+
+LOBES_BY_COUNT = {1: LOBES[:1], 2: LOBES, 4: TWO_SIDED_LOBES}
 
 METHOD = "adding-doubling"
 TABLE_NODES = 16    # Gauss-Legendre nodes per cosine panel of a table's solve
@@ -149,8 +152,16 @@ def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = DEFAULT_
 
 def bound_statistics(values: np.ndarray, bounds: np.ndarray, lum_w: np.ndarray) -> dict:
     """The error bound relative to the luminance over the significant cells (luminance >
-    ``SIGNIFICANT`` x the max): its max, RMS and 95th percentile, as ``meta`` keys."""
+    ``SIGNIFICANT`` x the max): its max, RMS and 95th percentile, as ``meta`` keys; and
+    the same per part (``rel_error_by_part``, a part's cells against its own max)."""
     lum, lum_err = values @ lum_w, bounds @ np.abs(lum_w)
+    return {**_bound_figures(lum.ravel(), lum_err.ravel()),
+            "rel_error_by_part": by_part(LOBES_BY_COUNT[values.shape[0]], lum.ravel(), lum_err.ravel(),
+                                         lambda a, b: {k: v for k, v in _bound_figures(a, b).items()
+                                                       if k.startswith("rel_error")})}
+
+
+def _bound_figures(lum: np.ndarray, lum_err: np.ndarray) -> dict:
     mask = lum > SIGNIFICANT * max(float(lum.max()), 1e-300)
     rel = lum_err[mask] / lum[mask] if np.any(mask) else np.zeros(1)
     rms, top = float(np.sqrt(np.mean(rel**2))), float(rel.max())

@@ -203,7 +203,8 @@ def assemble(model: BSDF, grid: TableGrid, blocks: Sequence[CellBlock], pilot: P
             "pilot_walks": int(min_samples) * n if stochastic else 0,
             "nonfinite_walks": nonfinite, "capped_walks": capped,
             "film_lookup_error": _film_lookup_error(model, grid, wavelengths),
-            **achieved_error(cat("lum"), cat("lum_error"))}
+            **achieved_error(cat("lum"), cat("lum_error")),
+            "rel_error_by_part": by_part(lobes, cat("lum"), cat("lum_error"), achieved_error)}
     table = TableData(model=model.to_dict(), grid=grid, lobes=lobes, channels=names,
                       split_direct=_splits(model), values=values, stderr=stderr, samples=samples,
                       rel_error_target=float(rel_error), meta=meta)
@@ -220,6 +221,14 @@ def achieved_error(lum: np.ndarray, lum_err: np.ndarray) -> dict[str, float]:
     r = lum_err[mask] / lum[mask]
     return {"rel_error_rms": float(np.sqrt(np.mean(r**2))),
             "rel_error_p95": float(np.percentile(r, 95)), "rel_error_max": float(r.max())}
+
+
+def by_part(lobes, lum: np.ndarray, lum_err: np.ndarray, statistics) -> dict[str, dict[str, float]]:
+    """``statistics(lum, lum_err)`` of each part (lobe) alone, by name: the same figures as
+    the table's, per part (cells are lobe-major, so each part is one contiguous run)."""
+    n = len(lobes)
+    return {name: statistics(l, e) for name, l, e in zip(lobes, np.split(np.asarray(lum), n),
+                                                         np.split(np.asarray(lum_err), n))}
 
 
 # -- internals ------------------------------------------------------------------------------

@@ -41,6 +41,10 @@ def test_01_transmissive_tables_hold_four_parts(ad_table, pfmc_table):
     # the per-part bookkeeping: every cell of every part has its walks and its error
     assert pfmc_table.samples.min() >= 512 and np.all(pfmc_table.stderr[..., 1] > 0)
     assert ad_table.meta["error_kind"].startswith("deterministic bound")
+    for t in (ad_table, pfmc_table):  # the accuracy figures per part, as for the whole table
+        parts = t.meta["rel_error_by_part"]
+        assert list(parts) == list(TWO_SIDED_LOBES)
+        assert max(p["rel_error_max"] for p in parts.values()) >= t.meta["rel_error_max"] * (1 - 1e-12)
 
 
 def test_02_adding_doubling_agrees_with_pfmc_on_every_part(ad_table, pfmc_table):
