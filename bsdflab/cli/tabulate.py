@@ -36,7 +36,8 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="pfmc: random seed (default 0)")
     p.add_argument("--method", choices=CHOICES, default="auto",
                    help="auto (default): adding-doubling wherever the solver covers the model (reflecting "
-                        "layered stacks, docs/solvers.md), else pfmc; pfmc (Monte Carlo) or adding-doubling "
+                        "layered stacks, and transmissive ones with a smooth top over a smooth base, "
+                        "tabulated on both sides: docs/solvers.md), else pfmc; pfmc (Monte Carlo) or adding-doubling "
                         "(deterministic) to choose; each is cached under its own key")
     p.add_argument("--nodes", type=int, default=None,
                    help=f"adding-doubling: Gauss-Legendre nodes per cosine panel, 4-256 (default {TABLE_NODES}); "

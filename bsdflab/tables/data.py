@@ -144,7 +144,7 @@ class TableData:
     def sides(self) -> str:
         """Which light the table describes, in words (``table info``)."""
         if self.two_sided:
-            return "both sides (reflection and transmission from above and from below)"
+            return "from both sides (reflection and transmission from above and from below)"
         if len(self.lobes) == 2:
             return "from above only (reflection, transmission; a format version 1-2 table)"
         return "from above (reflection; the model is opaque)"
