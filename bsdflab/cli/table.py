@@ -108,8 +108,10 @@ def run_info(args: argparse.Namespace) -> int:
         ("thickness", ", ".join(f"{t:g}" for t in g.thickness_nm) + " nm" if g.thickness_nm
          else "the model's own (no thickness axis)"),
         ("lobes", ", ".join(table.lobes)),
+        ("sides", table.sides()),
         ("channels", _channels(table, attributes)),
-        ("split direct", "yes: the top interface's reflection is evaluated exactly at lookup"
+        ("split direct", ("yes: the top interface's reflection is evaluated exactly at lookup"
+                          + (" (from below: the base's)" if table.two_sided else ""))
          if table.split_direct else "no: the table holds the whole non-delta BSDF"),
         ("units", ", ".join(f"{k} {v}" for k, v in json.loads(attributes["bsdflab.units"]).items())),
         effort,

@@ -36,7 +36,8 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="pfmc: random seed (default 0)")
     p.add_argument("--method", choices=CHOICES, default="auto",
                    help="auto (default): adding-doubling wherever the solver covers the model (reflecting "
-                        "layered stacks, docs/solvers.md), else pfmc; pfmc (Monte Carlo) or adding-doubling "
+                        "layered stacks, and transmissive ones with a smooth top over a smooth base, "
+                        "tabulated on both sides: docs/solvers.md), else pfmc; pfmc (Monte Carlo) or adding-doubling "
                         "(deterministic) to choose; each is cached under its own key")
     p.add_argument("--nodes", type=int, default=None,
                    help=f"adding-doubling: Gauss-Legendre nodes per cosine panel, 4-256 (default {TABLE_NODES}); "
@@ -90,6 +91,7 @@ def _report(args, request, fetched) -> int:
     print(f"method        {request.method} ({request.method_note})")
     print(f"grid          {grid.n_theta_i} x {grid.n_theta_o} x {grid.n_phi}, lobes {', '.join(table.lobes)}, "
           f"thickness nodes {list(grid.thickness_nm) or 'model default'}")
+    print(f"parts         {', '.join(table.lobes)}: light {table.sides()}")
     accuracy, lines = describe_accuracy(table)
     for label, text in lines:
         print(f"{label:<13} {text}")

@@ -68,9 +68,9 @@ def _check_spectral(model, wavelengths) -> None:
 
 
 def cells(request: dict[str, Any]) -> int:
-    """Table cells the request asks for (both lobes counted), for request caps."""
-    g = request["grid"]
-    return 2 * max(1, len(g["thickness_nm"])) * g["n_theta_i"] * g["n_theta_o"] * g["n_phi"]
+    """Table cells the request asks for (a transmissive model's four parts counted: an
+    upper bound before the model is asked), for request caps."""
+    return _request(request).cells()
 
 
 def key(request: dict[str, Any]) -> str:

@@ -182,19 +182,32 @@ def write_rgl(path, data: RGLData) -> int:
     return os.path.getsize(path)
 
 
-def export_table(table, out, *, wavelengths=None, **options) -> ExportReport:
+RGL_PARTS = ("reflection",)  # what the RGL format carries of a table's parts (lobes)
+
+
+def export_table(table, out, *, wavelengths=None, parts=RGL_PARTS, **options) -> ExportReport:
     """Write the RGL file ``out`` from a bsdflab table (a path or ``TableBSDF``).
 
     The table's own channels are kept: RGB tables give an RGB file, spectral tables a
-    spectral file at the table's wavelengths. ``options`` go to ``rgl_from_bsdf``."""
+    spectral file at the table's wavelengths. ``parts``: the table parts to write; the RGL
+    format carries reflection of light from above only, so any other part (transmission,
+    and a two-sided table's reflection_below and transmission_below) raises ValueError; a
+    table's other parts are left out of the file (its description lists them).
+    ``options`` go to ``rgl_from_bsdf``."""
     from bsdflab.tables import TableBSDF
     from bsdflab.tables.channels import channel_wavelengths
 
+    parts = (parts,) if isinstance(parts, str) else tuple(parts)
+    refused = [p for p in parts if p not in RGL_PARTS]
+    if refused or not parts:
+        raise ValueError(f"the RGL format carries only {', '.join(RGL_PARTS)} (light from above, reflected); "
+                         f"it cannot carry {', '.join(map(str, refused)) or 'an empty list of parts'}")
     t = table if isinstance(table, TableBSDF) else TableBSDF(table)
     own = channel_wavelengths(t.table.channels)
     if wavelengths is not None:
         raise ValueError("wavelengths: a table is exported at its own channels; pass None")
-    source = {"kind": "bsdflab table", "model": t.table.model, "file": os.path.basename(t.path or "")}
+    source = {"kind": "bsdflab table", "model": t.table.model, "file": os.path.basename(t.path or ""),
+              "parts": list(RGL_PARTS), "parts_left_out": [p for p in t.table.lobes if p not in RGL_PARTS]}
     if t.path:
         from bsdflab.tables.file_format import read_attributes
 

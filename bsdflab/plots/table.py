@@ -81,11 +81,13 @@ def table_figure(table: TableData, path: str, thickness_index: int = 0, source: 
     thickness = (f", film {g.thickness_nm[thickness_index]:g} nm" if g.thickness_nm else "")
     model = table.model.get("type", "model")
     part = ("\nthe scattered part only: the top interface's own reflection (its specular peak included) is "
-            "added exactly at lookup" if table.split_direct else "")
-    fig.suptitle(f"{source}{model} table{thickness}: {band}{part}", fontsize=11)
+            "added exactly at lookup" + (" (from below: the base's)" if table.two_sided else "")
+            if table.split_direct else "")
+    parts = f"\nparts (rows): {', '.join(table.lobes)}"
+    fig.suptitle(f"{source}{model} table{thickness}: {band}{part}{parts}", fontsize=11)
     save_figure(fig, path)
     plt.close(fig)
-    return f"{band}{part}".replace("\n", "; ")
+    return f"{band}{part}{parts}".replace("\n", "; ")
 
 
 def _error_map(fig, ax, table, values, errors, lobe, deg_i, deg_o, deg_phi, kind) -> None:

@@ -7,8 +7,10 @@ the solver's settings and its a-posteriori error bound in the header (``meta``).
 The stored ``stderr`` of each cell is the solver's deterministic bound (the change to a
 solve with half the nodes, 2/3 of the orders and a 16 x thicker doubling start,
 ``Solution.eval_with_error``), not a standard error; ``meta["error_kind"]`` says so.
-Only reflection tables: a transmissive stack raises ValueError (the solver does not
-solve transmission yet).
+A transmissive stack the solver solves on both sides (a smooth top over a smooth
+dielectric base, ``Solution.two_sided``) gets a two-sided table (four lobes: reflection and
+transmission of light from above and from below); other transmissive stacks raise
+ValueError (PFMC tabulates them).
 """
 from __future__ import annotations
 
@@ -22,9 +24,12 @@ from bsdflab._version import __version__
 from bsdflab.bsdfs.base import from_dict
 from bsdflab.layered import Layered
 from bsdflab.solvers import solve
-from bsdflab.solvers.adding_doubling import Settings, check_model
+from bsdflab.solvers.adding_doubling import Settings, check_model, one_sided_reason
 from bsdflab.tables.channels import table_channels
-from bsdflab.tables.data import DEFAULT_REL_ERROR, LOBES, TableData, TableGrid
+from bsdflab.tables.data import DEFAULT_REL_ERROR, LOBES, TWO_SIDED_LOBES, TableData, TableGrid
+from bsdflab.tables.stages import by_part
+
+LOBES_BY_COUNT = {1: LOBES[:1], 2: LOBES, 4: TWO_SIDED_LOBES}
 
 METHOD = "adding-doubling"
 TABLE_NODES = 16    # Gauss-Legendre nodes per cosine panel of a table's solve
@@ -65,13 +70,15 @@ def with_film_thickness(model: Layered, thickness_nm: float) -> Layered:
 
 
 def adding_doubling_gap(model) -> str | None:
-    """Why this method cannot tabulate ``model`` (None: it can): it tabulates reflecting
-    ``Layered`` stacks within the solver's validated range (bsdflab.solvers.adding_doubling
-    ``check_model``)."""
+    """Why this method cannot tabulate ``model`` (None: it can): it tabulates ``Layered``
+    stacks within the solver's validated range (bsdflab.solvers.adding_doubling
+    ``check_model``) that reflect only, or transmit through a smooth top and a smooth
+    dielectric base (the stacks the solver solves on both sides: ``Solution.two_sided``)."""
     if not isinstance(model, Layered):
         return f"it tabulates Layered models, not {type(model).__name__}"
-    if _transmits(model):
-        return "the stack transmits and the solver solves reflection from above only"
+    if _transmits(model) and not _two_sided(model):
+        return (f"the stack transmits through {one_sided_reason(model)} and the solver solves light "
+                "from below and transmission only for a smooth top over a smooth dielectric base")
     try:
         check_model(model)
     except ValueError as e:
@@ -106,9 +113,8 @@ def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = DEFAULT_
     check_adding_doubling(model)
     names, model_wl, P, lum_w = table_channels(wavelengths)
     start = time.perf_counter()
-    ti, to, ph = np.meshgrid(grid.theta_i, grid.theta_o, grid.phi, indexing="ij")
-    wi = np.stack([np.sin(ti), np.zeros_like(ti), np.cos(ti)], axis=-1).reshape(-1, 3)
-    wo = np.stack([np.sin(to) * np.cos(ph), np.sin(to) * np.sin(ph), np.cos(to)], axis=-1).reshape(-1, 3)
+    lobes = TWO_SIDED_LOBES if _transmits(model) else LOBES[:1]
+    wi, wo = lobe_directions(grid, len(lobes))
     thicknesses = list(grid.thickness_nm) or [-1.0]
     values, bounds, lookup_error, orders_used, first = [], [], None, 0, None
     for t in thicknesses:
@@ -120,23 +126,24 @@ def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = DEFAULT_
                                 orders=orders, film_lookup=True,
                                 **{**table_settings(rel_error, len(model_wl)), **(solver or {})})
         v, e = sol.eval_with_error(wi, wo, scattered_only=True)
-        values.append(v / wo[:, 2:] @ P.T)
-        bounds.append(e / wo[:, 2:] @ np.abs(P).T)
+        values.append(v / np.abs(wo[:, 2:]) @ P.T)
+        bounds.append(e / np.abs(wo[:, 2:]) @ np.abs(P).T)
         orders_used = max(orders_used, sol.orders)
         if sol.film_lookup_error is not None:
             lookup_error = max(lookup_error or 0.0, sol.film_lookup_error)
-    shape = (1, len(thicknesses), grid.n_theta_i, grid.n_theta_o, grid.n_phi, len(names))
+    shape = (len(lobes), len(thicknesses), grid.n_theta_i, grid.n_theta_o, grid.n_phi, len(names))
     # The statistics are of the stored (float32) cells, so a table assembled from units
-    # (bsdflab.tables.units) reports the same ones.
-    vals = np.stack(values).reshape(shape).astype(np.float32)
-    errs = np.stack(bounds).reshape(shape).astype(np.float32)
+    # (bsdflab.tables.units) reports the same ones. Per thickness the rows run lobe-major.
+    by_node = (len(thicknesses), len(lobes), *shape[2:])
+    vals = np.stack(values).reshape(by_node).swapaxes(0, 1).astype(np.float32)
+    errs = np.stack(bounds).reshape(by_node).swapaxes(0, 1).astype(np.float32)
     meta = {"bsdflab_version": __version__, "method": METHOD,
             "solver": {**sol.settings.to_dict(), "orders": orders_used},
             "seconds": round(time.perf_counter() - start, 3), "threads": _core.worker_count(),
             "error_kind": "deterministic bound (adding-doubling, Solution.eval_with_error)",
             "film_lookup_error": lookup_error,
             **bound_statistics(vals.astype(np.float64), errs.astype(np.float64), lum_w)}
-    table = TableData(model=model.to_dict(), grid=grid, lobes=LOBES[:1], channels=names, split_direct=True,
+    table = TableData(model=model.to_dict(), grid=grid, lobes=lobes, channels=names, split_direct=True,
                       values=vals, stderr=errs,
                       samples=np.ones(shape[:-1], dtype=np.int32), rel_error_target=float(rel_error), meta=meta)
     table.check()
@@ -145,13 +152,40 @@ def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = DEFAULT_
 
 def bound_statistics(values: np.ndarray, bounds: np.ndarray, lum_w: np.ndarray) -> dict:
     """The error bound relative to the luminance over the significant cells (luminance >
-    ``SIGNIFICANT`` x the max): its max, RMS and 95th percentile, as ``meta`` keys."""
+    ``SIGNIFICANT`` x the max): its max, RMS and 95th percentile, as ``meta`` keys; and
+    the same per part (``rel_error_by_part``, a part's cells against its own max)."""
     lum, lum_err = values @ lum_w, bounds @ np.abs(lum_w)
+    return {**_bound_figures(lum.ravel(), lum_err.ravel()),
+            "rel_error_by_part": by_part(LOBES_BY_COUNT[values.shape[0]], lum.ravel(), lum_err.ravel(),
+                                         lambda a, b: {k: v for k, v in _bound_figures(a, b).items()
+                                                       if k.startswith("rel_error")})}
+
+
+def _bound_figures(lum: np.ndarray, lum_err: np.ndarray) -> dict:
     mask = lum > SIGNIFICANT * max(float(lum.max()), 1e-300)
     rel = lum_err[mask] / lum[mask] if np.any(mask) else np.zeros(1)
     rms, top = float(np.sqrt(np.mean(rel**2))), float(rel.max())
     return {"error_bound_max_rel": top, "error_bound_rms_rel": rms, "rel_error_rms": rms,
             "rel_error_p95": float(np.percentile(rel, 95)), "rel_error_max": top}
+
+
+def lobe_directions(grid: TableGrid, n_lobes: int) -> tuple[np.ndarray, np.ndarray]:
+    """(wi, wo), each (n_lobes x theta_i x theta_o x phi, 3), lobe-major: the cells'
+    directions as the core's TableGrid::cell_directions gives them (lobes 2 and 3 lit
+    from below; wo above for lobes 0 and 3)."""
+    ti, to, ph = np.meshgrid(grid.theta_i, grid.theta_o, grid.phi, indexing="ij")
+    wi = np.stack([np.sin(ti), np.zeros_like(ti), np.cos(ti)], axis=-1).reshape(-1, 3)
+    wo = np.stack([np.sin(to) * np.cos(ph), np.sin(to) * np.sin(ph), np.cos(to)], axis=-1).reshape(-1, 3)
+    flip = np.array([1.0, 1.0, -1.0])
+    pairs = [(wi, wo), (wi, wo * flip), (wi * flip, wo * flip), (wi * flip, wo)][:n_lobes]
+    return np.concatenate([a for a, _ in pairs]), np.concatenate([b for _, b in pairs])
+
+
+def _two_sided(model: Layered) -> bool:
+    """Whether the solver solves every pair of ``model`` (``Solution.two_sided``'s rule,
+    asked without a solve): a smooth top over a smooth base that transmits."""
+    return (getattr(model.interfaces[0], "alpha", None) is None and getattr(model.base, "alpha", None) is None
+            and _transmits(model))
 
 
 def _transmits(model: Layered) -> bool:

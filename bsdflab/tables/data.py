@@ -2,7 +2,9 @@
 
 Axes (all angles in radians):
   lobe       "reflection" (wo above the surface) and, for models that transmit,
-             "transmission" (wo below; theta_o measured from -z)
+             "transmission" (wo below; theta_o measured from -z), "reflection_below"
+             (wi and wo below) and "transmission_below" (wi below, wo above): light
+             from below (format version 3; version 1-2 files hold the first two only)
   thickness  film-thickness nodes in nm (empty: the model's own thickness only)
   theta_i    incidence nodes, cell centres of n equal steps over [0, pi/2]
   theta_o    outgoing nodes, the same scheme
@@ -29,8 +31,12 @@ from bsdflab.tables.coverage import coverage_record
 from bsdflab.util import args as check
 from bsdflab.util import limits
 
-FORMAT_VERSION = 2  # 2: optional keyed signature (bsdflab.signature); 1 is still read
-LOBES = ("reflection", "transmission")
+# 3: transmissive models hold four lobes (light from both sides); 2: optional keyed
+# signature (bsdflab.signature); 1 and 2 are still read.
+FORMAT_VERSION = 3
+LOBES = ("reflection", "transmission")  # light from above (all a version 1-2 file holds)
+TWO_SIDED_LOBES = (*LOBES, "reflection_below", "transmission_below")
+LOBE_SETS = (LOBES[:1], LOBES, TWO_SIDED_LOBES)  # opaque; transmissive, above only; both sides
 MAX_NODES = 512
 MAX_THICKNESS_NODES = 256
 # RGB tables may hold slightly negative channels (saturated spectra lie outside the sRGB
@@ -46,9 +52,9 @@ def node_centres(n: int) -> np.ndarray:
 DEFAULT_REL_ERROR = 0.01  # the one default target of a table (docs/table_format.md, "Target met")
 
 
-def check_table_memory(grid: TableGrid, n_channels: int, n_lobes: int = 2) -> None:
+def check_table_memory(grid: TableGrid, n_channels: int, n_lobes: int = len(TWO_SIDED_LOBES)) -> None:
     """Refuse a table on ``grid`` whose estimated memory exceeds ``BSDFLAB_MAX_BYTES``
-    (call before tabulating; ``n_lobes`` 2 covers transmissive models)."""
+    (call before tabulating; ``n_lobes`` 4 covers transmissive models, two-sided)."""
     cells = grid.cells(n_lobes)
     limits.check_bytes(f"a table of {cells} cells x {n_channels} channels", limits.table_bytes(cells, n_channels))
 
@@ -77,8 +83,8 @@ class TableGrid:
         if list(t) != sorted(set(t)):
             raise ValueError("thickness_nm must be strictly increasing")
         object.__setattr__(self, "thickness_nm", t)
-        limits.check_count("table grid cells (2 lobes x thickness nodes x theta_i x theta_o x phi)",
-                           self.cells(2), "BSDFLAB_MAX_TABLE_CELLS")
+        limits.check_count(f"table grid cells ({len(TWO_SIDED_LOBES)} lobes x thickness nodes x theta_i x "
+                           "theta_o x phi)", self.cells(len(TWO_SIDED_LOBES)), "BSDFLAB_MAX_TABLE_CELLS")
 
     def cells(self, n_lobes: int = 1) -> int:
         """Cells of a table on this grid with ``n_lobes`` lobes."""
@@ -131,6 +137,19 @@ class TableData:
         return max(1, len(self.grid.thickness_nm))
 
     @property
+    def two_sided(self) -> bool:
+        """Whether the table holds light arriving from below too (four lobes)."""
+        return self.lobes == TWO_SIDED_LOBES
+
+    def sides(self) -> str:
+        """Which light the table describes, in words (``table info``)."""
+        if self.two_sided:
+            return "from both sides (reflection and transmission from above and from below)"
+        if len(self.lobes) == 2:
+            return "from above only (reflection, transmission; a format version 1-2 table)"
+        return "from above (reflection; the model is opaque)"
+
+    @property
     def spectral(self) -> bool:
         return self.channels != ("R", "G", "B")
 
@@ -146,8 +165,8 @@ class TableData:
                              f"expected {shape} from the grid, lobes and channels")
         if self.samples.shape != shape[:-1]:
             raise ValueError(f"table samples have shape {self.samples.shape}, expected {shape[:-1]}")
-        if self.lobes not in (LOBES[:1], LOBES):
-            raise ValueError(f"table lobes must be ('reflection',) or ('reflection', 'transmission'), got {self.lobes}")
+        if self.lobes not in LOBE_SETS:
+            raise ValueError(f"table lobes must be one of {', '.join(map(str, LOBE_SETS))}, got {self.lobes}")
         if not np.all(np.isfinite(self.values)) or not np.all(np.isfinite(self.stderr)):
             raise ValueError("table values must be finite")
         if np.any(self.stderr < 0):
@@ -189,14 +208,15 @@ class TableData:
     def check_model(self):
         """The table's model rebuilt through ``from_dict`` (ValueError when it is not a
         valid model), checked against the table: layered models are split, and the
-        transmission lobe is there exactly when the model transmits."""
+        transmission lobes are there exactly when the model transmits (two of them in a
+        version 1-2 table, light from above only; four since version 3)."""
         model = from_dict(self.model)
         layered = model.type_name == "layered"
         if self.split_direct != layered:
             raise ValueError(f"split_direct is {self.split_direct} but the model is "
                              f"{'' if layered else 'not '}layered")
         transmits = bool(model.lobes & Lobe.TRANSMISSION)
-        if (len(self.lobes) == 2) != transmits:
+        if (len(self.lobes) > 1) != transmits:
             raise ValueError(f"the table has lobes {self.lobes} but the model "
                              f"{'transmits' if transmits else 'does not transmit'}")
         return model

@@ -69,7 +69,9 @@ UNHASHED = (HASH_ATTRIBUTE, SIGNATURE_ATTRIBUTE)
 REQUIRED = tuple(PREFIX + name for name in (
     "format_version", "version", "model", "grid", "lobes", "channels", "colour_space", "units",
     "layout", "split_direct", "rel_error_target", "meta", "content_hash"))
-SUPPORTED_VERSIONS = (1, FORMAT_VERSION)  # 1 differs only in having no signature
+# 1 differs from 2 only in having no signature; 1 and 2 hold a transmissive model's light
+# from above only (lobes reflection, transmission), 3 from both sides (four lobes).
+SUPPORTED_VERSIONS = (1, 2, FORMAT_VERSION)
 
 RGB_COLOUR_SPACE = "linear sRGB (D65)"
 SPECTRAL_COLOUR_SPACE = "spectral, nm"

@@ -26,7 +26,7 @@ from typing import Any
 from bsdflab import _core
 from bsdflab.bsdfs.base import BSDF, from_dict
 from bsdflab.tables.channels import table_channels
-from bsdflab.tables.data import DEFAULT_REL_ERROR, FORMAT_VERSION, TableGrid
+from bsdflab.tables.data import DEFAULT_REL_ERROR, FORMAT_VERSION, TWO_SIDED_LOBES, TableGrid
 from bsdflab.tables.file_format import canonical_json
 from bsdflab.tables.stages import DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES, ERROR_FLOOR
 from bsdflab.util import args as check
@@ -155,9 +155,9 @@ class TableRequest:
         return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
     def cells(self) -> int:
-        """Table cells, both lobes counted (an upper bound before the model is asked)."""
-        g = self.grid
-        return 2 * max(1, len(g.thickness_nm)) * g.n_theta_i * g.n_theta_o * g.n_phi
+        """Table cells, a transmissive model's four lobes counted (an upper bound before
+        the model is asked)."""
+        return self.grid.cells(len(TWO_SIDED_LOBES))
 
 
 def estimator_version() -> int:

@@ -3,9 +3,10 @@ bsdflab.tables.tabulate runs them; the work units of bsdflab.tables.units run th
 block on a runner).
 
 For layered (PFMC) models the top interface's own reflection is left out of the table
-(`split_direct`: the core tabulates the model's scattered part) and re-evaluated exactly at
-lookup: it is the sharpest feature and is known in closed form, so the table only holds
-the smoother multiply-scattered light.
+(`split_direct`: the core tabulates the model's scattered part; for light from below, the
+base's own reflection likewise) and re-evaluated exactly at lookup: it is the sharpest
+feature and is known in closed form, so the table only holds the smoother
+multiply-scattered light.
 
 Effort adapts per cell in two stages (core/include/bsdflab/tabulation.h has the details):
 
@@ -48,7 +49,7 @@ from bsdflab._version import __version__
 from bsdflab.bsdfs.base import BSDF
 from bsdflab.lobes import Lobe
 from bsdflab.tables.channels import table_channels
-from bsdflab.tables.data import LOBES, TableData, TableGrid
+from bsdflab.tables.data import LOBES, TWO_SIDED_LOBES, TableData, TableGrid
 from bsdflab.tables.file_format import canonical_json
 from bsdflab.util import args as check
 from bsdflab.util.progress import run_with_progress
@@ -202,7 +203,8 @@ def assemble(model: BSDF, grid: TableGrid, blocks: Sequence[CellBlock], pilot: P
             "pilot_walks": int(min_samples) * n if stochastic else 0,
             "nonfinite_walks": nonfinite, "capped_walks": capped,
             "film_lookup_error": _film_lookup_error(model, grid, wavelengths),
-            **achieved_error(cat("lum"), cat("lum_error"))}
+            **achieved_error(cat("lum"), cat("lum_error")),
+            "rel_error_by_part": by_part(lobes, cat("lum"), cat("lum_error"), achieved_error)}
     table = TableData(model=model.to_dict(), grid=grid, lobes=lobes, channels=names,
                       split_direct=_splits(model), values=values, stderr=stderr, samples=samples,
                       rel_error_target=float(rel_error), meta=meta)
@@ -221,6 +223,14 @@ def achieved_error(lum: np.ndarray, lum_err: np.ndarray) -> dict[str, float]:
             "rel_error_p95": float(np.percentile(r, 95)), "rel_error_max": float(r.max())}
 
 
+def by_part(lobes, lum: np.ndarray, lum_err: np.ndarray, statistics) -> dict[str, dict[str, float]]:
+    """``statistics(lum, lum_err)`` of each part (lobe) alone, by name: the same figures as
+    the table's, per part (cells are lobe-major, so each part is one contiguous run)."""
+    n = len(lobes)
+    return {name: statistics(l, e) for name, l, e in zip(lobes, np.split(np.asarray(lum), n),
+                                                         np.split(np.asarray(lum_err), n))}
+
+
 # -- internals ------------------------------------------------------------------------------
 def _check_model(model) -> None:
     if not isinstance(model, BSDF):
@@ -228,8 +238,10 @@ def _check_model(model) -> None:
 
 
 def lobes_of(model: BSDF) -> tuple[str, ...]:
-    """The table's lobes for ``model``: reflection, and transmission when it transmits."""
-    return LOBES if model.lobes & Lobe.TRANSMISSION else LOBES[:1]
+    """The table's lobes for ``model``: reflection; for a model that transmits also
+    transmission, and reflection and transmission of light from below (a two-sided table:
+    the walks start below as readily as above)."""
+    return TWO_SIDED_LOBES if model.lobes & Lobe.TRANSMISSION else LOBES[:1]
 
 
 def _splits(model: BSDF) -> bool:

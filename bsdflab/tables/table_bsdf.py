@@ -2,7 +2,8 @@
 
 Lookup is multilinear over (film thickness, theta_i, theta_o, phi) in the C++ core; for
 layered tables the top interface's reflection (glossy and delta) is added back exactly
-from the model stored in the table. Sampling and pdf are described in
+from the model stored in the table, and in a two-sided table (four lobes, a transmissive
+model) the base's reflection of light from below likewise. Sampling and pdf are described in
 core/include/bsdflab/table_bsdf.h.
 """
 from __future__ import annotations
@@ -92,25 +93,35 @@ class TableBSDF(BSDF):
     def _build(self, channel_ids: np.ndarray):
         t = self.table
         g = t.grid
-        direct, P = None, []
+        direct, below, P = None, None, []
         if t.split_direct:
-            top = from_dict(t.model).exact_part
+            model = from_dict(t.model)
+            top = model.exact_part
+            # A two-sided table leaves out the base's own reflection of light from below
+            # (the walks' entry boundary there): it is added back exactly, with its own film.
+            base = model.base if t.two_sided else None
             if self._wavelengths is None and not self.film_lookup:
                 direct = top._core(DEFAULT_WAVELENGTHS)
+                below = base._core(DEFAULT_WAVELENGTHS) if base is not None else None
                 P = srgb_weights(DEFAULT_WAVELENGTHS).ravel()
             elif self._wavelengths is None or (self.film_lookup and _default_grid(self._wavelengths)):
                 # The film's R and T looked up (RGB, or the 81 bins for a spectral render).
                 thickness = [x for x in g.thickness_nm if x >= 0]
+                spectral = self._wavelengths is not None
                 direct = lookup_interface(top, (min(thickness), max(thickness)) if thickness else None,
-                                          default_film_thickness(t.model), spectral=self._wavelengths is not None)
+                                          default_film_thickness(t.model), spectral=spectral)
+                below = (lookup_interface(base, None, film_thickness_of(base), spectral=spectral)
+                         if base is not None else None)
                 P = np.eye(3 if self._wavelengths is None else len(self._wavelengths)).ravel()
             else:
                 direct = top._core(self._wavelengths)
+                below = base._core(self._wavelengths) if base is not None else None
                 P = np.eye(len(self._wavelengths)).ravel()
         lum = LUMINANCE_RGB if self._wavelengths is None else np.full(len(t.channels), 1 / len(t.channels))
         return _core.TabulatedBSDF(list(channel_ids), len(t.lobes), g.n_theta_i, g.n_theta_o, g.n_phi,
                                    list(g.thickness_nm), t.values.ravel().tolist(), list(lum), direct,
-                                   list(P), default_film_thickness(t.model), transmission_eta(t.model))
+                                   list(P), default_film_thickness(t.model), transmission_eta(t.model),
+                                   direct_below=below)
 
     def _params(self) -> dict[str, Any]:
         if self.path is None:

@@ -68,7 +68,8 @@ def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = DEFA
         Airy sum per wavelength: ~3x fewer CPU-seconds per walk for the snake. False
         evaluates every film exactly (the reference; not available with a runner).
     method : 'pfmc' (default), 'adding-doubling' or 'auto'
-        'adding-doubling' tabulates a reflecting ``Layered`` model deterministically
+        'adding-doubling' tabulates a ``Layered`` model deterministically (reflecting, or
+        transmitting through a smooth top and smooth base: a two-sided table)
         (bsdflab.tables.adding_doubling: one solve per thickness node, the solver's error
         bound stored as each cell's error, method and settings in ``meta``); the walk
         settings (samples, seed, film_lookup) do not apply to it. 'auto' (the default of a
@@ -96,7 +97,7 @@ def make_table(request: TableRequest, progress: bool = True, runner: Runner | No
         from bsdflab.tables.adding_doubling import check_adding_doubling, tabulate_adding_doubling
 
         check_adding_doubling(model)
-        check_table_memory(grid, len(request.channels), 1)
+        check_table_memory(grid, len(request.channels), len(lobes_of(model)))
         solver = {"nodes": request.nodes, "orders": request.orders}
         if runner is not None:
             return tabulate_adding_doubling_units(runner, model, grid, rel_error=rel_error,

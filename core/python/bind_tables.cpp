@@ -13,7 +13,7 @@ using namespace bsdflab;
 
 static TableGrid make_grid(int n_lobes, int n_theta_i, int n_theta_o, int n_phi,
                            std::vector<double> thickness) {
-    if (n_lobes < 1 || n_lobes > 2 || n_theta_i < 2 || n_theta_o < 2 || n_phi < 2)
+    if ((n_lobes != 1 && n_lobes != 2 && n_lobes != 4) || n_theta_i < 2 || n_theta_o < 2 || n_phi < 2)
         throw std::invalid_argument("bad table grid");
     TableGrid g;
     g.n_lobes = n_lobes;
@@ -117,16 +117,18 @@ void bind_tables(py::module_ &m) {
         .def(py::init([](std::vector<double> channel_ids, int n_lobes, int n_theta_i, int n_theta_o,
                          int n_phi, std::vector<double> thickness, std::vector<float> values,
                          std::vector<double> luminance, std::shared_ptr<BSDF> direct, std::vector<double> P,
-                         double default_thickness, double transmission_eta) {
+                         double default_thickness, double transmission_eta,
+                         std::shared_ptr<BSDF> direct_below) {
                  return std::make_shared<TabulatedBSDF>(
                      std::move(channel_ids),
                      make_grid(n_lobes, n_theta_i, n_theta_o, n_phi, std::move(thickness)), std::move(values),
-                     std::move(luminance), direct, std::move(P), default_thickness, transmission_eta);
+                     std::move(luminance), direct, std::move(P), default_thickness, transmission_eta,
+                     direct_below);
              }),
              py::arg("channel_ids"), py::arg("n_lobes"), py::arg("n_theta_i"), py::arg("n_theta_o"),
              py::arg("n_phi"), py::arg("thickness"), py::arg("values"), py::arg("luminance"),
-             py::arg("direct"), py::arg("P"), py::arg("default_thickness"),
-             py::arg("transmission_eta") = 1.0);
+             py::arg("direct"), py::arg("P"), py::arg("default_thickness"), py::arg("transmission_eta") = 1.0,
+             py::arg("direct_below") = nullptr);
 
     py::class_<ProjectedFresnelTerm, FresnelTerm, std::shared_ptr<ProjectedFresnelTerm>>(
         m, "ProjectedFresnelTerm")

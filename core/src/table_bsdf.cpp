@@ -21,10 +21,11 @@ double wrap_phi(const Vec3 &wi, const Vec3 &wo) {
 
 TabulatedBSDF::TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, std::vector<float> values,
                              std::vector<double> luminance, std::shared_ptr<const BSDF> direct,
-                             std::vector<double> P, double default_thickness, double transmission_eta)
+                             std::vector<double> P, double default_thickness, double transmission_eta,
+                             std::shared_ptr<const BSDF> direct_below)
     : BSDF(std::move(channel_ids)), grid_(std::move(grid)), values_(std::move(values)),
-      luminance_(std::move(luminance)), direct_(std::move(direct)), P_(std::move(P)),
-      default_thickness_(default_thickness), transmission_eta_(transmission_eta) {
+      luminance_(std::move(luminance)), direct_(std::move(direct)), direct_below_(std::move(direct_below)),
+      P_(std::move(P)), default_thickness_(default_thickness), transmission_eta_(transmission_eta) {
     if (!(transmission_eta_ > 0) || !std::isfinite(transmission_eta_))
         throw std::invalid_argument("transmission_eta must be finite and > 0");
     const int C = channels();
@@ -33,79 +34,91 @@ TabulatedBSDF::TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, st
         throw std::invalid_argument("table values do not match the grid");
     if (static_cast<int>(luminance_.size()) != C)
         throw std::invalid_argument("luminance needs one weight per channel");
-    if (direct_ && P_.size() != std::size_t(C) * direct_->channels())
-        throw std::invalid_argument("P must map the direct model's channels to the table's");
+    if (grid_.n_lobes != 1 && grid_.n_lobes != 2 && grid_.n_lobes != 4)
+        throw std::invalid_argument("a table has 1, 2 or 4 lobes");
+    sides_ = grid_.n_lobes == 4 ? 2 : 1;
+    per_side_ = grid_.n_lobes == 1 ? 1 : 2;
+    if (direct_below_ && sides_ < 2) throw std::invalid_argument("direct_below needs a two-sided table");
+    for (const BSDF *d : {direct_.get(), direct_below_.get()})
+        if (d && P_.size() != std::size_t(C) * d->channels())
+            throw std::invalid_argument("P must map the direct model's channels to the table's");
+    if (direct_ && direct_below_ && direct_->channels() != direct_below_->channels())
+        throw std::invalid_argument("the exact parts above and below must share their channels");
 
-    // Sampling CDFs per (thickness node, theta_i node).
+    // Sampling CDFs per (side, thickness node, theta_i node).
     const std::size_t NP = patches();
     const int NT = grid_.n_thickness(), NI = grid_.n_theta_i;
-    cdf_.assign(std::size_t(NT) * NI * (NP + 1), 0.0);
-    prob_.assign(std::size_t(NT) * NI * NP, 0.0);
-    albedo_.assign(std::size_t(NT) * NI, 0.0);
+    const std::size_t nodes = std::size_t(sides_) * NT * NI;
+    cdf_.assign(nodes * (NP + 1), 0.0);
+    prob_.assign(nodes * NP, 0.0);
+    albedo_.assign(nodes, 0.0);
     std::vector<double> w(NP);
-    for (int t = 0; t < NT; ++t)
-        for (int ti = 0; ti < NI; ++ti) {
-            double total = 0;
-            for (int lobe = 0; lobe < grid_.n_lobes; ++lobe)
-                for (int k = 0; k < grid_.n_theta_o; ++k)
-                    for (int m = 0; m < grid_.n_phi; ++m) {
-                        double ch, cl, pl, ph;
-                        patch_bounds(k, m, ch, cl, pl, ph);
-                        double solid = (ch - cl) * 2.0 * (ph - pl);
-                        const float *v = &values_[grid_.cell_index(lobe, t, ti, k, m) * C];
-                        double lum = 0;
-                        for (int c = 0; c < C; ++c) lum += luminance_[c] * v[c];
-                        double cos_mid = std::cos(grid_.theta_o(k));
-                        std::size_t p = (std::size_t(lobe) * grid_.n_theta_o + k) * grid_.n_phi + m;
-                        w[p] = std::max(lum, 0.0) * cos_mid * solid; // f cos dOmega
-                        total += w[p];
-                    }
-            albedo_[std::size_t(t) * NI + ti] = total;
-            double mean = total / NP;
-            double floor = mean > 0 ? kPatchFloor * mean : 1.0;
-            double *cdf = &cdf_[(std::size_t(t) * NI + ti) * (NP + 1)];
-            double *prob = &prob_[(std::size_t(t) * NI + ti) * NP];
-            double acc = 0;
-            for (std::size_t p = 0; p < NP; ++p) acc += w[p] + floor;
-            cdf[0] = 0;
-            for (std::size_t p = 0; p < NP; ++p) {
-                prob[p] = (w[p] + floor) / acc;
-                cdf[p + 1] = cdf[p] + prob[p];
+    for (int side = 0; side < sides_; ++side)
+        for (int t = 0; t < NT; ++t)
+            for (int ti = 0; ti < NI; ++ti) {
+                double total = 0;
+                for (int l = 0; l < per_side_; ++l)
+                    for (int k = 0; k < grid_.n_theta_o; ++k)
+                        for (int m = 0; m < grid_.n_phi; ++m) {
+                            double ch, cl, pl, ph;
+                            patch_bounds(k, m, ch, cl, pl, ph);
+                            double solid = (ch - cl) * 2.0 * (ph - pl);
+                            const float *v = &values_[grid_.cell_index(2 * side + l, t, ti, k, m) * C];
+                            double lum = 0;
+                            for (int c = 0; c < C; ++c) lum += luminance_[c] * v[c];
+                            double cos_mid = std::cos(grid_.theta_o(k));
+                            std::size_t p = (std::size_t(l) * grid_.n_theta_o + k) * grid_.n_phi + m;
+                            w[p] = std::max(lum, 0.0) * cos_mid * solid; // f cos dOmega
+                            total += w[p];
+                        }
+                albedo_[node(side, t, ti)] = total;
+                double mean = total / NP;
+                double floor = mean > 0 ? kPatchFloor * mean : 1.0;
+                double *cdf = &cdf_[node(side, t, ti) * (NP + 1)];
+                double *prob = &prob_[node(side, t, ti) * NP];
+                double acc = 0;
+                for (std::size_t p = 0; p < NP; ++p) acc += w[p] + floor;
+                cdf[0] = 0;
+                for (std::size_t p = 0; p < NP; ++p) {
+                    prob[p] = (w[p] + floor) / acc;
+                    cdf[p + 1] = cdf[p] + prob[p];
+                }
+                cdf[NP] = 1.0;
             }
-            cdf[NP] = 1.0;
-        }
 
-    // Glossy albedo of the direct model per theta_i node (mixture weights only).
-    direct_albedo_.assign(NI, 0.0);
-    if (direct_ && (direct_->lobes() & (kGlossyReflection | kDiffuseReflection))) {
-        std::vector<double> wd(direct_->channels());
+    // Glossy albedo of the direct models per (side, theta_i node) (mixture weights only).
+    direct_albedo_.assign(std::size_t(sides_) * NI, 0.0);
+    for (int side = 0; side < sides_; ++side) {
+        const BSDF *d = this->direct(side);
+        if (!d || !(d->lobes() & (kGlossyReflection | kDiffuseReflection))) continue;
+        std::vector<double> wd(d->channels());
         Query q;
-        q.film_thickness_nm = default_thickness_;
+        q.film_thickness_nm = side == 0 ? default_thickness_ : -1.0;
         PCG32 rng(0x5eed);
         for (int ti = 0; ti < NI; ++ti) {
             double a = grid_.theta_i(ti), sum = 0;
-            Vec3 wi{std::sin(a), 0.0, std::cos(a)};
+            Vec3 wi{std::sin(a), 0.0, side == 0 ? std::cos(a) : -std::cos(a)};
             for (int n = 0; n < kDirectAlbedoSamples; ++n) {
                 // Named draws: argument evaluation order is unspecified (GCC and Clang differ).
                 const double u1 = rng.uniform(), u2x = rng.uniform(), u2y = rng.uniform();
                 BSDFSample s =
-                    direct_->sample(wi, u1, u2x, u2y, kGlossyReflection | kDiffuseReflection, q, wd.data());
+                    d->sample(wi, u1, u2x, u2y, kGlossyReflection | kDiffuseReflection, q, wd.data());
                 if (!s.lobe) continue;
                 for (int c = 0; c < C; ++c) {
                     double proj = 0;
-                    for (int d = 0; d < direct_->channels(); ++d)
-                        proj += P_[c * direct_->channels() + d] * wd[d];
+                    for (int e = 0; e < d->channels(); ++e) proj += P_[c * d->channels() + e] * wd[e];
                     sum += luminance_[c] * proj;
                 }
             }
-            direct_albedo_[ti] = std::max(sum / kDirectAlbedoSamples, 0.0);
+            direct_albedo_[std::size_t(side) * NI + ti] = std::max(sum / kDirectAlbedoSamples, 0.0);
         }
     }
 }
 
 uint32_t TabulatedBSDF::lobes() const {
     uint32_t l = kGlossyReflection | (grid_.n_lobes > 1 ? kGlossyTransmission : 0u);
-    if (direct_) l |= direct_->lobes() & (kReflection);
+    for (const BSDF *d : {direct_.get(), direct_below_.get()})
+        if (d) l |= d->lobes() & kReflection;
     return l;
 }
 
@@ -140,8 +153,12 @@ TabulatedBSDF::Weights TabulatedBSDF::phi_weights(double phi) const {
 // the nodes' range as the table part is (thickness_weights): outside the tabulated range
 // the whole BSDF is that of the nearest end node, so the two parts never describe
 // different films.
-Query TabulatedBSDF::direct_query(const Query &q) const {
+Query TabulatedBSDF::direct_query(const Query &q, int side) const {
     Query d = q;
+    if (side == 1) { // the base keeps its own film: a query's thickness is the top film's
+        d.film_thickness_nm = -1.0;
+        return d;
+    }
     const auto &T = grid_.thickness;
     if (T.size() == 1) {
         d.film_thickness_nm = T[0];
@@ -166,10 +183,10 @@ TabulatedBSDF::Weights TabulatedBSDF::thickness_weights(const Query &q) const {
 void TabulatedBSDF::table_eval(const Vec3 &wi, const Vec3 &wo, const Query &q, double *out) const {
     const int C = channels();
     for (int c = 0; c < C; ++c) out[c] = 0.0;
-    int lobe = wo.z > 0 ? 0 : 1;
-    if (lobe >= grid_.n_lobes) return;
+    int lobe = table_lobe(wi, wo);
+    if (lobe < 0 || lobe >= grid_.n_lobes) return;
     Weights wt = thickness_weights(q);
-    Weights wa = angle_weights(std::acos(std::clamp(wi.z, -1.0, 1.0)), grid_.n_theta_i);
+    Weights wa = angle_weights(std::acos(std::clamp(std::abs(wi.z), 0.0, 1.0)), grid_.n_theta_i);
     Weights wb = angle_weights(std::acos(std::clamp(std::abs(wo.z), 0.0, 1.0)), grid_.n_theta_o);
     Weights wp = phi_weights(wrap_phi(wi, wo));
     for (int a = 0; a < 2; ++a)
@@ -188,11 +205,11 @@ void TabulatedBSDF::table_eval(const Vec3 &wi, const Vec3 &wo, const Query &q, d
     for (int c = 0; c < C; ++c) out[c] *= cos_o;
 }
 
-void TabulatedBSDF::direct_eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
-                                double *out) const {
-    const int C = channels(), D = direct_->channels();
+void TabulatedBSDF::direct_eval(const BSDF &direct, const Vec3 &wi, const Vec3 &wo, uint32_t lobes,
+                                const Query &q, double *out) const {
+    const int C = channels(), D = direct.channels();
     double *v = scratch(3, D); // slots 0-1 belong to the interfaces' own evaluation
-    direct_->eval(wi, wo, lobes & kReflection, q, v);
+    direct.eval(wi, wo, lobes & kReflection, q, v);
     for (int c = 0; c < C; ++c) {
         double acc = 0;
         for (int d = 0; d < D; ++d) acc += P_[c * D + d] * v[d];
@@ -202,24 +219,28 @@ void TabulatedBSDF::direct_eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, 
 
 void TabulatedBSDF::eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const {
     zero(out);
-    if (!usable_direction(wi) || !usable_direction(wo) || wi.z <= 0) return;
-    uint32_t lobe = wo.z > 0 ? kGlossyReflection : kGlossyTransmission;
+    if (!usable_direction(wi) || !usable_direction(wo) || wi.z == 0) return;
+    const int side = side_of(wi);
+    if (side >= sides_) return;
+    const bool reflect = wi.z * wo.z > 0;
+    uint32_t lobe = reflect ? kGlossyReflection : kGlossyTransmission;
     if (lobes & lobe) table_eval(wi, wo, q, out);
-    if (direct_ && wo.z > 0 && (lobes & kReflection)) direct_eval(wi, wo, lobes, direct_query(q), out);
+    if (const BSDF *d = direct(side); d && reflect && (lobes & kReflection))
+        direct_eval(*d, wi, wo, lobes, direct_query(q, side), out);
 }
 
 double TabulatedBSDF::table_albedo(const Vec3 &wi, const Query &q) const {
     Weights wt = thickness_weights(q);
-    Weights wa = angle_weights(std::acos(std::clamp(wi.z, -1.0, 1.0)), grid_.n_theta_i);
-    const int NI = grid_.n_theta_i;
-    auto A = [&](int t, int ti) { return albedo_[std::size_t(t) * NI + ti]; };
+    Weights wa = angle_weights(std::acos(std::clamp(std::abs(wi.z), 0.0, 1.0)), grid_.n_theta_i);
+    const int side = side_of(wi);
+    auto A = [&](int t, int ti) { return albedo_[node(side, t, ti)]; };
     return (1 - wt.w1) * ((1 - wa.w1) * A(wt.i0, wa.i0) + wa.w1 * A(wt.i0, wa.i1)) +
            wt.w1 * ((1 - wa.w1) * A(wt.i1, wa.i0) + wa.w1 * A(wt.i1, wa.i1));
 }
 
 double TabulatedBSDF::table_pdf(const Vec3 &wi, const Vec3 &wo, const Query &q) const {
-    int lobe = wo.z > 0 ? 0 : 1;
-    if (lobe >= grid_.n_lobes) return 0.0;
+    int lobe = table_lobe(wi, wo);
+    if (lobe < 0 || lobe >= grid_.n_lobes) return 0.0;
     double theta_o = std::acos(std::clamp(std::abs(wo.z), 0.0, 1.0));
     int k = std::min(static_cast<int>(theta_o / (0.5 * kPi / grid_.n_theta_o)), grid_.n_theta_o - 1);
     double phi = wrap_phi(wi, wo);
@@ -229,12 +250,12 @@ double TabulatedBSDF::table_pdf(const Vec3 &wi, const Vec3 &wo, const Query &q) 
     patch_bounds(k, m, ch, cl, pl, ph);
     double area = (ch - cl) * 2.0 * (ph - pl);
     if (!(area > 0)) return 0.0;
-    std::size_t p = (std::size_t(lobe) * grid_.n_theta_o + k) * grid_.n_phi + m;
+    std::size_t p = (std::size_t(lobe % 2) * grid_.n_theta_o + k) * grid_.n_phi + m;
     Weights wt = thickness_weights(q);
-    Weights wa = angle_weights(std::acos(std::clamp(wi.z, -1.0, 1.0)), grid_.n_theta_i);
+    Weights wa = angle_weights(std::acos(std::clamp(std::abs(wi.z), 0.0, 1.0)), grid_.n_theta_i);
     const std::size_t NP = patches();
-    const int NI = grid_.n_theta_i;
-    auto P = [&](int t, int ti) { return prob_[(std::size_t(t) * NI + ti) * NP + p]; };
+    const int side = side_of(wi);
+    auto P = [&](int t, int ti) { return prob_[node(side, t, ti) * NP + p]; };
     double prob = (1 - wt.w1) * ((1 - wa.w1) * P(wt.i0, wa.i0) + wa.w1 * P(wt.i0, wa.i1)) +
                   wt.w1 * ((1 - wa.w1) * P(wt.i1, wa.i0) + wa.w1 * P(wt.i1, wa.i1));
     return prob / area;
@@ -246,12 +267,13 @@ void TabulatedBSDF::mixture(const Vec3 &wi, const Query &q, double &p_delta, dou
     double a_delta = 0, a_direct = 0;
     if (delta_weight)
         for (int c = 0; c < C; ++c) delta_weight[c] = 0.0;
-    if (direct_) {
-        if (direct_->lobes() & kDeltaReflection) {
-            double *r = scratch(2, direct_->channels());
-            BSDFSample s = direct_->sample(wi, 0.5, 0.5, 0.5, kDeltaReflection, direct_query(q), r);
+    const int side = side_of(wi);
+    if (const BSDF *d = direct(side)) {
+        if (d->lobes() & kDeltaReflection) {
+            double *r = scratch(2, d->channels());
+            BSDFSample s = d->sample(wi, 0.5, 0.5, 0.5, kDeltaReflection, direct_query(q, side), r);
             if (s.lobe) {
-                const int D = direct_->channels();
+                const int D = d->channels();
                 for (int c = 0; c < C; ++c) {
                     double acc = 0;
                     for (int d = 0; d < D; ++d) acc += P_[c * D + d] * r[d];
@@ -260,8 +282,9 @@ void TabulatedBSDF::mixture(const Vec3 &wi, const Query &q, double &p_delta, dou
                 }
             }
         }
-        Weights wa = angle_weights(std::acos(std::clamp(wi.z, -1.0, 1.0)), grid_.n_theta_i);
-        a_direct = (1 - wa.w1) * direct_albedo_[wa.i0] + wa.w1 * direct_albedo_[wa.i1];
+        Weights wa = angle_weights(std::acos(std::clamp(std::abs(wi.z), 0.0, 1.0)), grid_.n_theta_i);
+        const double *da = &direct_albedo_[std::size_t(side) * grid_.n_theta_i];
+        a_direct = (1 - wa.w1) * da[wa.i0] + wa.w1 * da[wa.i1];
     }
     double a_table = table_albedo(wi, q);
     double total = std::max(a_delta, 0.0) + a_direct + a_table;
@@ -275,23 +298,25 @@ void TabulatedBSDF::mixture(const Vec3 &wi, const Query &q, double &p_delta, dou
 }
 
 double TabulatedBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const {
-    if (!usable_direction(wi) || !usable_direction(wo) || wi.z <= 0) return 0.0;
+    if (!usable_direction(wi) || !usable_direction(wo) || wi.z == 0 || side_of(wi) >= sides_) return 0.0;
     // sample() draws from the whole mixture and drops a direction outside the mask, so
     // the density of what it returns is the mixture's inside the mask and 0 outside.
-    if (!(lobes & (wo.z > 0 ? kGlossyReflection : kGlossyTransmission))) return 0.0;
+    const bool reflect = wi.z * wo.z > 0;
+    if (!(lobes & (reflect ? kGlossyReflection : kGlossyTransmission))) return 0.0;
     double p_delta, p_direct;
     mixture(wi, q, p_delta, p_direct, nullptr);
     double p = (1.0 - p_delta - p_direct) * table_pdf(wi, wo, q);
-    if (direct_ && p_direct > 0 && wo.z > 0)
-        p += p_direct * direct_->pdf(wi, wo, kGlossyReflection | kDiffuseReflection, direct_query(q));
+    const int side = side_of(wi);
+    if (const BSDF *d = direct(side); d && p_direct > 0 && reflect)
+        p += p_direct * d->pdf(wi, wo, kGlossyReflection | kDiffuseReflection, direct_query(q, side));
     return p;
 }
 
 BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes,
                                  const Query &q, double *weight) const {
     zero(weight);
-    if (!usable_direction(wi) || wi.z <= 0) return {};
-    const int C = channels();
+    if (!usable_direction(wi) || wi.z == 0 || side_of(wi) >= sides_) return {};
+    const int C = channels(), side = side_of(wi);
     double small[16]; // RGB tables: no allocation in the render loop
     std::vector<double> large(C > 16 ? C : 0);
     double *delta_w = C > 16 ? large.data() : small;
@@ -308,25 +333,26 @@ BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u
         return s;
     }
     if (u1 < p_delta + p_direct) {
-        double *wd = scratch(3, direct_->channels());
+        const BSDF *direct_side = direct(side);
+        double *wd = scratch(3, direct_side->channels());
         const double u_lobe = rng.uniform();
-        BSDFSample d = direct_->sample(wi, u_lobe, u2x, u2y, kGlossyReflection | kDiffuseReflection,
-                                       direct_query(q), wd);
+        BSDFSample d = direct_side->sample(wi, u_lobe, u2x, u2y, kGlossyReflection | kDiffuseReflection,
+                                           direct_query(q, side), wd);
         if (!d.lobe) return {};
         s.wo = d.wo;
     } else {
         // Table: theta_i and thickness nodes by their interpolation weights, then a patch.
         Weights wt = thickness_weights(q);
-        Weights wa = angle_weights(std::acos(std::clamp(wi.z, -1.0, 1.0)), grid_.n_theta_i);
+        Weights wa = angle_weights(std::acos(std::clamp(std::abs(wi.z), 0.0, 1.0)), grid_.n_theta_i);
         int t = rng.uniform() < wt.w1 ? wt.i1 : wt.i0;
         int ti = rng.uniform() < wa.w1 ? wa.i1 : wa.i0;
         const std::size_t NP = patches();
-        const double *cdf = &cdf_[(std::size_t(t) * grid_.n_theta_i + ti) * (NP + 1)];
+        const double *cdf = &cdf_[node(side, t, ti) * (NP + 1)];
         double u = rng.uniform();
         std::size_t p = std::min<std::size_t>(std::upper_bound(cdf, cdf + NP + 1, u) - cdf - 1, NP - 1);
         int m = static_cast<int>(p % grid_.n_phi);
         int k = static_cast<int>((p / grid_.n_phi) % grid_.n_theta_o);
-        int lobe = static_cast<int>(p / (std::size_t(grid_.n_phi) * grid_.n_theta_o));
+        int l = static_cast<int>(p / (std::size_t(grid_.n_phi) * grid_.n_theta_o)); // 0: reflection
         double ch, cl, pl, ph;
         patch_bounds(k, m, ch, cl, pl, ph);
         double cz = cl + u2x * (ch - cl);
@@ -334,9 +360,10 @@ BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u
         if (rng.uniform() < 0.5) phi = -phi;
         double sz = std::sqrt(std::max(0.0, 1.0 - cz * cz));
         double base = std::atan2(wi.y, wi.x) + phi;
-        s.wo = {sz * std::cos(base), sz * std::sin(base), lobe == 0 ? cz : -cz};
+        const bool up = (l == 0) == (wi.z > 0);
+        s.wo = {sz * std::cos(base), sz * std::sin(base), up ? cz : -cz};
     }
-    s.lobe = s.wo.z > 0 ? kGlossyReflection : kGlossyTransmission;
+    s.lobe = wi.z * s.wo.z > 0 ? kGlossyReflection : kGlossyTransmission;
     if (!(s.lobe & lobes)) return {};
     s.pdf = pdf(wi, s.wo, lobes, q);
     if (!(s.pdf > 0)) return {};
@@ -344,7 +371,7 @@ BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u
     for (int c = 0; c < C; ++c) weight[c] /= s.pdf;
     // Transmitted weights carry (n_i / n_t)^2 of the whole stack: report its eta so a
     // path tracer's Russian roulette (throughput x eta^2) sees the radiance scaling.
-    if (s.lobe == kGlossyTransmission) s.eta = transmission_eta_;
+    if (s.lobe == kGlossyTransmission) s.eta = side == 0 ? transmission_eta_ : 1.0 / transmission_eta_;
     return s;
 }
 

@@ -18,8 +18,11 @@ void TableGrid::cell_directions(std::size_t cell, Vec3 &wi, Vec3 &wo, int &lobe,
     t = static_cast<int>(cell % n_thickness());
     lobe = static_cast<int>(cell / n_thickness());
     double a = theta_i(ti), b = theta_o(to), p = phi(ph);
-    wi = {std::sin(a), 0.0, std::cos(a)};
-    wo = {std::sin(b) * std::cos(p), std::sin(b) * std::sin(p), lobe == 0 ? std::cos(b) : -std::cos(b)};
+    // Lobes 2 and 3 (two-sided tables) are lit from below: wi.z < 0; wo lies above for
+    // reflection from above and transmission upward (lobes 0 and 3).
+    const bool below = lobe >= 2, up = lobe == 0 || lobe == 3;
+    wi = {std::sin(a), 0.0, below ? -std::cos(a) : std::cos(a)};
+    wo = {std::sin(b) * std::cos(p), std::sin(b) * std::sin(p), up ? std::cos(b) : -std::cos(b)};
 }
 
 } // namespace bsdflab

@@ -49,6 +49,23 @@ def test_tabulate_kind_equals_the_python_api(tmp_path):
     assert kind.existing(request, tmp_path)["hash"] == result["hash"]
 
 
+def test_a_transmissive_model_gives_a_two_sided_table(tmp_path):
+    """A table job of a transmissive stack (smooth top, smooth base: adding-doubling, the
+    automatic method) writes a two-sided table (format version 3, four parts) and says so."""
+    stack = {"type": "layered", "interfaces": [{"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0}],
+             "slabs": [{"thickness_um": 2.0, "sigma_a": 0.1, "sigma_s": 2.0}],
+             "base": {"type": "dielectric", "int_ior": 1.33, "ext_ior": 1.5}}
+    kind = get_kind("tabulate")
+    request = kind.normalise({"model": stack, "grid": {"n_theta_i": 2, "n_theta_o": 3, "n_phi": 3},
+                              "rel_error": 0.05})
+    assert request["method"] == "adding-doubling"
+    result = kind.run(request, tmp_path, [].append, lambda: False)
+    table = read_table(tmp_path / result["files"]["exr"])
+    assert table.two_sided and table.values.shape[0] == 4
+    assert result["lobes"] == list(table.lobes) == ["reflection", "transmission", "reflection_below",
+                                                    "transmission_below"]
+
+
 def test_requests_are_normalised_and_bad_ones_named():
     kind = get_kind("tabulate")
     a = kind.normalise(SMALL)
@@ -60,7 +77,7 @@ def test_requests_are_normalised_and_bad_ones_named():
         kind.normalise({**SMALL, "colour": 1})
     with pytest.raises(ValueError, match="unknown scene"):
         get_kind("render").normalise({"scene": "nowhere"})
-    assert tabulate_kind.cells(a) == 2 * 2 * 3 * 3
+    assert tabulate_kind.cells(a) == 4 * 2 * 3 * 3  # four parts: a two-sided table's, the upper bound
     # "auto" (the default): adding-doubling where it covers the model, said in the request
     auto = kind.normalise({k: v for k, v in SMALL.items() if k != "method"})
     assert auto["method"] == "adding-doubling" and auto["method_note"].startswith("automatic")

@@ -91,7 +91,7 @@ def test_attributes_are_strings_with_the_metadata(table_file):
     assert set(file_format.REQUIRED) <= set(attributes)
     assert all(isinstance(v, str) for v in attributes.values())
     assert attributes["bsdflab.colour_space"] == "linear sRGB (D65)"
-    assert attributes["bsdflab.format_version"] == "2"
+    assert attributes["bsdflab.format_version"] == "3"
     assert len(attributes["bsdflab.content_hash"]) == 64
 
 
@@ -135,11 +135,11 @@ def test_changed_metadata_fails_the_hash(table_file):
 
 
 def test_newer_format_version_is_refused(tmp_path, monkeypatch):
-    monkeypatch.setattr(file_format, "FORMAT_VERSION", 3)
-    write_table(tmp_path / "v3.exr", make_table())
+    monkeypatch.setattr(file_format, "FORMAT_VERSION", 4)
+    write_table(tmp_path / "v4.exr", make_table())
     monkeypatch.undo()
-    with pytest.raises(ValueError, match="written by format version 3, this bsdflab reads versions 1, 2"):
-        read_table(tmp_path / "v3.exr")
+    with pytest.raises(ValueError, match="written by format version 4, this bsdflab reads versions 1, 2, 3"):
+        read_table(tmp_path / "v4.exr")
 
 
 def test_foreign_files_are_refused(tmp_path):
@@ -263,7 +263,7 @@ def test_table_info_and_plot(tmp_path):
     assert r.returncode == 0, r.stderr
     for text in ("roughdielectric (preset xenopeltis)", "reflection, transmission", "300, 400 nm",
                  "3 wavelengths", "spectral, nm", "median", "95th pct", "content hash  OK",
-                 "format version 2"):
+                 "format version 3", "from above only"):
         assert text in r.stdout, text
     out = tmp_path / "figs" / "t.png"
     r = cli("table", "plot", str(path), "--out", str(out), "--thickness-index", "1")

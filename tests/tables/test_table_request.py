@@ -33,7 +33,7 @@ def test_01_keys_are_the_documented_hash_of_the_old_content():
     Mutations caught: a method entry in a PFMC request's content, a seed in an adding-
     doubling one, or any renamed field changes the hash."""
     model = SNAKE.to_dict()
-    common = {"channels": ["450", "550", "650"], "format_version": 2, "grid": GRID.to_dict(), "model": model,
+    common = {"channels": ["450", "550", "650"], "format_version": 3, "grid": GRID.to_dict(), "model": model,
               "rel_error": 0.02}
     pfmc = TableRequest.make(SNAKE, GRID, 0.02, WL, "pfmc", 64, 128, 3)
     assert pfmc.key() == sha({**common, "min_samples": 64, "max_samples": 128, "seed": 3, "error_floor": 0.05,

@@ -9,10 +9,14 @@
 // small floor so every patch where interpolation can be non-zero is reachable), then
 // uniform in (cos theta_o, phi) within the patch; theta_i and thickness nodes are picked
 // with their interpolation weights. pdf() is the exact density of that mixture.
-// Tables describe light arriving from above (wi.z > 0); from below everything is zero.
+// One- and two-lobe tables describe light arriving from above (wi.z > 0): from below
+// everything is zero. Four-lobe (two-sided) tables also hold light arriving from below
+// (lobes 2, 3 of table_grid.h): each side has its own CDFs, and its own exact part
+// (`direct` above: the top interface; `direct_below` below: the base, asked with its own
+// film), added to reflection on its side.
 // Film thicknesses outside a multi-node thickness range are clamped to its ends, for the
 // table part and the exact part alike. Transmitted samples report eta = n_t / n_i of the
-// whole stack (their weights carry (n_i / n_t)^2).
+// whole stack (their weights carry (n_i / n_t)^2); from below its inverse.
 #pragma once
 #include <memory>
 #include <vector>
@@ -27,7 +31,8 @@ class TabulatedBSDF final : public BSDF {
     // luminance: per channel weights for the sampling CDFs.
     TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, std::vector<float> values,
                   std::vector<double> luminance, std::shared_ptr<const BSDF> direct, std::vector<double> P,
-                  double default_thickness, double transmission_eta = 1.0);
+                  double default_thickness, double transmission_eta = 1.0,
+                  std::shared_ptr<const BSDF> direct_below = nullptr);
     uint32_t lobes() const override;
     void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const override;
     double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const override;
@@ -40,30 +45,42 @@ class TabulatedBSDF final : public BSDF {
         double w1;
     }; // linear interpolation between two nodes
     Weights thickness_weights(const Query &q) const;
-    Query direct_query(const Query &q) const; // the film thickness the exact part sees
+    Query direct_query(const Query &q, int side) const; // the film thickness the exact part sees
+    int side_of(const Vec3 &wi) const { return wi.z > 0 ? 0 : 1; }
+    int table_lobe(const Vec3 &wi, const Vec3 &wo) const { // -1: not in the table
+        int l = wi.z * wo.z > 0 ? 0 : 1;
+        return l < per_side_ ? 2 * side_of(wi) + l : -1;
+    }
+    const BSDF *direct(int side) const { return side == 0 ? direct_.get() : direct_below_.get(); }
+    std::size_t node(int side, int t, int ti) const {
+        return (std::size_t(side) * grid_.n_thickness() + t) * grid_.n_theta_i + ti;
+    }
     Weights angle_weights(double theta, int n) const;
     Weights phi_weights(double phi) const;
     void table_eval(const Vec3 &wi, const Vec3 &wo, const Query &q, double *out) const;
     double table_pdf(const Vec3 &wi, const Vec3 &wo, const Query &q) const;
     double table_albedo(const Vec3 &wi, const Query &q) const;
-    void direct_eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const;
+    void direct_eval(const BSDF &d, const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
+                     double *out) const;
     void mixture(const Vec3 &wi, const Query &q, double &p_delta, double &p_direct,
                  double *delta_weight) const;
     // Patch geometry of (theta_o cell k, phi cell m).
     void patch_bounds(int k, int m, double &cos_hi, double &cos_lo, double &phi_lo, double &phi_hi) const;
-    std::size_t patches() const { return std::size_t(grid_.n_lobes) * grid_.n_theta_o * grid_.n_phi; }
+    // Patches of one side: (lobe of the side, theta_o cell, phi cell).
+    std::size_t patches() const { return std::size_t(per_side_) * grid_.n_theta_o * grid_.n_phi; }
 
     TableGrid grid_;
     std::vector<float> values_;
     std::vector<double> luminance_;
-    std::shared_ptr<const BSDF> direct_;
+    std::shared_ptr<const BSDF> direct_, direct_below_;
+    int sides_ = 1, per_side_ = 1; // sides lit (1: above only, 2: both) and lobes per side
     std::vector<double> P_; // (C x direct channels) row-major, or empty
     double default_thickness_;
     double transmission_eta_; // n_t / n_i across the whole stack, reported by transmitted samples
-    // Per (thickness node, theta_i node): patch CDF (patches() + 1 entries), patch
-    // probabilities, and the table albedo (luminance) at that node.
+    // Per (side, thickness node, theta_i node) (node()): patch CDF (patches() + 1
+    // entries), patch probabilities, and the table albedo (luminance) at that node.
     std::vector<double> cdf_, prob_, albedo_;
-    std::vector<double> direct_albedo_; // per theta_i node, glossy reflection luminance
+    std::vector<double> direct_albedo_; // per (side, theta_i node), glossy reflection luminance
 };
 
 } // namespace bsdflab

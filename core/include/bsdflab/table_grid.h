@@ -1,5 +1,7 @@
 // Axes of a BSDF table and the mapping between cells and directions.
-//   lobe      0 = reflection (wo above), 1 = transmission (wo below, theta_o from -z)
+//   lobe      0 = reflection (wo above), 1 = transmission (wo below, theta_o from -z);
+//             two-sided tables add 2 = reflection from below (wi and wo below) and
+//             3 = transmission from below (wi below, wo above); theta_i then from -z
 //   thickness film-thickness nodes in nm (one node with value < 0 = the model's own)
 //   theta_i, theta_o  cell-centred nodes (k + 1/2) (pi/2) / n, never normal or grazing
 //   phi       |phi_o - phi_i| nodes evenly over [0, pi], both ends included
