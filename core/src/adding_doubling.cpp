@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 #include "bsdflab/adding_doubling_ops.h"
+#include "bsdflab/constants.h"
 #include "bsdflab/frame.h"
 #include "bsdflab/interfaces.h"
 #include "bsdflab/parallel.h"
@@ -17,7 +18,6 @@ using ad::Op;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kIndexTolerance = 1e-9;
 
 bool is_delta(const BSDF &b) { return (b.lobes() & ~kDelta) == 0; }
