@@ -7,7 +7,7 @@ from fastapi import APIRouter, Request
 from fastapi.responses import Response
 
 from bsdflab.optics import film_reflectance, film_transmittance
-from bsdflab.optics.thin_film import FilmStack, Layer
+from bsdflab.optics.thin_film import FilmLayer, FilmStack
 from bsdflab.plots.film_colour import display_exposure, display_srgb, spectral_rgb
 from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import HeavyDep, SettingsDep
@@ -51,7 +51,7 @@ def _film(body: ThinFilmRequest):
     if given:
         raise ValueError(f"give the film either as layers or as film_ior and thickness_nm, not both "
                          f"(layers and {', '.join(sorted(given))} were given)")
-    layers = [Layer(check.real_scalar(f"layers[{i}].ior", layer.ior, *IOR_RANGE),
+    layers = [FilmLayer(check.real_scalar(f"layers[{i}].ior", layer.ior, *IOR_RANGE),
                     check.real_scalar(f"layers[{i}].thickness_nm", layer.thickness_nm, 0.0, MAX_THICKNESS_NM))
               for i, layer in enumerate(body.layers)]
     total = sum(layer.thickness_nm for layer in layers)
