@@ -7,8 +7,9 @@ import warnings
 
 import pytest
 
+import bsdflab as bl
 from bsdflab import optics
-from bsdflab.optics import FilmLayer
+from bsdflab.optics import Cauchy, Constant, FilmLayer, Tabulated, dispersion_from_dict
 from bsdflab.oracles import _ad_operators
 
 
@@ -29,3 +30,25 @@ def test_film_layer_is_the_name_and_layer_still_imports():
         assert _ad_operators.Layer is _ad_operators.LayerOperators
     with pytest.raises(AttributeError):
         optics.NoSuchName  # noqa: B018
+
+
+@pytest.mark.parametrize("model", [Constant(1.8, 0.1), Cauchy(1.532, 5890.0), Tabulated([400, 700], [1.5, 1.4])])
+def test_dispersion_dicts_are_tagged_type_and_old_model_tags_read(model):
+    d = model.to_dict()
+    assert d["type"] == model.type_name and "model" not in d
+    assert silently(lambda: dispersion_from_dict(d)) == model
+    old = {("model" if k == "type" else k): v for k, v in d.items()}
+    with pytest.warns(FutureWarning, match="'model' is deprecated: it is now called 'type'"):
+        assert dispersion_from_dict(old) == model
+    with pytest.raises(ValueError, match="both 'type' and its old name 'model'"):
+        dispersion_from_dict({**d, "model": d["type"]})
+
+
+def test_a_stored_model_dict_with_old_dispersion_tags_still_builds():
+    """A film material written before issue 34 (e.g. inside a stored table's model): it
+    reads with a warning, and writes back in the new form."""
+    new = bl.Dielectric(1.5, 1.0, film=[{"material": Cauchy(1.532, 5890.0), "thickness_nm": 400.0}]).to_dict()
+    assert new["film"][0]["material"]["type"] == "cauchy"
+    old = {**new, "film": [{"material": {"model": "cauchy", "A": 1.532, "B": 5890.0, "C": 0.0}, "thickness_nm": 400.0}]}
+    with pytest.warns(FutureWarning, match="dispersion dict key 'model'"):
+        assert bl.from_dict(old).to_dict() == new
