@@ -5,12 +5,16 @@ from __future__ import annotations
 
 import warnings
 
+import numpy as np
 import pytest
 
 import bsdflab as bl
 from bsdflab import optics
 from bsdflab.optics import Cauchy, Constant, FilmLayer, Tabulated, dispersion_from_dict
 from bsdflab.oracles import _ad_operators
+
+UP = np.array([[0.0, 0.0, 1.0]])
+TILTED = np.array([[0.3, 0.0, np.sqrt(1 - 0.09)]])
 
 
 def silently(f):
@@ -52,3 +56,44 @@ def test_a_stored_model_dict_with_old_dispersion_tags_still_builds():
     old = {**new, "film": [{"material": {"model": "cauchy", "A": 1.532, "B": 5890.0, "C": 0.0}, "thickness_nm": 400.0}]}
     with pytest.warns(FutureWarning, match="dispersion dict key 'model'"):
         assert bl.from_dict(old).to_dict() == new
+
+
+def test_thickness_keyword_is_thickness_nm():
+    coat = bl.RoughDielectric(0.3, 1.5, 1.0, film=[{"material": 1.8, "thickness_nm": 300.0}])
+    new = silently(lambda: coat.eval(UP, UP, thickness_nm=[320.0]))
+    with pytest.warns(FutureWarning, match="keyword 'thickness' is deprecated: it is now called 'thickness_nm'"):
+        old = coat.eval(UP, UP, thickness=[320.0])
+    np.testing.assert_array_equal(old, new)
+    # the keyword changes the answer (a film 300 -> 320 nm shifts its colour), so it is passed on
+    assert not np.array_equal(new, coat.eval(UP, UP))
+    with pytest.warns(FutureWarning, match="thickness_nm"):
+        old = coat.pdf(TILTED, UP, thickness=[320.0])
+    np.testing.assert_array_equal(old, coat.pdf(TILTED, UP, thickness_nm=[320.0]))
+    with pytest.warns(FutureWarning, match="thickness_nm"):
+        old = coat.sample(TILTED, thickness=[320.0])
+    np.testing.assert_array_equal(old.weight, coat.sample(TILTED, thickness_nm=[320.0]).weight)
+    with pytest.raises(ValueError, match="pass thickness_nm= only"):
+        coat.eval(UP, UP, thickness=[320.0], thickness_nm=[320.0])
+    with pytest.raises(ValueError, match="thickness_nm"):
+        coat.eval(UP, UP, thickness_nm=[-1.0])
+
+
+def test_layered_and_slices_take_thickness_nm():
+    from bsdflab.presets import preset
+    from bsdflab.slices import evaluate
+
+    snake = preset("xenopeltis", samples=64)
+    kw = {"wavelengths": [550.0], "samples": 64, "seed": 1}
+    new = silently(lambda: snake.estimate(TILTED, TILTED, thickness_nm=300.0, **kw))
+    with pytest.warns(FutureWarning, match="thickness_nm"):
+        old = snake.estimate(TILTED, TILTED, thickness=300.0, **kw)
+    np.testing.assert_array_equal(old.value, new.value)
+    with pytest.warns(FutureWarning, match="thickness_nm"):
+        old = snake.eval_with_error(TILTED, TILTED, thickness=300.0, **kw)
+    np.testing.assert_array_equal(old[0], new.value)
+    with pytest.warns(FutureWarning, match="thickness_nm"):
+        old = evaluate(snake, TILTED, TILTED, thickness=300.0, **kw)
+    np.testing.assert_array_equal(old.values, new.value)
+    with pytest.warns(FutureWarning, match="thickness_nm"):
+        old = snake.delta_reflectance(UP, wavelengths=[550.0], thickness=300.0)
+    np.testing.assert_array_equal(old, snake.delta_reflectance(UP, wavelengths=[550.0], thickness_nm=300.0))
