@@ -15,14 +15,15 @@ from bsdflab.service.errors import ERRORS, over_limit
 from bsdflab.service.schemas import ThinFilmRequest, ThinFilmResponse
 from bsdflab.service.settings import Settings
 from bsdflab.util import args as check
+from bsdflab.util import ranges
 
 router = APIRouter(prefix="/v1/thinfilm", tags=["thin film"], responses=ERRORS, route_class=ThreadedBody)
 DEFAULT_ANGLES = np.arange(0.0, 86.0, 5.0)
-# Physical ranges: indices of optical materials (1e-3..1e3), films up to 1 cm, wavelengths
-# from 1 nm to 1 mm; beyond them the film arithmetic loses all precision.
-IOR_RANGE = (1e-3, 1e3)
-MAX_THICKNESS_NM = 1e7
-WAVELENGTH_RANGE_NM = (1.0, 1e6)
+# Physical ranges are the library's (bsdflab/util/ranges.py): what bsdflab.optics accepts,
+# this route accepts. (Films thicker than the colour strip resolves are refused by it.)
+IOR_RANGE = ranges.IOR_RANGE
+MAX_THICKNESS_NM = ranges.MAX_FILM_THICKNESS_NM
+WAVELENGTH_RANGE_NM = ranges.WAVELENGTH_RANGE_NM
 DEFAULT_WAVELENGTHS = np.arange(380.0, 781.0, 5.0)
 
 
