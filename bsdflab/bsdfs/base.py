@@ -15,6 +15,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from bsdflab import _core
 from bsdflab.lobes import Lobe
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
 from bsdflab.util import args as check
@@ -173,7 +174,7 @@ def _spectrally_flat(core) -> bool:
     """True when eval and sample agree across all channels on a fixed set of directions
     from both sides (grazing included). Flatness comes from the parameters, not the
     directions, so a probe decides it; stochastic (layered) models are never flat."""
-    if core.channels < 2 or type(core).__name__ == "LayeredBSDF":
+    if core.channels < 2 or isinstance(core, _core.LayeredBSDF):
         return False
     theta = np.radians([0.0, 20.0, 45.0, 70.0, 85.0, 100.0, 135.0, 170.0])
     wi = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=1)

@@ -97,3 +97,17 @@ def test_layered_and_slices_take_thickness_nm():
     with pytest.warns(FutureWarning, match="thickness_nm"):
         old = snake.delta_reflectance(UP, wavelengths=[550.0], thickness=300.0)
     np.testing.assert_array_equal(old, snake.delta_reflectance(UP, wavelengths=[550.0], thickness_nm=300.0))
+
+
+def test_type_checks_are_isinstance_and_channels_are_real_wavelengths():
+    """A layered core is never 'spectrally flat' (stochastic), found by isinstance, not by its
+    class name; a render Diffuse's R, G, B channels carry real wavelengths, not [1, 2, 3]."""
+    from bsdflab.bsdfs.base import _spectrally_flat
+    from bsdflab.spectra import THREE_WAVELENGTHS_NM
+
+    wl = np.array([450.0, 550.0, 650.0])
+    grey = bl.Layered([bl.Dielectric(1.5, 1.0)], [bl.Slab(thickness_um=0.0)], bl.Diffuse(0.8), samples=16)
+    assert not _spectrally_flat(grey._core(wl))  # its channels agree, yet it is stochastic
+    assert _spectrally_flat(bl.Dielectric(1.5, 1.0)._core(wl))
+    core, P = bl.Diffuse(0.3).render_core()
+    assert P is None and list(core.wavelengths) == list(THREE_WAVELENGTHS_NM)
