@@ -39,7 +39,7 @@ from bsdflab.layered import Layered, Slab
 from bsdflab.spectra import Spectrum
 from bsdflab.util import args as check
 
-KERATIN_CAUCHY = {"model": "cauchy", "A": 1.532, "B": 5890.0}
+KERATIN_CAUCHY = {"type": "cauchy", "A": 1.532, "B": 5890.0}
 KERATIN_IOR_550 = KERATIN_CAUCHY["A"] + KERATIN_CAUCHY["B"] / 550.0**2
 GUANINE_IOR = 1.83
 CYTOPLASM_IOR = 1.33

@@ -18,6 +18,7 @@ from bsdflab.bsdfs.base import BSDF
 from bsdflab.lobes import Lobe
 from bsdflab.tables.channels import LUMINANCE_RGB
 from bsdflab.util import args as check
+from bsdflab.util.deprecation import renamed_keywords
 
 
 @dataclass(frozen=True)
@@ -30,16 +31,17 @@ def is_stochastic(bsdf: BSDF) -> bool:
     return hasattr(bsdf, "eval_with_error")
 
 
+@renamed_keywords(thickness="thickness_nm")
 def evaluate(bsdf: BSDF, wi, wo, wavelengths=None, samples: int | None = None,
-             seed: int | None = None, thickness=None) -> Values:
+             seed: int | None = None, thickness_nm=None) -> Values:
     """``bsdf.eval`` for every (wi, wo) pair, with standard errors for stochastic models.
     ``samples`` and ``seed`` replace a stochastic model's own (ignored otherwise);
-    ``thickness`` (nm, one or one per pair) replaces a thin-film coating's total thickness."""
+    ``thickness_nm`` (one or one per pair) replaces a thin-film coating's total thickness."""
     if is_stochastic(bsdf):
         value, err = bsdf.eval_with_error(wi, wo, wavelengths=wavelengths, samples=samples, seed=seed,
-                                          thickness=thickness)
+                                          thickness_nm=thickness_nm)
         return Values(value, err)
-    return Values(bsdf.eval(wi, wo, wavelengths=wavelengths, thickness=thickness), None)
+    return Values(bsdf.eval(wi, wo, wavelengths=wavelengths, thickness_nm=thickness_nm), None)
 
 
 def directions_from_angles(theta_i_deg, theta_o_deg, phi_deg) -> tuple[np.ndarray, np.ndarray]:

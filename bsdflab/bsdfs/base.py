@@ -15,9 +15,11 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from bsdflab import _core
 from bsdflab.lobes import Lobe
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
 from bsdflab.util import args as check
+from bsdflab.util.deprecation import renamed_keywords
 from bsdflab.util.registry import Registry
 
 # Types defined in this package register as their classes are created; types defined in
@@ -69,31 +71,34 @@ class BSDF(abc.ABC):
     def lobes(self) -> Lobe:
         return Lobe(self._core(DEFAULT_WAVELENGTHS).lobes)
 
+    @renamed_keywords(thickness="thickness_nm")
     def eval(self, wi, wo, wavelengths=None, lobes: Lobe | int = Lobe.ALL,
-             thickness=None) -> np.ndarray:
+             thickness_nm=None) -> np.ndarray:
         """f(wi, wo) |cos theta_o|, shape (N, C).
 
-        ``thickness`` (nm; a number or one per row) replaces a thin-film coating's total
+        ``thickness_nm`` (a number or one per row) replaces a thin-film coating's total
         thickness for this call, e.g. a texture's value at each shading point."""
         a, b = check.direction_pair(wi, wo)
         wl, to_rgb = self._channels(wavelengths)
-        t = check.per_row("thickness", thickness, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
+        t = check.per_row("thickness_nm", thickness_nm, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
         values = self._core(wl).eval(a, b, check.lobe_mask(lobes), t)
         return values @ to_rgb.T if to_rgb is not None else values
 
-    def pdf(self, wi, wo, lobes: Lobe | int = Lobe.ALL, thickness=None, wavelengths=None) -> np.ndarray:
+    @renamed_keywords(thickness="thickness_nm")
+    def pdf(self, wi, wo, lobes: Lobe | int = Lobe.ALL, thickness_nm=None, wavelengths=None) -> np.ndarray:
         """Solid-angle density of ``sample`` returning wo, shape (N,).
 
         Where the choice between lobes depends on wavelength (thin films), ``sample`` picks
         with the mean over its channels: pass the same ``wavelengths`` here (None = the
         default colour grid, as for ``sample``) to get the matching density."""
         a, b = check.direction_pair(wi, wo)
-        t = check.per_row("thickness", thickness, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
+        t = check.per_row("thickness_nm", thickness_nm, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
         wl, _ = self._channels(wavelengths)
         return self._core(wl).pdf(a, b, check.lobe_mask(lobes), t)
 
+    @renamed_keywords(thickness="thickness_nm")
     def sample(self, wi, u1=None, u2=None, *, seed: int = 0, wavelengths=None,
-               lobes: Lobe | int = Lobe.ALL, thickness=None) -> BSDFSample:
+               lobes: Lobe | int = Lobe.ALL, thickness_nm=None) -> BSDFSample:
         """Sample wo for each wi. Uniforms u1 (N,) and u2 (N, 2) are drawn from ``seed``
         (numpy PCG64) when not given, so the call is repeatable."""
         w = check.directions("wi", wi)
@@ -106,7 +111,7 @@ class BSDF(abc.ABC):
         u1 = check.uniforms("u1", u1, (n,))
         u2 = check.uniforms("u2", u2, (n, 2))
         wl, to_rgb = self._channels(wavelengths)
-        t = check.per_row("thickness", thickness, n, 0.0, check.MAX_FILM_THICKNESS_NM)
+        t = check.per_row("thickness_nm", thickness_nm, n, 0.0, check.MAX_FILM_THICKNESS_NM)
         wo, weight, pdf, lobe, eta = self._core(wl).sample(w, u1, u2, check.lobe_mask(lobes), t)
         if to_rgb is not None:
             weight = weight @ to_rgb.T
@@ -169,7 +174,7 @@ def _spectrally_flat(core) -> bool:
     """True when eval and sample agree across all channels on a fixed set of directions
     from both sides (grazing included). Flatness comes from the parameters, not the
     directions, so a probe decides it; stochastic (layered) models are never flat."""
-    if core.channels < 2 or type(core).__name__ == "LayeredBSDF":
+    if core.channels < 2 or isinstance(core, _core.LayeredBSDF):
         return False
     theta = np.radians([0.0, 20.0, 45.0, 70.0, 85.0, 100.0, 135.0, 170.0])
     wi = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=1)

@@ -29,7 +29,7 @@ class Conductor(ConductorParams, BSDF):
         Index of the exterior medium. Default 1.000277 (air).
     two_sided : bool
         Reflect from both sides (default: the underside is black, as in Mitsuba).
-    film : list of Layer or dicts, optional
+    film : list of FilmLayer or dicts, optional
         A thin-film coating (top first), e.g. ``[{"material": 1.5, "thickness_nm": 400}]``
         (like the ``conductorThinFilm`` of Padrón-Griffe et al. 2023). Its thickness can vary
         per query (``thickness=``).

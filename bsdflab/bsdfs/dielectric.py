@@ -38,7 +38,7 @@ class Dielectric(BSDF):
         default). int_ior / ext_ior must lie in [0.01, 100] (docs/limits.md).
     ext_ior : float in [1e-3, 1e3]
         Index of refraction of the exterior. Default 1.000277 (air).
-    film : list of Layer or dicts, optional
+    film : list of FilmLayer or dicts, optional
         A thin-film coating on the exterior side (top first); thickness variable per query.
     """
 

@@ -34,10 +34,12 @@ class Diffuse(BSDF):
     def render_core(self):
         # eval is linear in the reflectance, so a 3-channel Diffuse with the projected
         # reflectance gives exactly the RGB the spectral one does.
-        from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
+        # Its channels are R, G and B: labelled with the sRGB primaries' wavelengths (the
+        # labels name the channels; a Diffuse never reads them).
+        from bsdflab.spectra import DEFAULT_WAVELENGTHS, THREE_WAVELENGTHS_NM, srgb_weights
 
         rgb = srgb_weights(DEFAULT_WAVELENGTHS) @ self.reflectance.at(DEFAULT_WAVELENGTHS)
-        return _core.Diffuse(np.array([1.0, 2.0, 3.0]), rgb, self.two_sided), None
+        return _core.Diffuse(np.array(THREE_WAVELENGTHS_NM), rgb, self.two_sided), None
 
     def render_lift(self):
         # The core answers rgb * c (c = cos / pi, or 1 for a sample weight) with rgb = W R,

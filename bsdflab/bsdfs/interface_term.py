@@ -9,7 +9,7 @@ import numpy as np
 
 from bsdflab import _core
 from bsdflab.optics.metals import metal_ior
-from bsdflab.optics.thin_film import Layer
+from bsdflab.optics.thin_film import FilmLayer
 from bsdflab.spectra import Spectrum
 from bsdflab.util.args import MAX_EXTINCTION, MAX_IOR, MIN_IOR, flag, ior
 
@@ -22,29 +22,29 @@ DEFAULT_EXT_IOR = 1.000277  # air
 DEFAULT_INT_IOR = 1.5046    # BK7 at 589 nm (Mitsuba's default)
 
 
-def parse_film(film) -> tuple[Layer, ...]:
-    """A coating: None, a Layer, a dict, or a list of them (top = exterior side first)."""
+def parse_film(film) -> tuple[FilmLayer, ...]:
+    """A coating: None, a FilmLayer, a dict, or a list of them (top = exterior side first)."""
     if film is None:
         return ()
     items = film if isinstance(film, (list, tuple)) else [film]
-    if not isinstance(film, (list, tuple, dict, Layer)):
-        raise ValueError(f"film must be a Layer, a dict or a list of them, got {type(film).__name__}")
+    if not isinstance(film, (list, tuple, dict, FilmLayer)):
+        raise ValueError(f"film must be a FilmLayer, a dict or a list of them, got {type(film).__name__}")
     if len(items) > MAX_FILM_LAYERS:
         raise ValueError(f"film must have at most {MAX_FILM_LAYERS} layers, got {len(items)}")
     layers = []
     for i, item in enumerate(items):
-        if isinstance(item, Layer):
+        if isinstance(item, FilmLayer):
             layers.append(item)
         elif isinstance(item, dict) and {"material", "thickness_nm"} <= set(item):
-            layers.append(Layer.from_dict(item) if isinstance(item["material"], dict)
-                          else Layer(item["material"], item["thickness_nm"]))
+            layers.append(FilmLayer.from_dict(item) if isinstance(item["material"], dict)
+                          else FilmLayer(item["material"], item["thickness_nm"]))
         else:
-            raise ValueError(f"film[{i}] must be a Layer or a dict with 'material' and "
+            raise ValueError(f"film[{i}] must be a FilmLayer or a dict with 'material' and "
                              f"'thickness_nm', got {item!r}")
     return tuple(layers)
 
 
-def film_to_list(layers: tuple[Layer, ...]) -> list[dict[str, Any]] | None:
+def film_to_list(layers: tuple[FilmLayer, ...]) -> list[dict[str, Any]] | None:
     return [layer.to_dict() for layer in layers] or None
 
 
@@ -127,7 +127,7 @@ def int_ior_param(value, ext_ior: float) -> float:
     return n
 
 
-def make_term(wavelengths: np.ndarray, ext_ior: float, layers: tuple[Layer, ...], *,
+def make_term(wavelengths: np.ndarray, ext_ior: float, layers: tuple[FilmLayer, ...], *,
               int_ior: float | None = None, conductor: ConductorInterior | None = None):
     """The C++ Fresnel term for these wavelengths: dielectric (int_ior) or conductor."""
     wl = np.asarray(wavelengths, dtype=np.float64)

@@ -38,7 +38,7 @@ def register(sub) -> None:
 
 def film_from_args(args: argparse.Namespace):
     """(film, title, thickness label) from the options; ValueError for bad values."""
-    from bsdflab.optics import FilmStack, Layer
+    from bsdflab.optics import FilmLayer, FilmStack
 
     ext = real_scalar("--ext-ior", args.ext_ior, 0.0, lo_open=True)
     substrate = real_scalar("--substrate-ior", args.substrate_ior, 0.0, lo_open=True)
@@ -54,7 +54,7 @@ def film_from_args(args: argparse.Namespace):
                  f"{platelet['thickness_nm']:g} nm) with gaps "
                  f"({_n(gap['material'], CYTOPLASM_IOR, 'cytoplasm')}, "
                  f"{gap['thickness_nm']:g} nm), {media}")
-        layers = [Layer(layer["material"], layer["thickness_nm"]) for layer in spec]
+        layers = [FilmLayer(layer["material"], layer["thickness_nm"]) for layer in spec]
         return FilmStack(ext, layers, substrate), title, "total stack thickness"
     n_film = real_scalar("--film-ior", GUANINE_IOR if args.film_ior is None else args.film_ior,
                          0.0, lo_open=True)

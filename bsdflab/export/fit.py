@@ -55,12 +55,12 @@ def exact_film_rgb(m: ExportMaterial, angles_deg=ANGLES_DEG, scales=SCALES) -> n
 
     cos, s = _grid(angles_deg, scales)
     if m.stack:
-        from bsdflab.optics import FilmStack, Layer, film_reflectance
+        from bsdflab.optics import FilmLayer, FilmStack, film_reflectance
         from bsdflab.spectra import spectrum_to_rgb
 
         cols = []
         for k in scales:
-            stack = FilmStack(m.ext_ior, [Layer(n, d * k) for n, d in m.stack], m.int_ior)
+            stack = FilmStack(m.ext_ior, [FilmLayer(n, d * k) for n, d in m.stack], m.int_ior)
             R = film_reflectance(stack, SPECTRAL_GRID_NM, cos_theta=np.cos(np.radians(angles_deg))[:, None])
             cols.append(spectrum_to_rgb(np.asarray(R), SPECTRAL_GRID_NM))
         return np.stack(cols, axis=1)

@@ -24,7 +24,7 @@ SIGMA_A_GRID_NM = np.arange(MODEL_RANGE_NM[0], MODEL_RANGE_NM[1] + 2.5, 5.0)
 
 def film_layers(v: dict, model: ModelSettings) -> list[dict] | None:
     """The top's film as the engine's layer list (None: no film)."""
-    index = {"model": "cauchy", "A": v["film_ior"], "B": v["film_cauchy_b"]}
+    index = {"type": "cauchy", "A": v["film_ior"], "B": v["film_cauchy_b"]}
     if model.film == "single":
         return [{"material": index, "thickness_nm": v["film_thickness_nm"]}] if v["film_thickness_nm"] > 0 else None
     if model.film == "stack":

@@ -32,6 +32,7 @@ from bsdflab.bsdfs.rough import RoughDielectric
 from bsdflab.layered.slab import Slab
 from bsdflab.lobes import Lobe
 from bsdflab.util import args as check
+from bsdflab.util.deprecation import renamed_keywords
 
 INTERFACE_TYPES = (Dielectric, RoughDielectric)
 MAX_SLABS = 16
@@ -160,8 +161,9 @@ class Layered(BSDF):
         return self._build(np.asarray(wavelengths, dtype=np.float64), nee=False)
 
     # -- estimator extras -------------------------------------------------------------
+    @renamed_keywords(thickness="thickness_nm")
     def estimate(self, wi, wo, wavelengths=None, samples: int | None = None,
-                 seed: int | None = None, lobes: Lobe | int = Lobe.ALL, thickness=None,
+                 seed: int | None = None, lobes: Lobe | int = Lobe.ALL, thickness_nm=None,
                  scattered_only: bool = False) -> Estimate:
         """eval with an explicit effort and seed: value, standard error and the count of
         non-finite walks. For colour output the error is the bound sum_l |W_cl| sigma_l
@@ -169,7 +171,7 @@ class Layered(BSDF):
         the top interface's own reflection (what a table stores, see `exact_part`)."""
         a, b = check.direction_pair(wi, wo)
         wl, to_rgb = self._channels(wavelengths)
-        t = check.per_row("thickness", thickness, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
+        t = check.per_row("thickness_nm", thickness_nm, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
         n = self.samples if samples is None else _positive_int("samples", samples)
         s = self.seed if seed is None else check.seed(seed)
         core = self._core(wl)
@@ -183,10 +185,11 @@ class Layered(BSDF):
             value, err = value @ to_rgb.T, err @ np.abs(to_rgb).T
         return Estimate(value, err, int(bad), int(capped))
 
+    @renamed_keywords(thickness="thickness_nm")
     def eval_with_error(self, wi, wo, wavelengths=None, samples: int | None = None,
-                        seed: int | None = None, lobes: Lobe | int = Lobe.ALL, thickness=None):
+                        seed: int | None = None, lobes: Lobe | int = Lobe.ALL, thickness_nm=None):
         """(value, standard error), each (N, C): `estimate` without the non-finite count."""
-        e = self.estimate(wi, wo, wavelengths, samples, seed, lobes, thickness)
+        e = self.estimate(wi, wo, wavelengths, samples, seed, lobes, thickness_nm)
         return e.value, e.stderr
 
     @property
@@ -209,11 +212,12 @@ class Layered(BSDF):
         film = getattr(self.interfaces[0], "film", ()) or ()
         return float(sum(layer.thickness_nm for layer in film)) if film else -1.0
 
-    def delta_reflectance(self, wi, wavelengths=None, thickness=None) -> np.ndarray:
+    @renamed_keywords(thickness="thickness_nm")
+    def delta_reflectance(self, wi, wavelengths=None, thickness_nm=None) -> np.ndarray:
         """Reflectance of the top interface's delta lobe toward the mirror direction, (N, C)."""
         a = check.directions("wi", wi)
         wl, to_rgb = self._channels(wavelengths)
-        t = check.per_row("thickness", thickness, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
+        t = check.per_row("thickness_nm", thickness_nm, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
         r = self._core(wl).delta_reflectance(a, t)
         return r @ to_rgb.T if to_rgb is not None else r
 

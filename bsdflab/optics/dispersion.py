@@ -28,6 +28,7 @@ import numpy as np
 
 from bsdflab.util import args as check
 from bsdflab.util.args import MAX_EXTINCTION, MAX_IOR, MIN_IOR, real_array, real_scalar
+from bsdflab.util.deprecation import renamed_key
 
 
 def wavelengths_nm(value: Any, name: str = "wavelength_nm") -> np.ndarray:
@@ -38,7 +39,7 @@ def wavelengths_nm(value: Any, name: str = "wavelength_nm") -> np.ndarray:
 class Dispersion(abc.ABC):
     """Base of the dispersion models; see the module docstring."""
 
-    model: ClassVar[str]
+    type_name: ClassVar[str]  # the dict tag, "type" (as for BSDFs)
 
     @abc.abstractmethod
     def index(self, wavelength_nm) -> np.ndarray:
@@ -63,7 +64,7 @@ class Constant(Dispersion):
 
     n: float
     k: float = 0.0
-    model: ClassVar[str] = "constant"
+    type_name: ClassVar[str] = "constant"
 
     def __post_init__(self):
         object.__setattr__(self, "n", real_scalar("n", self.n, MIN_IOR, MAX_IOR))
@@ -74,7 +75,7 @@ class Constant(Dispersion):
         return np.full(wl.shape, complex(self.n, self.k))
 
     def to_dict(self) -> dict[str, Any]:
-        return {"model": self.model, "n": self.n, "k": self.k}
+        return {"type": self.type_name, "n": self.n, "k": self.k}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Constant:
@@ -100,7 +101,7 @@ class Cauchy(Dispersion):
     A: float
     B: float
     C: float = 0.0
-    model: ClassVar[str] = "cauchy"
+    type_name: ClassVar[str] = "cauchy"
 
     def __post_init__(self):
         for name in ("A", "B", "C"):
@@ -116,7 +117,7 @@ class Cauchy(Dispersion):
         return n.astype(np.complex128)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"model": self.model, "A": self.A, "B": self.B, "C": self.C}
+        return {"type": self.type_name, "A": self.A, "B": self.B, "C": self.C}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Cauchy:
@@ -138,7 +139,7 @@ class Tabulated(Dispersion):
     Outside [wavelengths_nm[0], wavelengths_nm[-1]] the end values are held.
     """
 
-    model: ClassVar[str] = "tabulated"
+    type_name: ClassVar[str] = "tabulated"
 
     def __init__(self, wavelengths_nm, n, k=None):
         self.wavelengths_nm = real_array("wavelengths_nm", wavelengths_nm, check.MIN_WAVELENGTH_NM,
@@ -165,7 +166,7 @@ class Tabulated(Dispersion):
                 + 1j * np.interp(wl, self.wavelengths_nm, self.k))
 
     def to_dict(self) -> dict[str, Any]:
-        return {"model": self.model, "wavelengths_nm": self.wavelengths_nm.tolist(),
+        return {"type": self.type_name, "wavelengths_nm": self.wavelengths_nm.tolist(),
                 "n": self.n.tolist(), "k": self.k.tolist()}
 
     @classmethod
@@ -185,20 +186,23 @@ class Tabulated(Dispersion):
         return f"Tabulated({len(wl)} samples, {wl[0]:g}-{wl[-1]:g} nm)"
 
 
-_MODELS = {m.model: m for m in (Constant, Cauchy, Tabulated)}
+_MODELS = {m.type_name: m for m in (Constant, Cauchy, Tabulated)}
 
 
 def dispersion_from_dict(d: dict[str, Any]) -> Dispersion:
-    """The model a `to_dict()` result describes; ValueError for an unknown model."""
-    if not isinstance(d, dict) or d.get("model") not in _MODELS:
+    """The model a `to_dict()` result describes; ValueError for an unknown model. Dicts
+    tagged ``"model"`` (before issue 34) still read, with a FutureWarning."""
+    if isinstance(d, dict):
+        d = renamed_key(d, "model", "type", "dispersion ")
+    if not isinstance(d, dict) or d.get("type") not in _MODELS:
         known = ", ".join(sorted(_MODELS))
-        raise ValueError(f"a dispersion dict needs 'model' in ({known}); got {check.brief(d)}")
+        raise ValueError(f"a dispersion dict needs 'type' in ({known}); got {check.brief(d)}")
     try:
-        return _MODELS[d["model"]].from_dict(d)
+        return _MODELS[d["type"]].from_dict(d)
     except KeyError as e:
-        raise ValueError(f"dispersion dict for model {d['model']!r} lacks the key {e}") from None
+        raise ValueError(f"dispersion dict of type {d['type']!r} lacks the key {e}") from None
     except (TypeError, AttributeError) as e:
-        raise ValueError(f"bad dispersion dict for model {d['model']!r}: {check.one_line(e)}") from None
+        raise ValueError(f"bad dispersion dict of type {d['type']!r}: {check.one_line(e)}") from None
 
 
 def as_dispersion(value: Any, name: str) -> Dispersion:

@@ -1,6 +1,6 @@
 """Exact coherent optics of thin films and multilayer stacks.
 
-A film is either a `FilmStack(incident, layers, substrate)` of `Layer(material,
+A film is either a `FilmStack(incident, layers, substrate)` of `FilmLayer(material,
 thickness_nm)`s, or the tuple ``(n0, n1, d_nm, n2)`` for one film of index n1 and
 thickness d_nm between an incident medium n0 and a substrate n2. Materials are dispersion
 models (`bsdflab.optics.dispersion`), dicts of them, or numbers n + i k (k >= 0 absorbing).
@@ -56,13 +56,14 @@ from bsdflab import _core
 from bsdflab.optics.dispersion import Constant, Dispersion, as_dispersion, dispersion_from_dict, wavelengths_nm
 from bsdflab.util import args as check
 from bsdflab.util.args import real_array
+from bsdflab.util.deprecation import renamed_attributes
 
 POLARISATIONS = ("s", "p", "unpolarised")
 MIN_COSINE = 1e-60
 
 
 @dataclass(frozen=True)
-class Layer:
+class FilmLayer:
     """One film of a stack.
 
     Parameters
@@ -85,7 +86,7 @@ class Layer:
         return {"material": self.material.to_dict(), "thickness_nm": self.thickness_nm}
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> Layer:
+    def from_dict(cls, d: dict[str, Any]) -> FilmLayer:
         return cls(dispersion_from_dict(d["material"]), d["thickness_nm"])
 
 
@@ -97,14 +98,14 @@ class FilmStack:
     ----------
     incident : Dispersion, dict or number
         The half-space light arrives from (for `reverse=False`).
-    layers : sequence of Layer
+    layers : sequence of FilmLayer
         At least one layer, in the order light from `incident` meets them.
     substrate : Dispersion, dict or number
         The half-space below the last layer.
     """
 
     incident: Dispersion
-    layers: tuple[Layer, ...]
+    layers: tuple[FilmLayer, ...]
     substrate: Dispersion
 
     def __post_init__(self):
@@ -112,11 +113,11 @@ class FilmStack:
         object.__setattr__(self, "substrate", as_dispersion(self.substrate, "substrate"))
         layers = tuple(self.layers) if isinstance(self.layers, (list, tuple)) else None
         if not layers:
-            raise ValueError("layers must be a non-empty list of Layer (for a bare interface "
+            raise ValueError("layers must be a non-empty list of FilmLayer (for a bare interface "
                              "use bsdflab.optics.fresnel_reflectance)")
         for i, layer in enumerate(layers):
-            if not isinstance(layer, Layer):
-                raise ValueError(f"layers[{i}] must be a Layer, got {type(layer).__name__}")
+            if not isinstance(layer, FilmLayer):
+                raise ValueError(f"layers[{i}] must be a FilmLayer, got {type(layer).__name__}")
         object.__setattr__(self, "layers", layers)
 
     def reversed(self) -> FilmStack:
@@ -131,7 +132,7 @@ class FilmStack:
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> FilmStack:
         return cls(dispersion_from_dict(d["incident"]),
-                   [Layer.from_dict(layer) for layer in d["layers"]],
+                   [FilmLayer.from_dict(layer) for layer in d["layers"]],
                    dispersion_from_dict(d["substrate"]))
 
 
@@ -430,3 +431,8 @@ def _solve_reflectance(p: _Problem) -> list[np.ndarray]:
         out = [np.reshape(a, p.shape) for a in _core.thin_film_reflectance(*_one_film_columns(p))]
         return _with_bare_fallback(p, out)
     return _solve(p)[4:6]
+
+
+# `Layer` was this class's name before issue 34 (it also named the adding-doubling
+# oracle's operator quadruple); still importable, with a FutureWarning.
+__getattr__ = renamed_attributes(__name__, {"Layer": ("FilmLayer", FilmLayer)})

@@ -84,22 +84,22 @@ def _diagonal(values) -> op.Operator:
     return op.Operator(*values)
 
 
-def top_layer(cos, n_slab: float, n_ext: float, g: op.Grid) -> op.Layer:
+def top_layer(cos, n_slab: float, n_ext: float, g: op.Grid) -> op.LayerOperators:
     """The smooth top seen from the slab: its interior reflectance as the bottom-side
     reflection; transmissions the identity (outer factors applied by the caller)."""
     one = op.identity(g)
     inside = _diagonal(fresnel_reflectance(n_slab, n_ext, c) for c in cos)
-    return op.Layer(op.Operator(), one, inside, one)
+    return op.LayerOperators(op.Operator(), one, inside, one)
 
 
-def smooth_base_layer(cos, n_slab: float, n_below: float, g: op.Grid) -> op.Layer:
+def smooth_base_layer(cos, n_slab: float, n_below: float, g: op.Grid) -> op.LayerOperators:
     """A smooth interface to a medium of index n_below under the last slab."""
     one = op.identity(g)
     inside = _diagonal(fresnel_reflectance(n_slab, n_below, c) for c in cos)
-    return op.Layer(inside, one, op.Operator(), one)
+    return op.LayerOperators(inside, one, op.Operator(), one)
 
 
-def lambertian_base_layer(albedo, g: op.Grid) -> op.Layer:
+def lambertian_base_layer(albedo, g: op.Grid) -> op.LayerOperators:
     """An opaque Lambertian base of albedo (L,): kernel albedo / pi in order 0 only."""
     L, M = g.batch
     k = np.zeros((L, M, 1, 1))
@@ -107,4 +107,4 @@ def lambertian_base_layer(albedo, g: op.Grid) -> op.Layer:
     shapes = ((g.n, g.n), (g.n_out, g.n), (g.n, g.n_in))
     K, Kr, Kc = (np.broadcast_to(k, (L, M) + s) for s in shapes)
     R = op.Operator(K=K, Kr=Kr, Kc=Kc, Kp=np.broadcast_to(k[..., 0], (L, M, len(g.pr))))
-    return op.Layer(R, op.Operator(), op.Operator(), op.Operator())
+    return op.LayerOperators(R, op.Operator(), op.Operator(), op.Operator())

@@ -30,6 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsdflab.util.deprecation import renamed_attributes
+
 
 @dataclass(frozen=True)
 class Grid:
@@ -97,7 +99,7 @@ def inverse_one_minus(a: Operator, g: Grid) -> Operator:
 
 
 @dataclass(frozen=True)
-class Layer:
+class LayerOperators:
     """The four operators of a layer: reflection from the top (Rt) and from the bottom
     (Rb), transmission downward (Td) and upward (Tu); all on the same grid."""
 
@@ -107,7 +109,7 @@ class Layer:
     Tu: Operator
 
 
-def stack(top: Layer, bottom: Layer, g: Grid) -> Layer:
+def stack(top: LayerOperators, bottom: LayerOperators, g: Grid) -> LayerOperators:
     """Adding equations: `top` lying on `bottom`, all orders of multiple reflection
     between them summed by the two inverses."""
     down = inverse_one_minus(mul(top.Rb, bottom.Rt, g), g)   # (I - Rb1 Rt2)^-1
@@ -116,15 +118,15 @@ def stack(top: Layer, bottom: Layer, g: Grid) -> Layer:
     Tu = mul(top.Tu, mul(up, bottom.Tu, g), g)
     Rt = add(top.Rt, mul(top.Tu, mul(up, mul(bottom.Rt, top.Td, g), g), g))
     Rb = add(bottom.Rb, mul(bottom.Td, mul(down, mul(top.Rb, bottom.Tu, g), g), g))
-    return Layer(Rt, Td, Rb, Tu)
+    return LayerOperators(Rt, Td, Rb, Tu)
 
 
-def double(layer: Layer, g: Grid) -> Layer:
+def double(layer: LayerOperators, g: Grid) -> LayerOperators:
     """A homogeneous, up-down symmetric layer stacked on itself (Rt = Rb, Td = Tu)."""
     S = inverse_one_minus(mul(layer.Rt, layer.Rt, g), g)
     T = mul(layer.Td, mul(S, layer.Td, g), g)
     R = add(layer.Rt, mul(layer.Td, mul(S, mul(layer.Rt, layer.Td, g), g), g))
-    return Layer(R, T, R, T)
+    return LayerOperators(R, T, R, T)
 
 
 # -- None-aware pieces ----------------------------------------------------------------
@@ -169,3 +171,7 @@ def _pairs(Ar, W, Bc, g: Grid):
 
 def _full(x, shape):
     return np.zeros(shape) if x is None else np.broadcast_to(x, shape)
+
+
+# `Layer` was LayerOperators' name before issue 34 (FilmLayer is the optics' film layer).
+__getattr__ = renamed_attributes(__name__, {"Layer": ("LayerOperators", LayerOperators)})

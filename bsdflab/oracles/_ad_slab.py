@@ -95,7 +95,7 @@ def _unscattered(tau, mu_nodes, mu_out, mu_in):
     return (np.exp(-t / mu_nodes), np.exp(-t / mu_out), np.exp(-t / mu_in))
 
 
-def thin_layer(cos, pr, pc, omega, delta, g, orders) -> op.Layer:
+def thin_layer(cos, pr, pc, omega, delta, g, orders) -> op.LayerOperators:
     """Single-scattering layer of optical depths delta (L,) and albedos omega (L,) on
     cos = (nodes, outputs, inputs) with the requested pairs (pr, pc)."""
     mu, out, inp = cos
@@ -105,17 +105,17 @@ def thin_layer(cos, pr, pc, omega, delta, g, orders) -> op.Layer:
     (rK, tK), (rKr, tKr), (rKc, tKc), (rKp, tKp) = blocks
     R = op.Operator(K=rK, Kr=rKr, Kc=rKc, Kp=rKp)
     T = op.Operator(*_unscattered(delta, mu, out, inp), K=tK, Kr=tKr, Kc=tKc, Kp=tKp)
-    return op.Layer(R, T, R, T)
+    return op.LayerOperators(R, T, R, T)
 
 
-def slab_layer(cos, grid: op.Grid, tau, omega, g, thin_depth) -> op.Layer:
+def slab_layer(cos, grid: op.Grid, tau, omega, g, thin_depth) -> op.LayerOperators:
     """Operators of a slab of optical depths tau (L,) and albedos omega (L,), by
     doubling from a layer no thicker than thin_depth."""
     tau = np.asarray(tau, dtype=np.float64)
     omega = np.asarray(omega, dtype=np.float64)
     if not np.any(omega > 0):  # absorption only: the unscattered beam is exact
         T = op.Operator(*_unscattered(tau, *cos))
-        return op.Layer(op.Operator(), T, op.Operator(), T)
+        return op.LayerOperators(op.Operator(), T, op.Operator(), T)
     doublings = max(0, int(np.ceil(np.log2(max(float(np.max(tau)), 1e-300) / thin_depth))))
     delta = tau / 2.0 ** doublings
     layer = thin_layer(cos, grid.pr, grid.pc, omega, delta, g, grid.batch[1])
@@ -124,5 +124,5 @@ def slab_layer(cos, grid: op.Grid, tau, omega, g, thin_depth) -> op.Layer:
         # the unscattered beam exactly (2^28 products of exp(-delta / mu) lose 3e-8)
         d = layer.Td
         T = op.Operator(*_unscattered(delta * 2.0 ** k, *cos), d.K, d.Kr, d.Kc, d.Kp)
-        layer = op.Layer(layer.Rt, T, layer.Rb, T)
+        layer = op.LayerOperators(layer.Rt, T, layer.Rb, T)
     return layer

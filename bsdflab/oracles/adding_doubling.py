@@ -267,7 +267,7 @@ class AddingDoublingOracle:
         rho = None if self.base_albedo is None else self.base_albedo.at(wl)
         return slabs, rho
 
-    def _stack(self, cos, pairs, weights, wl, orders, thin_depth) -> op.Layer:
+    def _stack(self, cos, pairs, weights, wl, orders, thin_depth) -> op.LayerOperators:
         """The whole stack's operators (top boundary, slabs, base) on cos = (nodes,
         output cosines, input cosines) with the requested (output, input) index pairs."""
         mu, out, inp = cos

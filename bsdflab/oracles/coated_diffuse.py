@@ -79,7 +79,7 @@ class CoatedDiffuseOracle:
         Slab index n_slab, > 0.
     ext_ior : float
         Exterior index n_ext, > 0.
-    film : list of Layer or dicts {"material", "thickness_nm"}, optional
+    film : list of FilmLayer or dicts {"material", "thickness_nm"}, optional
         Coherent coating on the exterior side of the top, exterior side first (see
         ``bsdflab.bsdfs.interface_term.parse_film``); thicknesses in nm.
     thickness_um : float

@@ -54,10 +54,11 @@ from bsdflab.tables.file_format import canonical_json
 from bsdflab.util import args as check
 from bsdflab.util.progress import run_with_progress
 
-ERROR_FLOOR = 0.05
+# The tabulator's defaults are the core's (core/include/bsdflab/tabulation.h), written once.
+ERROR_FLOOR = _core.TabulationSettings.default_floor
 SIGNIFICANT = 0.01  # cells counted in the achieved-error statistics: f > 1 % of the max
-DEFAULT_MIN_SAMPLES = 512
-DEFAULT_MAX_SAMPLES = 65536
+DEFAULT_MIN_SAMPLES = _core.TabulationSettings.default_min_samples
+DEFAULT_MAX_SAMPLES = _core.TabulationSettings.default_max_samples
 
 
 @dataclass(frozen=True)

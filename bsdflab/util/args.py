@@ -5,24 +5,18 @@ from typing import Any
 
 import numpy as np
 
+from bsdflab.util import ranges
+
 # Directions must be unit vectors to this tolerance (float32 inputs normalised by callers
 # are accepted; anything further off is a caller's bug, not rounding).
 UNIT_TOLERANCE = 1e-4
 
-# Physical ranges (docs/limits.md). Refractive indices (the real part n, and a
-# conductor's eta) from 1e-3 to 1e3 cover every optical material, metals' n < 1 and
-# metamaterials included; beyond them the Fresnel and Snell arithmetic loses all precision
-# (n = 1e-200 samples NaN directions, 1e200 overflows the microfacet terms). Extinction
-# k is bounded the same way; two indices in range have a ratio within [1e-6, 1e6].
-MIN_IOR, MAX_IOR = 1e-3, 1e3
-MAX_EXTINCTION = 1e3
-# Wavelengths from 1 nm (soft X-ray; shorter ones -- denormals gave NaN -- break the
-# phase arithmetic) to 1e12 nm: long wavelengths only make phases vanish, and the
-# scaled-stack identity of plots/film_colour evaluates at lambda / s up to ~1e12 nm.
-MIN_WAVELENGTH_NM, MAX_WAVELENGTH_NM = 1.0, 1e12
-# Film thicknesses: 0 to 1 m (an opaque absorbing layer may be thick; phases 2 pi n d / lambda
-# stay below 1e13 rad, finite in double precision; 1e308 gave NaN).
-MAX_FILM_THICKNESS_NM = 1e9
+# Physical ranges (docs/limits.md), written once in bsdflab/util/ranges.py (the service reads
+# them there too); named here as well for the checks' callers (check.MAX_IOR, ...).
+MIN_IOR, MAX_IOR, MAX_EXTINCTION = ranges.MIN_IOR, ranges.MAX_IOR, ranges.MAX_EXTINCTION
+MIN_WAVELENGTH_NM, MAX_WAVELENGTH_NM = ranges.MIN_WAVELENGTH_NM, ranges.MAX_WAVELENGTH_NM
+MAX_FILM_THICKNESS_NM = ranges.MAX_FILM_THICKNESS_NM
+
 # Seeds are the core's uint64; counts of work (walks, depths) its int32 and far below.
 MAX_SEED = (1 << 64) - 1
 MAX_COUNT = 1 << 24

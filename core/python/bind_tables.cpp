@@ -26,7 +26,12 @@ static TableGrid make_grid(int n_lobes, int n_theta_i, int n_theta_o, int n_phi,
 
 void bind_tables(py::module_ &m) {
     // Keyword-only structs: the settings by name, never by position.
-    py::class_<TabulationSettings>(m, "TabulationSettings")
+    py::class_<TabulationSettings> settings(m, "TabulationSettings");
+    // The defaults live in tabulation.h only; Python reads them from here.
+    settings.attr("default_min_samples") = TabulationSettings{}.min_samples;
+    settings.attr("default_max_samples") = TabulationSettings{}.max_samples;
+    settings.attr("default_floor") = TabulationSettings{}.floor;
+    settings
         .def(py::init([](double rel_error, double floor, int min_samples, int max_samples, uint64_t seed,
                          bool film_lookup) {
                  if (min_samples < 1 || max_samples < min_samples)

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include "adding_doubling_parts.h"
 #include "bsdflab/adding_doubling_ops.h"
+#include "bsdflab/constants.h"
 #include "bsdflab/frame.h"
 #include "bsdflab/interfaces.h"
 #include "bsdflab/parallel.h"
@@ -14,7 +15,6 @@ namespace bsdflab {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kIndexTolerance = 1e-9;
 
 } // namespace

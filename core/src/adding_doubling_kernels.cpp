@@ -3,14 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include "bsdflab/adding_doubling_ops.h"
+#include "bsdflab/constants.h"
 #include "bsdflab/parallel.h"
 #include "bsdflab/quadrature.h"
 
 namespace bsdflab::ad {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // cos(m k pi / H) for k = 0..H, m < M, and the trapezoid weights of the half period.
 struct CosineTable {

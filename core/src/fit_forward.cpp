@@ -4,6 +4,7 @@
 #include <limits>
 #include <numeric>
 #include <stdexcept>
+#include "bsdflab/constants.h"
 #include "bsdflab/parallel.h"
 #include "bsdflab/thin_film.h"
 
@@ -11,7 +12,6 @@ namespace bsdflab::fit {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::size_t kFilmEvalsPerThread = 4000; // ~0.5 ms of work
 
 bool finite_params(const double *p) {

@@ -5,6 +5,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <vector>
+#include "bsdflab/constants.h"
 #include "bsdflab/parallel.h"
 #include "bsdflab/thin_film.h"
 
@@ -12,8 +13,6 @@ namespace bsdflab::fit {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
 constexpr std::size_t kStacksPerThread = 2000; // ~0.3 ms of work per chunk
 constexpr std::size_t kMaxMedia = 2 * kFilmSpectrumMaxLayers + 2;
 constexpr std::size_t kMaxCone = 64;
@@ -37,7 +36,7 @@ InstrumentStack::InstrumentStack(std::vector<double> angles_deg, std::size_t wav
     const double sum = std::accumulate(band_w_.begin(), band_w_.end(), 0.0);
     for (double &w : band_w_) w /= sum;
     for (std::size_t m = 0; m < azimuths; ++m)
-        psi_cos_.push_back(std::cos(3.14159265358979323846 * (m + 0.5) / static_cast<double>(azimuths)));
+        psi_cos_.push_back(std::cos(kPi * (m + 0.5) / static_cast<double>(azimuths)));
 }
 
 void InstrumentStack::evaluate(const cplx *n, const double *wl, const double *d, const double *inst,
@@ -74,12 +73,12 @@ void InstrumentStack::evaluate_angle(const cplx *n, const double *wl, const doub
     // Incidence cosines of the cone's nodes and their normalised weights (solid angle).
     const bool cone = accept > 0;
     const std::size_t nb = cone ? cone_u_.size() : 1, npsi = cone ? psi_cos_.size() : 1;
-    const double ct = std::cos(theta * kDeg), st = std::sin(theta * kDeg);
+    const double ct = std::cos(theta * kDegToRad), st = std::sin(theta * kDegToRad);
     double cos_in[kMaxCone * kMaxCone], weight[kMaxCone * kMaxCone];
     std::size_t nodes = 0;
     double wsum = 0.0;
     for (std::size_t q = 0; q < nb; ++q) {
-        const double b = cone ? accept * kDeg * cone_u_[q] : 0.0;
+        const double b = cone ? accept * kDegToRad * cone_u_[q] : 0.0;
         const double wb = cone ? cone_w_[q] * std::sin(b) : 1.0;
         for (std::size_t m = 0; m < npsi; ++m) {
             cos_in[nodes] =

@@ -6,11 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include "bsdflab/constants.h"
 
 namespace bsdflab {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kEps = 5.9604644775390625e-08; // float32 epsilon / 2, as Mitsuba clips samples
 
 double theta2u(double t) { return std::sqrt(std::max(t, 0.0) * (2.0 / kPi)); }

@@ -14,7 +14,6 @@
 namespace bsdflab {
 
 namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
 // Shadow rays stop this fraction short of the light point (float BVH precision).
 constexpr double kShadowEpsilon = 1e-4;
 

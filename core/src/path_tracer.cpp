@@ -13,10 +13,6 @@
 
 namespace bsdflab {
 
-namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
-} // namespace
-
 RenderJob::RenderJob(std::shared_ptr<const RenderScene> scene, const RenderSettings &settings)
     : scene_(std::move(scene)), s_(settings) {
     if (!scene_) throw std::invalid_argument("render: no scene");

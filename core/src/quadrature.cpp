@@ -1,11 +1,11 @@
 #include "bsdflab/quadrature.h"
 
 #include <cmath>
+#include "bsdflab/constants.h"
 
 namespace bsdflab {
 
 void gauss_legendre(int n, std::vector<double> &x, std::vector<double> &w) {
-    constexpr double kPi = 3.14159265358979323846;
     x.assign(n, 0.0);
     w.assign(n, 0.0);
     for (int i = 0; i < n; ++i) {

@@ -12,10 +12,6 @@
 
 namespace bsdflab {
 
-namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
-} // namespace
-
 void RenderJob::aovs(int samples, double *albedo, double *normal, int *mesh_id) const {
     const int W = width(), H = height();
     const RenderScene &scene = *scene_;

@@ -1,12 +1,11 @@
 #include "bsdflab/thin_film.h"
 #include <cmath>
+#include "bsdflab/constants.h"
 #include "bsdflab/vector_math.h"
 
 namespace bsdflab {
 
 namespace {
-
-constexpr double kTwoPi = 6.283185307179586476925286766559;
 
 // Complex numbers with plain arithmetic. std::complex's operator* and operator/ follow C's
 // Annex G and check every result for NaN to rescue infinities; inputs here are finite and

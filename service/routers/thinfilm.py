@@ -7,7 +7,7 @@ from fastapi import APIRouter, Request
 from fastapi.responses import Response
 
 from bsdflab.optics import film_reflectance, film_transmittance
-from bsdflab.optics.thin_film import FilmStack, Layer
+from bsdflab.optics.thin_film import FilmLayer, FilmStack
 from bsdflab.plots.film_colour import display_exposure, display_srgb, spectral_rgb
 from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import HeavyDep, SettingsDep
@@ -15,14 +15,15 @@ from bsdflab.service.errors import ERRORS, over_limit
 from bsdflab.service.schemas import ThinFilmRequest, ThinFilmResponse
 from bsdflab.service.settings import Settings
 from bsdflab.util import args as check
+from bsdflab.util import ranges
 
 router = APIRouter(prefix="/v1/thinfilm", tags=["thin film"], responses=ERRORS, route_class=ThreadedBody)
 DEFAULT_ANGLES = np.arange(0.0, 86.0, 5.0)
-# Physical ranges: indices of optical materials (1e-3..1e3), films up to 1 cm, wavelengths
-# from 1 nm to 1 mm; beyond them the film arithmetic loses all precision.
-IOR_RANGE = (1e-3, 1e3)
-MAX_THICKNESS_NM = 1e7
-WAVELENGTH_RANGE_NM = (1.0, 1e6)
+# Physical ranges are the library's (bsdflab/util/ranges.py): what bsdflab.optics accepts,
+# this route accepts. (Films thicker than the colour strip resolves are refused by it.)
+IOR_RANGE = ranges.IOR_RANGE
+MAX_THICKNESS_NM = ranges.MAX_FILM_THICKNESS_NM
+WAVELENGTH_RANGE_NM = ranges.WAVELENGTH_RANGE_NM
 DEFAULT_WAVELENGTHS = np.arange(380.0, 781.0, 5.0)
 
 
@@ -51,7 +52,7 @@ def _film(body: ThinFilmRequest):
     if given:
         raise ValueError(f"give the film either as layers or as film_ior and thickness_nm, not both "
                          f"(layers and {', '.join(sorted(given))} were given)")
-    layers = [Layer(check.real_scalar(f"layers[{i}].ior", layer.ior, *IOR_RANGE),
+    layers = [FilmLayer(check.real_scalar(f"layers[{i}].ior", layer.ior, *IOR_RANGE),
                     check.real_scalar(f"layers[{i}].thickness_nm", layer.thickness_nm, 0.0, MAX_THICKNESS_NM))
               for i, layer in enumerate(body.layers)]
     total = sum(layer.thickness_nm for layer in layers)

@@ -55,6 +55,6 @@ def test_02_conductor_film_matches_tmm(theta):
 
 def test_03_zero_film_thickness_is_the_bare_interface():
     wi = directions_at(0.7)
-    coated = bl.Conductor(material="Cu", film=FILM).sample(wi, wavelengths=WL, thickness=0.0)
+    coated = bl.Conductor(material="Cu", film=FILM).sample(wi, wavelengths=WL, thickness_nm=0.0)
     bare = bl.Conductor(material="Cu").sample(wi, wavelengths=WL)
     assert np.allclose(coated.weight, bare.weight, rtol=1e-12)

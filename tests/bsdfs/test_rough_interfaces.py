@@ -131,13 +131,13 @@ def test_08_film_thickness_per_query_changes_colour():
     m = bl.RoughDielectric(0.2, 1.5, 1.0, film=FILM)
     wi = np.tile(directions_at(0.8), (3, 1))
     wo = np.tile(directions_at(0.8, 0.3 + np.pi), (3, 1))
-    rgb = m.eval(wi, wo, thickness=[0.0, 300.0, 400.0])
+    rgb = m.eval(wi, wo, thickness_nm=[0.0, 300.0, 400.0])
     bare = bl.RoughDielectric(0.2, 1.5, 1.0).eval(wi[:1], wo[:1])
     assert np.allclose(rgb[0], bare[0], rtol=1e-12)  # zero thickness = bare interface
     assert np.allclose(rgb[2], m.eval(wi[:1], wo[:1])[0], rtol=1e-12)  # default = 400 nm
     assert not np.allclose(rgb[1], rgb[2], rtol=0.05)
-    with pytest.raises(ValueError, match="thickness must be >= 0"):
-        m.eval(wi, wo, thickness=-1.0)
+    with pytest.raises(ValueError, match="thickness_nm must be >= 0"):
+        m.eval(wi, wo, thickness_nm=-1.0)
 
 
 @pytest.mark.parametrize("make, match", [

@@ -206,7 +206,7 @@ for m in (bl.RoughDielectric(0.5, 1.5, 1.0, multiscatter=True, film=[dict(materi
           bl.RoughConductor(0.4, material='Au', distribution='beckmann', multiscatter=True)):
     s = m.sample(v, seed=3, wavelengths=[450.0, 550.0, 650.0])
     t = rng.uniform(0, 500, len(v))
-    out += [m.eval(v, w, wavelengths=[450.0, 550.0, 650.0], thickness=t),
+    out += [m.eval(v, w, wavelengths=[450.0, 550.0, 650.0], thickness_nm=t),
             m.pdf(v, w, wavelengths=[450.0, 550.0, 650.0]), s.wo, s.weight, s.pdf]
 np.save({path!r}, np.concatenate([np.ravel(a) for a in out]))
 """

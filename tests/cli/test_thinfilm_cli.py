@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from bsdflab.cli.main import main
-from bsdflab.optics import FilmStack, Layer, film_reflectance
+from bsdflab.optics import FilmLayer, FilmStack, film_reflectance
 from bsdflab.plots.film_colour import delta_e_2000, reflectance, spectral_rgb, three_wavelength_colour
 from bsdflab.presets import AIR_IOR, GUANINE_IOR, KERATIN_IOR_550
 from bsdflab.spectra import THREE_WAVELENGTHS_NM, three_wavelength_rgb
@@ -103,11 +103,11 @@ def test_07_stack_thickness_sweep_equals_scaled_layers():
     """The stack sweep uses R(lambda; s d) = R(lambda / s; d); check it against stacks
     rebuilt with scaled layers."""
     layers = [(GUANINE_IOR, 80.0), (1.33, 100.0), (GUANINE_IOR, 80.0)]
-    stack = FilmStack(AIR_IOR, [Layer(n, d) for n, d in layers], KERATIN_IOR_550)
+    stack = FilmStack(AIR_IOR, [FilmLayer(n, d) for n, d in layers], KERATIN_IOR_550)
     wl, theta = np.linspace(380.0, 780.0, 41), np.radians(35.0)
     totals = np.array([0.0, 130.0, 260.0, 520.0])
     swept = reflectance(stack, wl[None, :], theta, totals[:, None])
     for total, row in zip(totals, swept, strict=True):
         s = total / 260.0
-        scaled = FilmStack(AIR_IOR, [Layer(n, s * d) for n, d in layers], KERATIN_IOR_550)
+        scaled = FilmStack(AIR_IOR, [FilmLayer(n, s * d) for n, d in layers], KERATIN_IOR_550)
         np.testing.assert_allclose(row, film_reflectance(scaled, wl, theta), atol=1e-12, rtol=0)

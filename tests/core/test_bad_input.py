@@ -96,7 +96,7 @@ HUGE = 10**400
     lambda: bl.Conductor(eta=HUGE), lambda: bl.Slab(HUGE), lambda: bl.PhaseFunction("hg", g=HUGE),
     lambda: bl.Diffuse(0.5).eval([HUGE, 0, 1], UP), lambda: bl.Diffuse(0.5).eval(UP, UP, wavelengths=[HUGE]),
     lambda: bl.Diffuse(0.5).eval(UP, UP, lobes=HUGE), lambda: bl.Diffuse(0.5).eval(UP, UP, lobes=float("inf")),
-    lambda: bl.Dielectric(film=[{"material": 1.5, "thickness_nm": 100}]).eval(UP, UP, thickness=HUGE),
+    lambda: bl.Dielectric(film=[{"material": 1.5, "thickness_nm": 100}]).eval(UP, UP, thickness_nm=HUGE),
     lambda: optics.film_reflectance((1.0, 1.5, HUGE, 1.5), 550.0, 0.3),
     lambda: optics.fresnel_reflectance(0.5, HUGE, 1.5),
     lambda: bl.Diffuse(0.5).sample(UP, seed=2**64),                       # old: pybind TypeError

@@ -41,7 +41,7 @@ def test_fit_material_is_exportable(model):
     assert np.isclose(m.film_ior, 1.77 + 6000.0 / 550.0**2, rtol=1e-12, atol=0)
     assert [d for d in m.dropped if d.startswith("film material: dispersion")]
     absorbing = fitted(model)
-    absorbing["interfaces"][0]["film"][0]["material"] = {"model": "constant", "n": 1.8, "k": 0.1}
+    absorbing["interfaces"][0]["film"][0]["material"] = {"type": "constant", "n": 1.8, "k": 0.1}
     with pytest.raises(ValueError, match="absorbing index"):
         export_material(absorbing)
 

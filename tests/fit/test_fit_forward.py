@@ -53,7 +53,7 @@ def test_diffuse_and_total_match_the_coated_diffuse_oracle(d, sigma_a, rho, n_s)
     got = ForwardModel(ds).evaluate(theta)
     oracles = {w: CoatedDiffuseOracle(
         int_ior=n_s, ext_ior=theta[5], thickness_um=4.0, sigma_a=sigma_a * (w / 550.0) ** -3.33, base_reflectance=rho,
-        film=[{"material": {"model": "cauchy", "A": A, "B": B}, "thickness_nm": d}] if d else None) for w in wls}
+        film=[{"material": {"type": "cauchy", "A": A, "B": B}, "thickness_nm": d}] if d else None) for w in wls}
     ref = []
     for g, a, b, w in rows:
         oracle = oracles[w]

@@ -164,7 +164,7 @@ def test_08_limits_reduce_to_the_base():
     bare = bl.Layered([bl.RoughDielectric(film.interfaces[0].alpha, film.interfaces[0].int_ior,
                                           film.interfaces[0].ext_ior)], list(film.slabs), film.base,
                       samples=128)
-    a = film.eval(wi, wo, wavelengths=[550.0], thickness=0.0)
+    a = film.eval(wi, wo, wavelengths=[550.0], thickness_nm=0.0)
     b = bare.eval(wi, wo, wavelengths=[550.0])
     assert np.allclose(a, b, rtol=1e-12)
 

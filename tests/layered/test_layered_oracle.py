@@ -17,7 +17,7 @@ from support.statistics import assert_agrees
 FILMS = {
     "bare": None,
     "guanine 400 nm": [{"material": 1.83, "thickness_nm": 400.0}],
-    "absorbing 2-layer": [{"material": {"model": "constant", "n": 2.0, "k": 0.05}, "thickness_nm": 150.0},
+    "absorbing 2-layer": [{"material": {"type": "constant", "n": 2.0, "k": 0.05}, "thickness_nm": 150.0},
                           {"material": 1.33, "thickness_nm": 220.0}],
 }
 WAVELENGTHS = [450.0, 550.0, 650.0]

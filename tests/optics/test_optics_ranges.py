@@ -21,7 +21,7 @@ OBLIQUE = np.array([0.6, 0.0, 0.8])
     (lambda: optics.film_transmittance((1.0, 1.5, 100.0, 1.5), 550.0, 0.3, thickness_nm=1e308), "thickness_nm"),
     (lambda: optics.fresnel_reflectance(0.5, 1e-250, 1.5), "n_i"),
     (lambda: bl.Diffuse(0.5).eval(UP, OBLIQUE, wavelengths=[5e-324]), "wavelengths"),
-    (lambda: bl.Dielectric(film=[{"material": 1.8, "thickness_nm": 300}]).sample(OBLIQUE, thickness=1e300),
+    (lambda: bl.Dielectric(film=[{"material": 1.8, "thickness_nm": 300}]).sample(OBLIQUE, thickness_nm=1e300),
      "thickness"),
 ])
 def test_optics_refuse_what_would_be_nan(call, name):

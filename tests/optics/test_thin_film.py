@@ -10,8 +10,8 @@ from bsdflab import _core
 from bsdflab.optics import (
     Cauchy,
     Constant,
+    FilmLayer,
     FilmStack,
-    Layer,
     Tabulated,
     dispersion_from_dict,
     film_amplitudes,
@@ -60,13 +60,13 @@ def random_stack(rng, absorbing_substrate):
     layers = []
     for _ in range(rng.integers(1, 7)):
         d = 0.0 if rng.random() < 0.1 else rng.uniform(0.0, 1500.0)
-        layers.append(Layer(random_index(rng, rng.random() < 0.35), d))
+        layers.append(FilmLayer(random_index(rng, rng.random() < 0.35), d))
     return FilmStack(random_index(rng, False), layers, random_index(rng, absorbing_substrate))
 
 
 def tir_stack(rng):
     """Dense incident medium over thinner films and substrate: TIR past the critical angle."""
-    layers = [Layer(random_index(rng, rng.random() < 0.3, 1.0, 1.8), rng.uniform(0.0, 800.0))
+    layers = [FilmLayer(random_index(rng, rng.random() < 0.3, 1.0, 1.8), rng.uniform(0.0, 800.0))
               for _ in range(rng.integers(1, 4))]
     return FilmStack(random_index(rng, False, 2.0, 3.0), layers, random_index(rng, False, 1.0, 1.5))
 
@@ -110,7 +110,7 @@ def test_02_total_internal_reflection_matches_tmm():
         err = np.maximum(err, max_errors_vs_tmm(stack, rng, reverse=True))
     assert np.all(err <= TOL), f"max |dr|, |dt|, |dR|, |dT| = {err}"
     # past the critical angle into the substrate nothing is transmitted
-    stack = FilmStack(2.5, [Layer(1.3, 200.0)], 1.2)
+    stack = FilmStack(2.5, [FilmLayer(1.3, 200.0)], 1.2)
     theta = np.radians(60.0)  # 2.5 sin 60 deg = 2.17 > 1.3 and 1.2
     assert film_transmittance(stack, 550.0, theta) == 0.0
     assert film_reflectance(stack, 550.0, theta) == pytest.approx(1.0, abs=1e-14)
@@ -155,7 +155,7 @@ def test_04_lossless_stacks_match_colour_at_oblique_incidence():
     err = 0.0
     for _ in range(100):
         stack = random_stack(rng, False)
-        stack = FilmStack(stack.incident, [Layer(layer.material.n, layer.thickness_nm)
+        stack = FilmStack(stack.incident, [FilmLayer(layer.material.n, layer.thickness_nm)
                                            for layer in stack.layers], stack.substrate)
         media, _ = media_of(stack)
         # keep every refraction angle real: n0 sin(theta) < min n_j
@@ -210,7 +210,7 @@ def test_08_lossless_energy_conservation_both_sides():
     rng = np.random.default_rng(5)
     for _ in range(50):
         stack = random_stack(rng, False)
-        stack = FilmStack(stack.incident, [Layer(layer.material.n, layer.thickness_nm)
+        stack = FilmStack(stack.incident, [FilmLayer(layer.material.n, layer.thickness_nm)
                                            for layer in stack.layers], stack.substrate)
         wl, th = rng.uniform(380, 780, 50), rng.uniform(0, np.pi / 2, 50)
         for reverse in (False, True):
@@ -252,14 +252,14 @@ def test_09b_a_subnormal_thickness_between_equal_media_at_grazing_incidence():
 def test_10_opaque_layer_is_stable_and_hides_what_is_below():
     n0, n1 = 1.0, 1.2 + 2.0j
     for d in (2e3, 1e5, 1e9):
-        a = film_amplitudes(FilmStack(n0, [Layer(n1, d), Layer(1.5, 100.0)], 2.0), 500.0, 0.6)
+        a = film_amplitudes(FilmStack(n0, [FilmLayer(n1, d), FilmLayer(1.5, 100.0)], 2.0), 500.0, 0.6)
         top = fresnel_amplitudes(np.cos(0.6), n0, n1)
         assert abs(a.r_s - top.r_s) < 1e-12 and abs(a.r_p - top.r_p) < 1e-12
         assert abs(a.t_s) < 1e-20 and np.isfinite(a.t_p)
 
 
 def test_11_reverse_equals_the_reversed_stack():
-    stack = FilmStack(1.0, [Layer(1.4, 120.0), Layer(2.1 + 0.2j, 35.0)], 1.52)
+    stack = FilmStack(1.0, [FilmLayer(1.4, 120.0), FilmLayer(2.1 + 0.2j, 35.0)], 1.52)
     wl, th = np.linspace(400, 700, 7), np.linspace(0, 1.4, 7)
     assert np.array_equal(film_reflectance(stack, wl, th, reverse=True),
                           film_reflectance(stack.reversed(), wl, th))
@@ -289,7 +289,7 @@ def test_13_dispersion_models():
     assert Constant(1.5, 0.1).index(np.ones((2, 3))).shape == (2, 3)
     for model in (keratin, table, Constant(2.0, 0.5)):
         assert dispersion_from_dict(model.to_dict()) == model
-    stack = FilmStack(1.0, [Layer(keratin, 400.0), Layer(table, 20.0)], 1.5 + 0.01j)
+    stack = FilmStack(1.0, [FilmLayer(keratin, 400.0), FilmLayer(table, 20.0)], 1.5 + 0.01j)
     assert FilmStack.from_dict(stack.to_dict()) == stack
 
 
@@ -299,8 +299,8 @@ FILM = (1.0, 1.5, 300.0, 1.3)
 
 
 @pytest.mark.parametrize("call,match", [
-    (lambda: Layer(1.5, -1.0), "thickness_nm"),
-    (lambda: Layer(1.5, np.nan), "thickness_nm"),
+    (lambda: FilmLayer(1.5, -1.0), "thickness_nm"),
+    (lambda: FilmLayer(1.5, np.nan), "thickness_nm"),
     (lambda: film_reflectance((1.0, 1.5, -5.0, 1.3), 500.0, 0.2), "d_nm"),
     (lambda: film_reflectance(FILM, 500.0, 0.2, thickness_nm=[10.0, np.inf]), "thickness_nm"),
     (lambda: film_reflectance(FILM, 0.0, 0.2), "wavelength_nm"),
@@ -325,7 +325,7 @@ FILM = (1.0, 1.5, 300.0, 1.3)
     (lambda: film_transmittance((1.0 + 0.1j, 1.5, 300.0, 1.3), 500.0, 0.2), "incident"),
     (lambda: film_reflectance((1.0, 1.5, 300.0, 1.3 + 0.2j), 500.0, 0.2, reverse=True),
      "substrate"),
-    (lambda: film_reflectance(FilmStack(1.0, [Layer(1.5, 1.0), Layer(1.4, 2.0)], 1.3), 500.0,
+    (lambda: film_reflectance(FilmStack(1.0, [FilmLayer(1.5, 1.0), FilmLayer(1.4, 2.0)], 1.3), 500.0,
                               0.2, thickness_nm=5.0), "thickness_nm"),
     (lambda: film_reflectance([1.0, 1.5, 300.0, 1.3], 500.0, 0.2), "film"),
     (lambda: Tabulated([500, 400], [1.5, 1.6]), "increasing"),

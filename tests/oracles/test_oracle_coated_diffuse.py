@@ -14,8 +14,8 @@ from support.directions import directions_at, random_directions
 
 WL = [450.0, 550.0, 650.0]
 LOSSLESS_FILM = [{"material": 1.38, "thickness_nm": 100.0},
-                 {"material": {"model": "constant", "n": 2.1, "k": 0.0}, "thickness_nm": 250.0}]
-ABSORBING_FILM = [{"material": {"model": "constant", "n": 2.0, "k": 0.3}, "thickness_nm": 120.0},
+                 {"material": {"type": "constant", "n": 2.1, "k": 0.0}, "thickness_nm": 250.0}]
+ABSORBING_FILM = [{"material": {"type": "constant", "n": 2.0, "k": 0.3}, "thickness_nm": 120.0},
                   {"material": 1.38, "thickness_nm": 90.0}]
 THETAS_DEG = (0.0, 20.0, 45.0, 60.0, 75.0, 85.0, 89.5)
 
@@ -143,7 +143,7 @@ def test_09_gamma_matches_scipy_quad(n_s, n_e, tau):
 # -- the tmm interpolation path ---------------------------------------------------------------
 def test_10_zero_thickness_film_equals_bare_interface(rng):
     """The coated path (coh_tmm + Chebyshev) against the bare one (tmm's Fresnel helpers)."""
-    film = [{"material": {"model": "constant", "n": 2.0, "k": 0.5}, "thickness_nm": 0.0}]
+    film = [{"material": {"type": "constant", "n": 2.0, "k": 0.5}, "thickness_nm": 0.0}]
     for n_s, n_e in ((1.5, 1.0), (1.0, 1.5)):
         coated = CoatedDiffuseOracle(n_s, n_e, film=film, thickness_um=1.0, sigma_a=0.1)
         bare = CoatedDiffuseOracle(n_s, n_e, thickness_um=1.0, sigma_a=0.1)

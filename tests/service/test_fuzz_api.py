@@ -166,9 +166,9 @@ def _models_and_methods(data):
     lobes = data.draw(mostly(st.sampled_from([int(bl.Lobe.ALL), int(bl.Lobe.REFLECTION), 0])))
     n = max(len(np.atleast_2d(wi)) if isinstance(wi, np.ndarray) else 1,
             len(np.atleast_2d(wo)) if isinstance(wo, np.ndarray) else 1)
-    outcome(lambda: model.eval(wi, wo, wavelengths=wl, lobes=lobes, thickness=t),
+    outcome(lambda: model.eval(wi, wo, wavelengths=wl, lobes=lobes, thickness_nm=t),
             lambda v: finite(v, (n, channels_of(wl))))
-    outcome(lambda: model.pdf(wi, wo, lobes=lobes, thickness=t), lambda v: finite(v, (n,)))
+    outcome(lambda: model.pdf(wi, wo, lobes=lobes, thickness_nm=t), lambda v: finite(v, (n,)))
     seed = data.draw(mostly(st.integers(0, 2**64 - 1)))
     m = len(wi) if isinstance(wi, np.ndarray) else 1
 
@@ -176,7 +176,7 @@ def _models_and_methods(data):
         finite(s.wo, (m, 3)), finite(s.weight, (m, channels_of(wl))), finite(s.pdf, (m,))
         finite(s.eta, (m,))
 
-    outcome(lambda: model.sample(wi, seed=seed, wavelengths=wl, lobes=lobes, thickness=t), sampled)
+    outcome(lambda: model.sample(wi, seed=seed, wavelengths=wl, lobes=lobes, thickness_nm=t), sampled)
 
 
 def _optics(data):

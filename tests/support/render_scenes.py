@@ -55,7 +55,7 @@ def grey_world(size=16):
 
 
 FILM_TOP = {"type": "dielectric", "int_ior": 1.55, "ext_ior": 1.0,
-            "film": [{"material": {"model": "constant", "n": 2.4, "k": 0.0}, "thickness_nm": 400.0}]}
+            "film": [{"material": {"type": "constant", "n": 2.4, "k": 0.0}, "thickness_nm": 400.0}]}
 
 
 # A black base under a clear slab: the layered model's scattered part is exactly zero, so its

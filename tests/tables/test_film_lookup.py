@@ -110,12 +110,12 @@ def test_04_table_bsdf_with_lookup_matches_the_spectral_top():
     table = synthetic_table()
     fast, slow = TableBSDF(table, film_lookup=True), TableBSDF(table, film_lookup=False)
     wi, wo, d = random_queries(np.random.default_rng(5), 300)
-    a, b = fast.eval(wi, wo, thickness=d), slow.eval(wi, wo, thickness=d)
+    a, b = fast.eval(wi, wo, thickness_nm=d), slow.eval(wi, wo, thickness_nm=d)
     # |a - b| = D G / (4 cos_i) |R_lookup - R_exact| <= (eval_top / R_exact_lum) * bound: use
     # the grey factor from the exact evaluation of a white (R = 1) surface, i.e. a bound
     # relative to the largest glossy value, with the same per-channel error bound.
     top = snake_top()
-    grey = np.max(top.eval(wi, wo, thickness=d), axis=1) / 0.01  # R >= 0.01 on this film
+    grey = np.max(top.eval(wi, wo, thickness_nm=d), axis=1) / 0.01  # R >= 0.01 on this film
     assert np.all(np.abs(a - b) <= FILM_LOOKUP_MAX_ERROR * grey[:, None] + 1e-12)
     assert np.max(np.abs(a - b)) > 0  # a lookup, not the same code path
 
@@ -127,8 +127,8 @@ def test_05_exact_part_clamps_thickness_like_the_table_part():
         t = TableBSDF(table, film_lookup=film_lookup)
         wi, wo = sph(0.5, 0.0), sph(0.6, 3.0)  # near the specular direction: the top matters
         for outside, end in ((1.5 * HI, HI), (0.5 * LO, LO)):
-            assert np.array_equal(t.eval(wi, wo, thickness=outside), t.eval(wi, wo, thickness=end))
-            assert np.array_equal(t.pdf(wi, wo, thickness=outside), t.pdf(wi, wo, thickness=end))
+            assert np.array_equal(t.eval(wi, wo, thickness_nm=outside), t.eval(wi, wo, thickness_nm=end))
+            assert np.array_equal(t.pdf(wi, wo, thickness_nm=outside), t.pdf(wi, wo, thickness_nm=end))
 
 
 def test_06_transmitted_samples_report_the_stack_eta():
@@ -195,8 +195,8 @@ def test_09_spectral_table_bsdf_with_lookup_matches_the_spectral_top():
     fast, slow = TableBSDF(table, film_lookup=True), TableBSDF(table, film_lookup=False)
     wi, wo, d = random_queries(np.random.default_rng(6), 200)
     wl = DEFAULT_WAVELENGTHS
-    a = fast.eval(wi, wo, thickness=d, wavelengths=wl)
-    b = slow.eval(wi, wo, thickness=d, wavelengths=wl)
-    grey = np.max(snake_top().eval(wi, wo, thickness=d, wavelengths=wl), axis=1) / 0.01  # R >= 0.01
+    a = fast.eval(wi, wo, thickness_nm=d, wavelengths=wl)
+    b = slow.eval(wi, wo, thickness_nm=d, wavelengths=wl)
+    grey = np.max(snake_top().eval(wi, wo, thickness_nm=d, wavelengths=wl), axis=1) / 0.01  # R >= 0.01
     assert np.all(np.abs(a - b) <= FILM_LOOKUP_MAX_ERROR * grey[:, None] + 1e-12)
     assert np.max(np.abs(a - b)) > 0  # a lookup, not the same code path

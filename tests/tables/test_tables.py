@@ -340,18 +340,18 @@ def test_06_thickness_axis_interpolates_linearly(film_model):
     one = {t: TableBSDF(tabulate(film_model, TableGrid(**grid, thickness_nm=(t,)), progress=False))
            for t in (300.0, 400.0, 500.0)}
     wi, wo = random_pairs(200, 6)
-    at_node = {t: three.eval(wi, wo, thickness=t) for t in one}
+    at_node = {t: three.eval(wi, wo, thickness_nm=t) for t in one}
     for t in one:
         np.testing.assert_array_equal(at_node[t], one[t].eval(wi, wo))
     assert not np.allclose(at_node[300.0], at_node[400.0])  # the axis matters
     for t, (a, b) in {350.0: (300.0, 400.0), 330.0: (300.0, 400.0), 480.0: (400.0, 500.0)}.items():
         s = (t - a) / (b - a)
-        v = three.eval(wi, wo, thickness=t)
+        v = three.eval(wi, wo, thickness_nm=t)
         np.testing.assert_allclose(v, (1 - s) * at_node[a] + s * at_node[b], rtol=1e-12, atol=1e-300)
         assert np.all(v >= np.minimum(at_node[a], at_node[b]) * (1 - 1e-12))
         assert np.all(v <= np.maximum(at_node[a], at_node[b]) * (1 + 1e-12))
-    np.testing.assert_array_equal(three.eval(wi, wo, thickness=250.0), at_node[300.0])
-    np.testing.assert_array_equal(three.eval(wi, wo, thickness=600.0), at_node[500.0])
+    np.testing.assert_array_equal(three.eval(wi, wo, thickness_nm=250.0), at_node[300.0])
+    np.testing.assert_array_equal(three.eval(wi, wo, thickness_nm=600.0), at_node[500.0])
     np.testing.assert_array_equal(three.eval(wi, wo), at_node[400.0])
 
 
@@ -361,8 +361,8 @@ def test_07_table_without_thickness_axis_ignores_thickness(film_model):
     wi, wo = random_pairs(100, 7)
     base = tb.eval(wi, wo)
     for t in (0.0, 250.0, 400.0, 900.0):
-        np.testing.assert_array_equal(tb.eval(wi, wo, thickness=t), base)
-        np.testing.assert_array_equal(tb.pdf(wi, wo, thickness=t), tb.pdf(wi, wo))
+        np.testing.assert_array_equal(tb.eval(wi, wo, thickness_nm=t), base)
+        np.testing.assert_array_equal(tb.pdf(wi, wo, thickness_nm=t), tb.pdf(wi, wo))
 
 
 def test_08_layered_thickness_axis_and_exact_top():
@@ -375,7 +375,7 @@ def test_08_layered_thickness_axis_and_exact_top():
     wi, wo = random_pairs(60, 8, both_sides=False)
 
     def part(tb, t):  # the tabulated (scattered) part alone
-        return tb.eval(wi, wo, thickness=t) - top.eval(wi, wo, wavelengths=WL, thickness=t)
+        return tb.eval(wi, wo, thickness_nm=t) - top.eval(wi, wo, wavelengths=WL, thickness_nm=t)
 
     kw = dict(rel_error=0.5, wavelengths=WL, min_samples=16, max_samples=16, progress=False)
     three = TableBSDF(tabulate(model, TableGrid(3, 4, 3, (300.0, 400.0, 500.0)), **kw))
@@ -384,14 +384,14 @@ def test_08_layered_thickness_axis_and_exact_top():
 
     none = TableBSDF(tabulate(model, TableGrid(3, 4, 3), **kw))
     for t in (0.0, 250.0, 700.0):
-        np.testing.assert_array_equal(none.eval(wi, wo, thickness=t), none.eval(wi, wo))
+        np.testing.assert_array_equal(none.eval(wi, wo, thickness_nm=t), none.eval(wi, wo))
 
     single = tabulate(model, TableGrid(3, 4, 3, (350.0,)), **kw)
     tb = TableBSDF(single)
-    np.testing.assert_array_equal(tb.eval(wi, wo, thickness=600.0), tb.eval(wi, wo))
+    np.testing.assert_array_equal(tb.eval(wi, wo, thickness_nm=600.0), tb.eval(wi, wo))
     idx, w = corners(single.grid, wi, wo)
     table_part = np.einsum("nk,nkc->nc", w, at(single.values[0, 0].astype(float), idx)) * wo[:, 2:3]
-    exact_top = top.eval(wi, wo, wavelengths=WL, thickness=350.0)
+    exact_top = top.eval(wi, wo, wavelengths=WL, thickness_nm=350.0)
     np.testing.assert_allclose(tb.eval(wi, wo), table_part + exact_top, rtol=1e-12, atol=1e-15)
 
 
@@ -408,8 +408,10 @@ def test_09_round_trip_through_a_file(tmp_path, film_model, xeno):
         path = tmp_path / name
         write_table(path, table)
         mem, disk = TableBSDF(table), TableBSDF(path)
-        np.testing.assert_array_equal(disk.eval(wi, wo, thickness=thickness), mem.eval(wi, wo, thickness=thickness))
-        np.testing.assert_array_equal(disk.pdf(wi, wo, thickness=thickness), mem.pdf(wi, wo, thickness=thickness))
+        np.testing.assert_array_equal(disk.eval(wi, wo, thickness_nm=thickness),
+                                      mem.eval(wi, wo, thickness_nm=thickness))
+        np.testing.assert_array_equal(disk.pdf(wi, wo, thickness_nm=thickness),
+                                      mem.pdf(wi, wo, thickness_nm=thickness))
         a, b = disk.sample(wi, seed=3), mem.sample(wi, seed=3)
         np.testing.assert_array_equal(a.wo, b.wo)
         np.testing.assert_array_equal(a.weight, b.weight)

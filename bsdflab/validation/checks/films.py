@@ -58,9 +58,9 @@ def _single_film(ctx):
 
 
 def _random_stack(rng):
-    from bsdflab.optics import Constant, FilmStack, Layer
+    from bsdflab.optics import Constant, FilmLayer, FilmStack
 
-    layers = [Layer(Constant(rng.uniform(1.0, 3.0), rng.uniform(0.0, 1.5) if rng.random() < 0.3 else 0.0),
+    layers = [FilmLayer(Constant(rng.uniform(1.0, 3.0), rng.uniform(0.0, 1.5) if rng.random() < 0.3 else 0.0),
                     rng.uniform(0.0, 1000.0)) for _ in range(rng.integers(1, 7))]
     return FilmStack(Constant(rng.uniform(1.0, 2.0)), layers,
                      Constant(rng.uniform(1.0, 3.0), rng.uniform(0.0, 2.0) if rng.random() < 0.5 else 0.0))

@@ -1,12 +1,10 @@
 // Warps from the unit square to directions, with their solid-angle densities.
 #pragma once
 #include <cmath>
+#include "constants.h"
 #include "vector.h"
 
 namespace bsdflab {
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kInvPi = 1.0 / kPi;
 
 // Concentric (Shirley-Chiu) map of the square to the unit disk, then lifted to the
 // hemisphere: density cos(theta) / pi.

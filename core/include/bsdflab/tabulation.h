@@ -40,7 +40,7 @@ constexpr std::size_t kFilmLookupBudgetBytes = std::size_t(256) << 20;
 struct TabulationSettings {
     double rel_error = 0.01;
     double floor = 0.05;   // fraction of the lobe's mean luminance below which error is absolute
-    int min_samples = 64;  // pilot walks, and the least number of final walks
+    int min_samples = 512; // pilot walks, and the least number of final walks (docs/coverage.md)
     int max_samples = 1 << 16;
     uint64_t seed = 0;
     // Walks of a thickness node use the model's with_film_lookup copy at that thickness

@@ -18,14 +18,14 @@ class ScaledBSDF:
     def __init__(self, inner, factor):
         self.inner, self.factor = inner, factor
 
-    def eval(self, wi, wo, wavelengths=None, lobes=bsdflab.Lobe.ALL, thickness=None):
-        return self.factor * self.inner.eval(wi, wo, wavelengths=wavelengths, lobes=lobes, thickness=thickness)
+    def eval(self, wi, wo, wavelengths=None, lobes=bsdflab.Lobe.ALL, thickness_nm=None):
+        return self.factor * self.inner.eval(wi, wo, wavelengths=wavelengths, lobes=lobes, thickness_nm=thickness_nm)
 
-    def pdf(self, wi, wo, lobes=bsdflab.Lobe.ALL, thickness=None, wavelengths=None):
-        return self.inner.pdf(wi, wo, lobes=lobes, thickness=thickness, wavelengths=wavelengths)
+    def pdf(self, wi, wo, lobes=bsdflab.Lobe.ALL, thickness_nm=None, wavelengths=None):
+        return self.inner.pdf(wi, wo, lobes=lobes, thickness_nm=thickness_nm, wavelengths=wavelengths)
 
-    def sample(self, wi, u1=None, u2=None, *, seed=0, wavelengths=None, lobes=bsdflab.Lobe.ALL, thickness=None):
-        s = self.inner.sample(wi, u1, u2, seed=seed, wavelengths=wavelengths, lobes=lobes, thickness=thickness)
+    def sample(self, wi, u1=None, u2=None, *, seed=0, wavelengths=None, lobes=bsdflab.Lobe.ALL, thickness_nm=None):
+        s = self.inner.sample(wi, u1, u2, seed=seed, wavelengths=wavelengths, lobes=lobes, thickness_nm=thickness_nm)
         return BSDFSample(s.wo, self.factor * s.weight, s.pdf, s.lobe, s.eta)
 
     @property
@@ -46,8 +46,8 @@ class SkewedSampler(ScaledBSDF):
     def __init__(self, inner):
         super().__init__(inner, 1.0)
 
-    def sample(self, wi, u1=None, u2=None, *, seed=0, wavelengths=None, lobes=bsdflab.Lobe.ALL, thickness=None):
-        s = self.inner.sample(wi, u1, u2, seed=seed, wavelengths=wavelengths, lobes=lobes, thickness=thickness)
+    def sample(self, wi, u1=None, u2=None, *, seed=0, wavelengths=None, lobes=bsdflab.Lobe.ALL, thickness_nm=None):
+        s = self.inner.sample(wi, u1, u2, seed=seed, wavelengths=wavelengths, lobes=lobes, thickness_nm=thickness_nm)
         wo = np.array(s.wo, dtype=float)
         z = np.sign(wo[:, 2]) * np.abs(wo[:, 2]) ** 0.9
         r = np.sqrt(np.maximum(1 - z * z, 0.0)) / np.maximum(np.hypot(wo[:, 0], wo[:, 1]), 1e-300)
