@@ -29,7 +29,7 @@
 // walks it cuts are counted (EstimateRequest::capped, capped_walks()). The top boundary's
 // own reflection is added exactly (non-delta part); its delta part is not estimated: see
 // delta_reflectance / sample. pdf() is the density with which sample() returns wo
-// (estimated by sample()'s own walk; see layered.cpp and docs/estimators.md).
+// (estimated by sample()'s own walk; see core/src/layered/sample.cpp and docs/estimators.md).
 //
 // Paths whose every vertex is a delta event (e.g. a smooth coat over a smooth mirror) form
 // a delta lobe of the stack and are not part of eval.
