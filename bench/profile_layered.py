@@ -13,7 +13,8 @@ One thread gives the cleanest profile: BSDFLAB_THREADS=1.
 With --baseline-core PATH (a _core .so built from an earlier commit, bench/build_core_at.sh),
 the same workloads run alternately in child processes on this build's core and on the
 baseline's, `--rounds` times each, and the script prints the median of each side and the
-ratio baseline / this (> 1: this build is faster).
+ratio baseline / this (> 1: this build is faster), also of the fastest rounds (the least
+disturbed by other processes on a shared machine).
 
     python bench/profile_layered.py [--estimator pfmc2] [--walks 4000]
     python bench/profile_layered.py --baseline-core /tmp/core-main.so [--rounds 5]
@@ -105,12 +106,13 @@ def compare(baseline: str, estimator: str, walks: int, rounds: int) -> None:
     for _ in range(rounds):  # alternate, so that a change of machine load hits both sides
         this.append(_worker(None, estimator, walks))
         base.append(_worker(baseline, estimator, walks))
-    print(f"estimator {estimator}, {walks} walks, {rounds} rounds (median CPU-us per walk)")
-    print(f"{'workload':14s} {'this':>9s} {'baseline':>9s} {'baseline/this':>14s}")
+    print(f"estimator {estimator}, {walks} walks, {rounds} rounds: CPU-us per walk, median (and fastest) round")
+    print(f"{'workload':14s} {'this':>9s} {'baseline':>9s} {'baseline/this':>14s} {'fastest: ratio':>15s}")
     for key in this[0]:
         a = statistics.median(r[key] for r in this)
         b = statistics.median(r[key] for r in base)
-        print(f"{key:14s} {a:9.2f} {b:9.2f} {b / a:14.3f}")
+        fast = min(r[key] for r in base) / min(r[key] for r in this)
+        print(f"{key:14s} {a:9.2f} {b:9.2f} {b / a:14.3f} {fast:15.3f}")
 
 
 def main() -> None:
