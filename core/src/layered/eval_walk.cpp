@@ -12,7 +12,9 @@ EvalWalk::EvalWalk(const LayeredBSDF &model, const Query &q, PCG32 &rng, WalkMem
       tmp_(mem.tmp), tr_(mem.tr), contrib_(mem.contrib), C_(model.channels()), K_(int(model.slabs_.size())),
       entry_(entry), exit_(exit), nee_(model.options_.nee) {}
 
-bool EvalWalk::run(const Vec3 &wi, double entry_scale) {
+// flatten: the steps inline into the loop, as the one function they were (per-event calls
+// cost a few % on long walks, docs/estimators.md "Walk refactor speed").
+[[gnu::flatten]] bool EvalWalk::run(const Vec3 &wi, double entry_scale) {
     if (!enter(wi, entry_scale)) return false;
     for (int events = 1; events <= m_.options_.max_depth; ++events)
         if (!event() || !walk_.survive(events, kEvalRoulette)) return false;
