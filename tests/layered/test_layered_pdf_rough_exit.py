@@ -6,7 +6,7 @@ was 0 wherever none of them arrived: 36 % of a rough transmissive stack's own sa
 the default pdf_samples = 1, and a renderer's MIS then gave those samples no weight (or
 dropped them). Version 7 adds one defensive pseudo-walk whose exit density is a cosine lobe
 carrying the smoothed share (k + 1) / (n + 2) of draws that left through X, divided with
-the arrivals by n + 1 (core/src/layered.cpp, LayeredBSDF::pdf).
+the arrivals by n + 1 (core/src/layered/sample.cpp, LayeredBSDF::pdf).
 
 Mutation caught: without the pseudo-walk (version 6) tests 01 and 02 fail (pdf 0 for about
 a third of sample()'s directions, and at directions where eval > 0). The chi-square test of

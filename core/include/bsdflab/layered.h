@@ -29,11 +29,13 @@
 // walks it cuts are counted (EstimateRequest::capped, capped_walks()). The top boundary's
 // own reflection is added exactly (non-delta part); its delta part is not estimated: see
 // delta_reflectance / sample. pdf() is the density with which sample() returns wo
-// (estimated by sample()'s own walk; see layered.cpp and docs/estimators.md).
+// (estimated by sample()'s own walk; see core/src/layered/sample.cpp and docs/estimators.md).
 //
 // Paths whose every vertex is a delta event (e.g. a smooth coat over a smooth mirror) form
 // a delta lobe of the stack and are not part of eval.
 //
+// The code: core/src/layered/ (walk.h names the walk's steps; docs/estimators.md, "Where
+// the walk lives").
 // LayeredOptions::estimator selects the walk: 0 "pfmc" (the above; the reference) or 1
 // "pfmc2" (the default: groups of kWalksPerChain walks share a chain; bright slabs fly by their smallest
 // extinction so spectral weights stay <= 1); docs/estimators.md derives both.
@@ -51,6 +53,14 @@
 #include "rng.h"
 
 namespace bsdflab {
+
+namespace layered { // the walk's internals, core/src/layered/
+enum class Side;
+class Walk;
+class EvalWalk;
+struct Chain;
+struct WalkMemory;
+} // namespace layered
 
 struct Slab {
     double thickness = 0.0;       // um
@@ -76,6 +86,8 @@ struct LayeredOptions {
 
 constexpr int kEstimatorPfmc = 0;
 constexpr int kEstimatorPfmc2 = 1;
+// LayeredOptions::estimator, named (the option stays an int: the Python binding's keyword).
+enum class Estimator { Pfmc = kEstimatorPfmc, Pfmc2 = kEstimatorPfmc2 };
 // Walks that share one light chain (and its entry connection) in estimator pfmc2.
 constexpr int kWalksPerChain = 4;
 
@@ -113,7 +125,9 @@ class LayeredBSDF final : public BSDF, public StochasticEstimator {
     std::uint64_t capped_walks() const { return capped_.load(std::memory_order_relaxed); }
 
   private:
-    struct Walk;
+    // The walk's steps (core/src/layered/walk.h) and eval's connecting walk (eval_walk.h).
+    friend class layered::Walk;
+    friend class layered::EvalWalk;
     struct ExitDensity {   // pdf(): the walk's arrivals at `boundary` heading out
         Vec3 wo;
         int boundary;
@@ -121,20 +135,20 @@ class LayeredBSDF final : public BSDF, public StochasticEstimator {
         double sum;        // of its densities of transmitting toward wo
     };
     double approximate_pdf(const Vec3 &wi, const Vec3 &wo, bool reflect, const Query &q) const;
-    BSDFSample walk(const Vec3 &wi, BSDFSample entry, const Query &q, PCG32 &rng, double *buf,
-                    ExitDensity *density) const;
+    // sample()'s walk after the entry boundary transmitted (sample_walk.cpp).
+    BSDFSample sample_walk(const Vec3 &wi, BSDFSample entry, const Query &q, PCG32 &rng, double *buf,
+                           ExitDensity *density) const;
     std::uint64_t estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
                                 const EstimateRequest &request, bool include_direct,
                                 EstimateWorkspace &workspace, double *mean, double *err) const;
-    Walk bind_walk(EstimateWorkspace &workspace, std::size_t offset) const;
+    layered::WalkMemory bind_walk(EstimateWorkspace &workspace, std::size_t offset) const;
     std::size_t walk_doubles() const;
-    void build_chain(const Vec3 &wo, int exit, const Query &q, PCG32 &rng, Walk &wk) const;
+    // The light chain from wo through the boundaries on the exit side (chain.cpp); `tr` a
+    // buffer of channels() doubles.
+    void build_chain(const Vec3 &wo, layered::Side exit, const Query &q, PCG32 &rng, layered::Chain &ch,
+                     double *tr) const;
     // The exact all-delta continuations of the chain (bounces inside the delta region).
-    void solve_delta_region(int exit, const Query &q, Walk &wk) const;
-    // One walk; true if the depth cap cut it.
-    // `entry_scale` multiplies the entry vertex's connection (pfmc2 adds it once per chain).
-    bool one_walk(const Vec3 &wi, int entry, int exit, const Query &q, PCG32 &rng, Walk &wk,
-                  double entry_scale = 1.0) const;
+    void solve_delta_region(layered::Side exit, const Query &q, layered::Chain &ch) const;
     void transmittance(int slab, double distance, double *tr) const;
     // Advances a flight of at most `room` depth in slab j along a direction of |z| = cz,
     // sampled by spectral MIS over the channels' extinctions (so absorbing slabs scatter
@@ -156,6 +170,7 @@ class LayeredBSDF final : public BSDF, public StochasticEstimator {
     std::vector<bool> min_extinction_; // per slab: pfmc2 flies it by fly_min_extinction
     int walks_per_chain_[2] = {1, 1};  // pfmc2, leaving through the top (0) or the bottom (1)
     LayeredOptions options_;
+    Estimator estimator_;
     mutable std::atomic<std::uint64_t> capped_{0};
 };
 
