@@ -14,7 +14,9 @@ before the option; equivalently the mutation "estimate_pooled ignores error_walk
 the same criterion at these seeds, asserted in test 01: snake k = 3 holds 23 of 1440
 against the acceptance bound of 11 (k = 2: 95, bound 90); plastic
 with pfmc k = 2: 93 (bound 90). The default: snake 84, 9, 0 beyond k = 2, 3, 4; plastic
-78, 3, 0.
+78, 3, 0. The mutation "error_seed returns the seed" (error walks that repeat the value's)
+passes the coverage tests (83, 7, 0 and 81, 4, 0: pooling with the value's own walks is close
+to the design) and fails test 00, which catches it exactly.
 """
 
 from __future__ import annotations
@@ -86,6 +88,10 @@ def test_00_error_walks_leave_the_value_unchanged():
     for r in runs:
         assert np.array_equal(r.value, model.eval(wi, wo, WL)) and r.nonfinite == 0
     assert not np.array_equal(runs[0].stderr, runs[1].stderr)
+    # error walks from the value's own seed would repeat its walks: as many of them would
+    # pool to the same error, bit for bit (the mutation "error_seed returns the seed")
+    same = model.estimate(wi, wo, WL, error_walks=model.samples)
+    assert not np.allclose(same.stderr, runs[1].stderr, rtol=1e-3, atol=0)
     value, err = model.eval_with_error(wi, wo, WL, error_walks=0)
     assert np.array_equal(err, runs[1].stderr) and np.array_equal(value, runs[1].value)
     for bad in (-1, 1.5, "4"):
