@@ -8,12 +8,13 @@ reported standard errors, against the normal expectation 2 (1 - Phi(k)), k = 2, 
   small grid; per cell one channel (channel = (seed + cell) mod 3, so the counted cells
   are independent: channels of one cell share walks);
 * **pairs** -- ``Layered.estimate(..., scattered_only=True)`` at ``--samples`` walks (the
-  model's default effort, 256) for P direction pairs x S seeds, one channel per pair.
+  model's default effort, 256) for P direction pairs x S seeds, one channel per pair, with
+  ``--error-walks M`` x samples extra walks for the error (default: Layered.estimate's).
 
 z = (PFMC - AD) / hypot(PFMC stderr, AD error bound). Per k it prints the observed fraction,
 the expectation and the two-sided binomial p-value of the count (the units are
 independent, so the binomial is exact); 'ok' when p >= 0.01/3 (Sidak over k = 2, 3, 4).
-Run: python bench/coverage_tables.py [--seeds 200] [--what tables pairs] [--models ...]
+Run: python bench/coverage_tables.py [--seeds 200] [--what tables pairs] [--models ...] [--error-walks M]
 """
 from __future__ import annotations
 
@@ -82,13 +83,14 @@ def table_z(model, ad, seeds, rel_error, min_samples) -> np.ndarray:
     return np.concatenate(zs)
 
 
-def pair_z(model, sol, seeds, pairs, samples) -> np.ndarray:
+def pair_z(model, sol, seeds, pairs, samples, error_walks=None) -> np.ndarray:
     wi = random_unit_vectors(pairs, seed=11, hemisphere="upper")
     wo = random_unit_vectors(pairs, seed=12, hemisphere="upper")
     ref, ref_err = sol.eval_with_error(wi, wo, scattered_only=True)
     zs = []
     for seed in seeds:
-        e = model.estimate(wi, wo, WL, samples=samples, seed=int(seed), scattered_only=True)
+        e = model.estimate(wi, wo, WL, samples=samples, seed=int(seed), scattered_only=True,
+                           error_walks=error_walks)
         z = (e.value - ref) / np.hypot(e.stderr, ref_err)
         ch = (seed + np.arange(pairs)) % z.shape[-1]
         zs.append(z[np.arange(pairs), ch])
@@ -105,11 +107,16 @@ def main() -> None:
     ap.add_argument("--min-samples", type=int, default=512)
     ap.add_argument("--pairs", type=int, default=24)
     ap.add_argument("--samples", type=int, default=256)
+    ap.add_argument("--error-walks", type=int, default=None,
+                    help="pairs: extra walks for the error per walk of the value (default: "
+                         "the library's, Layered.estimate's error_walks; 0: the value's walks alone)")
     args = ap.parse_args()
+    extra = None if args.error_walks is None else args.error_walks * args.samples
     seeds = np.arange(args.seeds)
     print(f"{args.seeds} seeds; tables: grid {GRID.n_theta_i}x{GRID.n_theta_o}x{GRID.n_phi}x"
           f"{len(GRID.thickness_nm)}, rel_error {args.rel_error}, min_samples {args.min_samples}; "
-          f"pairs: {args.pairs} x {args.samples} walks; wavelengths {WL}")
+          f"pairs: {args.pairs} x {args.samples} walks, error_walks "
+          f"{'default' if extra is None else extra}; wavelengths {WL}")
     ok = True
     for name in args.models:
         make = models()[name]
@@ -128,7 +135,8 @@ def main() -> None:
                 print(f"  ({time.perf_counter() - t:.0f} s)")
             if "pairs" in args.what:
                 t = time.perf_counter()
-                ok &= print_report(f"{name} pairs {est}", pair_z(model, sol, seeds, args.pairs, args.samples))
+                ok &= print_report(f"{name} pairs {est}", pair_z(model, sol, seeds, args.pairs, args.samples,
+                                                                   extra))
                 print(f"  ({time.perf_counter() - t:.0f} s)")
     print("all covered" if ok else "MISCOVERED somewhere")
 

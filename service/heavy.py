@@ -25,6 +25,7 @@ import numpy as np
 from fastapi import HTTPException, Request
 
 from bsdflab import slices
+from bsdflab.layered.stack import ERROR_WALKS_PER_SAMPLE
 from bsdflab.util.progress import JobCancelled, cancel_requested, monitored
 
 T = TypeVar("T")
@@ -108,7 +109,9 @@ def evaluate_in_chunks(bsdf, wi: np.ndarray, wo: np.ndarray, wavelengths, sample
     if thickness is not None:
         thickness = np.broadcast_to(np.asarray(thickness, dtype=float), (pairs,))
     if slices.is_stochastic(bsdf):
-        step = max(1, CHUNK_WALKS // (samples if samples is not None else bsdf.samples))
+        # each walk of the value brings ERROR_WALKS_PER_SAMPLE walks for its error (Layered.estimate)
+        walks = (samples if samples is not None else bsdf.samples) * (1 + ERROR_WALKS_PER_SAMPLE)
+        step = max(1, CHUNK_WALKS // walks)
     else:
         step = CHUNK_PAIRS
     values, errors = [], []

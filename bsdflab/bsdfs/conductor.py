@@ -32,7 +32,7 @@ class Conductor(ConductorParams, BSDF):
     film : list of FilmLayer or dicts, optional
         A thin-film coating (top first), e.g. ``[{"material": 1.5, "thickness_nm": 400}]``
         (like the ``conductorThinFilm`` of Padrón-Griffe et al. 2023). Its thickness can vary
-        per query (``thickness=``).
+        per query (``thickness_nm=``).
     """
 
     type_name = "conductor"

@@ -40,6 +40,9 @@ IOR_TOLERANCE = 1e-9
 MAX_WALKS = 1 << 24
 MAX_DEPTH = 1 << 16
 PDF_SAMPLES = 1
+# Default extra walks for the standard error of `estimate`, per walk of the value
+# (core/include/bsdflab/walk_statistics.h; measured in docs/coverage.md).
+ERROR_WALKS_PER_SAMPLE = 4
 # The walk's estimators (core/include/bsdflab/layered.h, docs/estimators.md): "pfmc"
 # (Guo et al.'s, as estimator version 5: the reference) and "pfmc2" (the default).
 ESTIMATORS = {"pfmc": 0, "pfmc2": 1}
@@ -164,20 +167,30 @@ class Layered(BSDF):
     @renamed_keywords(thickness="thickness_nm")
     def estimate(self, wi, wo, wavelengths=None, samples: int | None = None,
                  seed: int | None = None, lobes: Lobe | int = Lobe.ALL, thickness_nm=None,
-                 scattered_only: bool = False) -> Estimate:
+                 scattered_only: bool = False, error_walks: int | None = None) -> Estimate:
         """eval with an explicit effort and seed: value, standard error and the count of
         non-finite walks. For colour output the error is the bound sum_l |W_cl| sigma_l
         (channels are correlated: the same walks serve all). ``scattered_only`` leaves out
-        the top interface's own reflection (what a table stores, see `exact_part`)."""
+        the top interface's own reflection (what a table stores, see `exact_part`).
+
+        ``error_walks`` extra walks, from a seed stream independent of the value's, serve
+        the standard error alone: it pools their per-walk spread with the value's walks'
+        (heavy-tailed walks read a small spread exactly when their mean is small, so the
+        value's own spread under-covers; docs/coverage.md). Default None:
+        ``ERROR_WALKS_PER_SAMPLE`` (4) x ``samples``, so the call costs 5x the walks; 0: the
+        value's own spread (the error before this option). The value never changes with it.
+        ``nonfinite`` and ``capped`` count the extra walks too."""
         a, b = check.direction_pair(wi, wo)
         wl, to_rgb = self._channels(wavelengths)
         t = check.per_row("thickness_nm", thickness_nm, len(a), 0.0, check.MAX_FILM_THICKNESS_NM)
         n = self.samples if samples is None else _positive_int("samples", samples)
         s = self.seed if seed is None else check.seed(seed)
+        extra = (min(ERROR_WALKS_PER_SAMPLE * n, MAX_WALKS) if error_walks is None
+                 else check.integer("error_walks", error_walks, 0, MAX_WALKS))
         core = self._core(wl)
         if scattered_only:
             core = core.scattered_part()
-        value, err, bad, capped = core.estimate(a, b, check.lobe_mask(lobes), t, n, s)
+        value, err, bad, capped = core.estimate(a, b, check.lobe_mask(lobes), t, n, s, extra)
         if capped:
             warnings.warn(f"{capped} walks reached max_depth = {self.max_depth} and were cut "
                           "(the estimate is biased low): raise max_depth", RuntimeWarning, stacklevel=2)
@@ -187,9 +200,12 @@ class Layered(BSDF):
 
     @renamed_keywords(thickness="thickness_nm")
     def eval_with_error(self, wi, wo, wavelengths=None, samples: int | None = None,
-                        seed: int | None = None, lobes: Lobe | int = Lobe.ALL, thickness_nm=None):
-        """(value, standard error), each (N, C): `estimate` without the non-finite count."""
-        e = self.estimate(wi, wo, wavelengths, samples, seed, lobes, thickness_nm)
+                        seed: int | None = None, lobes: Lobe | int = Lobe.ALL, thickness_nm=None,
+                        error_walks: int | None = None):
+        """(value, standard error), each (N, C): `estimate` without the non-finite count
+        (``error_walks`` as there: by default 4x ``samples`` extra walks for the error;
+        pass 0 where the error is not used)."""
+        e = self.estimate(wi, wo, wavelengths, samples, seed, lobes, thickness_nm, error_walks=error_walks)
         return e.value, e.stderr
 
     @property

@@ -8,6 +8,7 @@
 #include "bsdflab/estimate.h"
 #include "bsdflab/layered.h"
 #include "bsdflab/parallel.h"
+#include "bsdflab/walk_statistics.h"
 
 namespace py = pybind11;
 using namespace bsdflab;
@@ -21,7 +22,7 @@ static Query query_of(const Darr &t, std::size_t i) {
 
 // (value, standard error, non-finite walks) of any stochastic model, for N pairs.
 static py::tuple estimate_many(const BSDF &model, const Darr &wi, const Darr &wo, uint32_t lobes,
-                               const py::object &thickness, int samples, uint64_t seed) {
+                               const py::object &thickness, int samples, uint64_t seed, int error_walks) {
     const StochasticEstimator *est = model.stochastic();
     if (!est) throw std::invalid_argument("this model is not stochastic");
     require_rows3(wi, "wi");
@@ -30,6 +31,7 @@ static py::tuple estimate_many(const BSDF &model, const Darr &wi, const Darr &wo
     if (static_cast<std::size_t>(wo.shape(0)) != n)
         throw std::invalid_argument("wi and wo must have the same length");
     if (samples < 1) throw std::invalid_argument("samples must be >= 1");
+    if (error_walks < 0) throw std::invalid_argument("error_walks must be >= 0");
     Darr t = thickness.is_none() ? Darr() : py::cast<Darr>(thickness);
     if (t.size() > 0 && static_cast<std::size_t>(t.size()) != n)
         throw std::invalid_argument("thickness must have shape (N,)");
@@ -45,9 +47,10 @@ static py::tuple estimate_many(const BSDF &model, const Darr &wi, const Darr &wo
             std::uint64_t bad = 0, cut = 0;
             EstimateRequest req{samples, seed};
             req.capped = &cut;
+            req.error_walks = error_walks;
             for (std::size_t i = s; i < end; ++i)
-                bad += est->estimate(row(pi, i), row(po, i), lobes, query_of(t, i), req, lease.get(),
-                                     o + i * C, e + i * C);
+                bad += estimate_pooled(*est, row(pi, i), row(po, i), lobes, query_of(t, i), req,
+                                       static_cast<int>(C), lease.get(), o + i * C, e + i * C);
             nonfinite += bad;
             capped += cut;
         });
@@ -113,8 +116,9 @@ void bind_layered(py::module_ &m) {
              py::arg("sigma_a"), py::arg("sigma_s"), py::arg("phase_kind"), py::arg("phase_param"),
              py::arg("options"))
         .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"), py::arg("thickness"),
-             py::arg("samples"), py::arg("seed"),
-             "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed")
+             py::arg("samples"), py::arg("seed"), py::arg("error_walks") = 0,
+             "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed;\n"
+             "error_walks > 0 pools the error with that many extra walks (walk_statistics.h)")
         .def_property_readonly("capped_walks", &LayeredBSDF::capped_walks,
                                "walks of eval(), sample() and pdf() cut by max_depth since construction")
         .def("delta_reflectance", &delta_reflectance_many, py::arg("wi"), py::arg("thickness") = py::none())
@@ -125,6 +129,7 @@ void bind_layered(py::module_ &m) {
 
     py::class_<ScatteredPart, BSDF, std::shared_ptr<ScatteredPart>>(m, "LayeredScatteredPart")
         .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"), py::arg("thickness"),
-             py::arg("samples"), py::arg("seed"),
-             "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed");
+             py::arg("samples"), py::arg("seed"), py::arg("error_walks") = 0,
+             "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed;\n"
+             "error_walks > 0 pools the error with that many extra walks (walk_statistics.h)");
 }

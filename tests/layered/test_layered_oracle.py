@@ -23,6 +23,14 @@ FILMS = {
 WAVELENGTHS = [450.0, 550.0, 650.0]
 
 
+# The family is the 18 cases of test_01 (3 films x 3 optical depths x 2 estimators), each
+# 32 pairs x 3 wavelengths, Sidak-corrected over all of them at 0.01. Per case (limit 3.88)
+# the family-wise rate was 17 %: seed 3's pair 0 at sigma_a 1.0 (pfmc) is a ~3.9 sigma draw
+# shared by two film cases (the same walks); over 2000 other seeds at that pair the value's
+# spread is 1.011x the stated error and the 4000-walk mean is symmetric (docs/coverage.md).
+FAMILY = 18
+
+
 @pytest.mark.parametrize("estimator", ["pfmc", "pfmc2"])
 @pytest.mark.parametrize("film", list(FILMS))
 @pytest.mark.parametrize("sigma_a", [0.0, 0.15, 1.0])
@@ -37,7 +45,7 @@ def test_01_pfmc_matches_oracle(film, sigma_a, estimator):
     oracle = CoatedDiffuseOracle(int_ior=eta, ext_ior=1.0, film=FILMS[film], thickness_um=thickness,
                                  sigma_a=sigma_a, base_reflectance=rho)
     ref = oracle.eval(wi, wo, wavelengths=WAVELENGTHS)
-    assert_agrees(value, err, ref, f"{film}, sigma_a {sigma_a}")
+    assert_agrees(value, err, ref, f"{film}, sigma_a {sigma_a}", family=FAMILY)
 
 
 def test_02_delta_reflectance_is_exact():

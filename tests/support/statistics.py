@@ -19,8 +19,10 @@ def z_limit(n: int, alpha: float = SIGNIFICANCE) -> float:
     return sidak_z_limit(alpha, n)
 
 
-def assert_agrees(value, err, ref, what="", model_error=None):
+def assert_agrees(value, err, ref, what="", model_error=None, family: int = 1):
     """z-tests of estimates against a reference. Arrays are (pairs,) or (pairs, channels).
+    ``family``: how many such calls share the family-wise significance (a parametrized
+    test's cases), Sidak-corrected across them too.
 
     max |z| over everything is held below the Sidak quantile (valid for the positively
     correlated channels, which share walks). The sum of z^2 is tested per channel over the
@@ -29,9 +31,9 @@ def assert_agrees(value, err, ref, what="", model_error=None):
     total = err if model_error is None else np.hypot(err, model_error)
     z = np.atleast_2d(((value - ref) / total).T).T.reshape(np.shape(value)[0], -1)
     n_pairs, channels = z.shape
-    assert np.max(np.abs(z)) < z_limit(z.size), \
-        f"{what}: max |z| = {np.max(np.abs(z)):.2f} >= {z_limit(z.size):.2f}"
-    alpha = SIGNIFICANCE / channels
+    limit = z_limit(z.size * family)
+    assert np.max(np.abs(z)) < limit, f"{what}: max |z| = {np.max(np.abs(z)):.2f} >= {limit:.2f}"
+    alpha = SIGNIFICANCE / (channels * family)
     lo, hi = stats.chi2.ppf([alpha / 2, 1 - alpha / 2], n_pairs)
     for c in range(channels):
         chi2 = np.sum(z[:, c] ** 2)

@@ -79,6 +79,9 @@ struct EstimateRequest {
     // Optional out: walks cut by the model's depth cap are added here (a cut walk is a
     // truncated, biased sample; roulette ends walks long before the cap in sound models).
     std::uint64_t *capped = nullptr;
+    // Extra walks for the standard error alone (walk_statistics.h estimate_pooled reads it;
+    // StochasticEstimator::estimate itself ignores it). 0: the error of the value's walks.
+    int error_walks = 0;
     int out_rows(int channels) const { return P ? rows : channels; }
 };
 
