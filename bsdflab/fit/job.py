@@ -19,7 +19,6 @@ is seen within one sampler step, one MAP iteration or one emulator solve.
 """
 from __future__ import annotations
 
-import hashlib
 import os
 import re
 import shutil
@@ -27,10 +26,9 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from bsdflab import __version__
 from bsdflab.fit.config import FitConfig
 from bsdflab.fit.data import Dataset
-from bsdflab.tables.file_format import canonical_json
+from bsdflab.jobs.keys import job_key, plain_json
 
 FIELDS = {"config", "data", "sidecar"}
 SUFFIX = ".fitdata"
@@ -93,21 +91,13 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
                              "reflectance instead")
         parse_spec(spec, "sidecar")
     out = {"config": config, "data": files, "sidecar": spec}
-    _canonical(out)
+    plain_json(out, "fit")
     return out
-
-
-def _canonical(request: dict[str, Any]) -> str:
-    try:
-        return canonical_json(request)
-    except (TypeError, ValueError) as e:
-        raise ValueError(f"fit request is not plain JSON: {e}") from None
 
 
 def key(request: dict[str, Any]) -> str:
     """SHA-256 of the canonical request, the kind and the package version."""
-    text = _canonical({"kind": "fit", "bsdflab_version": __version__, "request": request})
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+    return job_key("fit", request)
 
 
 def folder(request_key: str) -> str:

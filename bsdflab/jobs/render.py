@@ -18,20 +18,18 @@ file. The summary's ``tables`` entry (JSON) lists them: each table's hash, metho
 """
 from __future__ import annotations
 
-import hashlib
 import json
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from bsdflab._version import __version__
+from bsdflab.jobs.keys import job_key, plain_json
 from bsdflab.render import render, write_exr, write_png
 from bsdflab.render.build import TABULATED, table_request
 from bsdflab.render.lights import lights_of
 from bsdflab.render.render import MAX_SPP
 from bsdflab.scenes import SCENES, scene
 from bsdflab.tables.cache import cache_dir, get
-from bsdflab.tables.file_format import canonical_json
 from bsdflab.util import args as check
 from bsdflab.util.progress import monitored
 
@@ -74,21 +72,13 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
             raise ValueError(f"options.{e}") from None   # the request's field
         raise
     out["max_depth"] = scene.max_depth
-    _canonical(out)            # options must be plain JSON
+    plain_json(out, "render")  # options must be plain JSON
     return out
-
-
-def _canonical(request: dict[str, Any]) -> str:
-    try:
-        return canonical_json(request)
-    except (TypeError, ValueError) as e:
-        raise ValueError(f"render request is not plain JSON: {e}") from None
 
 
 def key(request: dict[str, Any]) -> str:
     """SHA-256 of the canonical request, the kind and the package version."""
-    text = _canonical({"kind": "render", "bsdflab_version": __version__, "request": request})
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+    return job_key("render", request)
 
 
 def files(request_key: str) -> dict[str, str]:
