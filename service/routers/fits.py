@@ -57,10 +57,22 @@ def check_limits(settings, request: dict[str, Any]) -> None:
         over_limit(settings, "limit_fit_walker_steps", s.walkers * s.max_steps, "[sampler] walkers x max_steps")
     else:
         over_limit(settings, "limit_fit_live_points", s.live_points, "[sampler] live_points")
-    if config.model.kind == "full" and config.model.emulator_nodes:
-        solves = config.model.emulator_nodes ** len(config.free)
-        over_limit(settings, "limit_fit_emulator_solves", solves, "[model] emulator_nodes ^ free parameters")
+    m = config.model
+    if m.kind == "full":
+        # emulator_nodes = 0 solves the model at every likelihood evaluation (before: uncounted,
+        # 2^21 direct solves passed); the emulator's error checks are direct solves too
+        if m.emulator_nodes:
+            solves, what = m.emulator_nodes ** len(config.free), "[model] emulator_nodes ^ free parameters"
+        elif s.kind == "emcee":
+            solves, what = s.walkers * s.max_steps, "[model] emulator_nodes = 0: walkers x max_steps direct solves"
+        else:
+            raise HTTPException(422, "[model] emulator_nodes = 0 with the nested sampler: its direct solves have "
+                                     "no bound; give emulator_nodes (BSDFLAB_LIMIT_FIT_EMULATOR_SOLVES)")
+        over_limit(settings, "limit_fit_emulator_solves", solves + m.emulator_checks,
+                   f"{what} + emulator_checks")
     ap = config.appearance
+    # each posterior draw is evaluated at every angle (before: angles_deg had no length bound)
+    over_limit(settings, "limit_fit_walker_steps", ap.draws * len(ap.angles_deg), "[appearance] draws x angles_deg")
     over_limit(settings, "limit_render_samples", ap.renders * ap.render_size ** 2 * ap.render_spp,
                "[appearance] renders x render_size^2 x render_spp")
     over_limit(settings, "limit_render_pixels", (ap.renders + 1) * ap.render_size ** 2,
@@ -106,6 +118,9 @@ def create_fit(body: FitRequest, jobs: JobsDep, settings: SettingsDep, client: C
         if not fit_uploads.stored(jobs, item["hash"]):
             raise HTTPException(422, f"data[{i}].hash: no uploaded fit data file {item['hash']} "
                                      f"(upload it with POST {DATASETS})")
+    # read here, before the queue's admission: one upload named 64 times was 64 copies and reads
+    total = sum(fit_uploads.size(jobs, item["hash"]) for item in request["data"])
+    over_limit(settings, "limit_measured_bytes", total, "the bytes of the fit's data files together")
     fit_job.load_dataset(request, jobs.artefact_dir)   # what the worker would refuse, refused now (422)
     row, _ = jobs.submit(KIND, request, key, client)
     info = job_info(jobs.job(row["id"]))

@@ -1,0 +1,138 @@
+"""The second review of issue 33's new surface (fits as jobs), as a tenant would attack it.
+Each test failed on the code before its fix (the before is in the test's docstring)."""
+
+from __future__ import annotations
+
+import ctypes
+import io
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from support.service_client import make_client
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "fit"
+LONG = (EXAMPLES / "data.csv").read_bytes()
+PARAMETERS = {"film_thickness_nm": {"prior": "normal", "mean": 430.0, "sd": 10.0}}
+SMALL = {"walkers": 8, "max_steps": 20}
+
+
+@pytest.fixture(scope="module")
+def client(tmp_path_factory):
+    with make_client(
+        tmp_path_factory.mktemp("attack2"),
+        limit_body_bytes=256 << 10,
+        limit_measured_bytes=8 * len(LONG),
+        limit_queue=4,
+    ) as c:
+        yield c
+
+
+def upload(client, data: bytes, name: str):
+    return client.post(
+        "/v1/fits/datasets", params={"name": name}, content=data, headers={"Content-Type": "application/octet-stream"}
+    )
+
+
+def submit(client, body):
+    """POST /v1/fits; a job the attack should never have queued is cancelled at once."""
+    r = client.post("/v1/fits", json=body)
+    if r.status_code == 202:
+        client.delete(f"/v1/jobs/{r.json()['id']}")
+    return r
+
+
+def raw8_with_zip_bomb() -> bytes:
+    """A valid AvaSoft 8 file (what the upload checks) with a zip appended (zip archives are
+    read from their end): 65 MiB of one XML member deflated to about 64 KB."""
+    from avaread.AvaTypes import AVSInfoBlock, AVSPreamble
+
+    wl, dark, ref = np.array([400.0, 450.0, 500.0, 550.0, 600.0]), np.full(5, 100.0), np.full(5, 4100.0)
+    info = AVSInfoBlock()
+    info.Measurement.StartPixel, info.Measurement.StopPixel = 0, 4
+    info.blockLength = ctypes.sizeof(info) + 16 * 5
+    raw8 = (
+        bytes(AVSPreamble(b"AVS", b"84", 1))
+        + bytes(info)
+        + np.concatenate([wl, dark + 2000, dark, ref]).astype(np.float32).tobytes()
+    )
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("ps_0.xml", b"<a>" + b" " * (65 << 20) + b"</a>")
+    return raw8 + buf.getvalue()
+
+
+@pytest.fixture(scope="module")
+def polyglot(client):
+    r = upload(client, raw8_with_zip_bomb(), "s_20deg.raw8")
+    assert r.status_code == 200 and r.json()["format"] == "avantes-raw8", r.text
+    return r.json()["hash"]
+
+
+@pytest.mark.parametrize(
+    "name, sidecar",
+    [("s_20deg.ProcSpec", {"geometry": "specular"}), ("s_20deg.raw8", {"geometry": "specular", "format": "procspec"})],
+)
+def test_a_zip_bomb_uploaded_under_another_format_is_not_inflated(client, polyglot, name, sidecar):
+    """Before: the upload was checked as the format its name gave (a raw8 file passes), but the
+    fit reads it as the name or the sidecar's format in the fit request says: as a .ProcSpec, the
+    appended zip inflated in the web process before the queue (a 300 KB upload: 300 MiB, 6 s,
+    +600 MB RSS; 64 MiB of upload: tens of GB). After: the reader refuses it from its sizes."""
+    r = submit(
+        client,
+        {
+            "config": {"parameters": PARAMETERS, "sampler": SMALL},
+            "data": [{"hash": polyglot, "name": name}],
+            "sidecar": sidecar,
+        },
+    )
+    assert r.status_code == 422 and "inflates to" in r.json()["detail"], r.text
+
+
+@pytest.fixture(scope="module")
+def long_hash(client):
+    r = upload(client, LONG, "data.csv")
+    assert r.status_code == 200, r.text
+    return r.json()["hash"]
+
+
+@pytest.mark.parametrize(
+    "config, words",
+    [
+        (
+            {"model": {"kind": "full", "emulator_nodes": 0}, "sampler": {"walkers": 32, "max_steps": 20000}},
+            "emulator_nodes = 0: walkers x max_steps direct solves + emulator_checks",
+        ),
+        (
+            {"model": {"kind": "full", "emulator_nodes": 0}, "sampler": {"kind": "nested"}},
+            "emulator_nodes = 0 with the nested sampler",
+        ),
+        (
+            {
+                "sampler": SMALL,
+                "appearance": {"draws": 100000, "renders": 0, "angles_deg": [float(a) for a in range(85)]},
+            },
+            "[appearance] draws x angles_deg",
+        ),
+    ],
+)
+def test_fit_work_limits_cannot_be_bypassed(client, long_hash, config, words):
+    """Before: each was queued (202). The full model with emulator_nodes = 0 solves the model
+    at every likelihood evaluation, so walkers x max_steps (2^21 passed the walker-step limit)
+    were adding-doubling solves, and nested sampling had no bound at all; the appearance
+    evaluated draws x angles (angles_deg of any length)."""
+    r = submit(
+        client, {"config": {"parameters": PARAMETERS, **config}, "data": [{"hash": long_hash, "name": "data.csv"}]}
+    )
+    assert r.status_code == 422 and words in r.json()["detail"], r.text
+
+
+def test_one_upload_named_many_times_is_not_read_many_times(client, long_hash):
+    """Before: the data list may name one upload under 64 names; each was copied and read in
+    the web process before the queue (64 x a 64 MiB upload: 4 GiB). After: the data files
+    together are bounded by BSDFLAB_LIMIT_MEASURED_BYTES, checked from their stored sizes."""
+    data = [{"hash": long_hash, "name": f"part_{i}.csv"} for i in range(16)]
+    r = submit(client, {"config": {"parameters": PARAMETERS, "sampler": SMALL}, "data": data})
+    assert r.status_code == 422 and "BSDFLAB_LIMIT_MEASURED_BYTES" in r.json()["detail"], r.text
