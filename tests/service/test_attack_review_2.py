@@ -136,3 +136,24 @@ def test_one_upload_named_many_times_is_not_read_many_times(client, long_hash):
     data = [{"hash": long_hash, "name": f"part_{i}.csv"} for i in range(16)]
     r = submit(client, {"config": {"parameters": PARAMETERS, "sampler": SMALL}, "data": data})
     assert r.status_code == 422 and "BSDFLAB_LIMIT_MEASURED_BYTES" in r.json()["detail"], r.text
+
+
+def test_the_service_checks_server_listens_on_loopback_only(tmp_path, monkeypatch):
+    """The validation family "service" (a job any tenant may start: POST /v1/validations)
+    starts a ``bsdflab serve`` of its own. Before: it took the parent's environment, and the
+    container image sets BSDFLAB_HOST=0.0.0.0, so that server listened on every interface
+    (the parent's table cache behind it). After: it is told 127.0.0.1."""
+    import psutil
+
+    from bsdflab.validation.checks.service import serve
+
+    monkeypatch.setenv("BSDFLAB_HOST", "0.0.0.0")
+    url, stop = serve(tmp_path)
+    try:
+        port = int(url.rsplit(":", 1)[1])
+        listening = {
+            c.laddr.ip for c in psutil.net_connections("tcp") if c.status == psutil.CONN_LISTEN and c.laddr.port == port
+        }
+    finally:
+        stop()
+    assert listening == {"127.0.0.1"}, listening
