@@ -10,7 +10,7 @@ from fastapi.responses import FileResponse, JSONResponse
 from starlette.concurrency import run_in_threadpool
 
 from bsdflab.fit import job as fit_job
-from bsdflab.service import fit_uploads
+from bsdflab.service import fit_uploads, uploads
 from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep
 from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
@@ -121,7 +121,16 @@ def create_fit(body: FitRequest, jobs: JobsDep, settings: SettingsDep, client: C
     # read here, before the queue's admission: one upload named 64 times was 64 copies and reads
     total = sum(fit_uploads.size(jobs, item["hash"]) for item in request["data"])
     over_limit(settings, "limit_measured_bytes", total, "the bytes of the fit's data files together")
-    fit_job.load_dataset(request, jobs.artefact_dir)   # what the worker would refuse, refused now (422)
+    # one read of uploaded files per client at once, as its uploads (before: as many reads at
+    # once as the route's threads, each up to BSDFLAB_LIMIT_MEASURED_BYTES, before any 429)
+    lock = uploads.client_lock(client.name)
+    if not lock.acquire(blocking=False):
+        raise HTTPException(429, f"client {client.name!r} has an upload or a fit's data being read; retry later",
+                            headers={"Retry-After": "2"})
+    try:
+        fit_job.load_dataset(request, jobs.artefact_dir)   # what the worker would refuse, refused now (422)
+    finally:
+        lock.release()
     row, _ = jobs.submit(KIND, request, key, client)
     info = job_info(jobs.job(row["id"]))
     return JSONResponse(info.model_dump(mode="json"), status_code=202, headers={"Location": info.links["self"]})

@@ -157,3 +157,21 @@ def test_the_service_checks_server_listens_on_loopback_only(tmp_path, monkeypatc
     finally:
         stop()
     assert listening == {"127.0.0.1"}, listening
+
+
+def test_a_clients_fit_data_is_read_once_at_a_time(client, long_hash):
+    """Before: each POST /v1/fits read its data files in the web process before the queue,
+    as many at once as the route's threads (40), each read up to BSDFLAB_LIMIT_MEASURED_BYTES.
+    After: one read per client at once, sharing the lock of its uploads (429 while one runs);
+    held here as an upload in progress holds it."""
+    from bsdflab.service import uploads
+
+    body = {
+        "config": {"parameters": PARAMETERS, "sampler": {**SMALL, "seed": 7}},
+        "data": [{"hash": long_hash, "name": "data.csv"}],
+    }
+    lock = uploads.client_lock("anonymous")
+    with lock:
+        r = submit(client, body)
+    assert r.status_code == 429 and r.headers["Retry-After"], r.text
+    assert submit(client, body).status_code == 202
