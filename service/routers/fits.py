@@ -115,7 +115,10 @@ def create_fit(body: FitRequest, jobs: JobsDep, settings: SettingsDep, client: C
     if found is not None:
         return _info(jobs, key, request, found, client)
     for i, item in enumerate(request["data"]):
-        if not fit_uploads.stored(jobs, item["hash"]):
+        # only the client's own uploads (an admin: any): another tenant's file is as absent
+        # (before: any stored hash, and the study's data.csv handed its rows back)
+        if not fit_uploads.stored(jobs, item["hash"]) or not (
+                client.admin or jobs.store.uploaded(item["hash"], client.name)):
             raise HTTPException(422, f"data[{i}].hash: no uploaded fit data file {item['hash']} "
                                      f"(upload it with POST {DATASETS})")
     # read here, before the queue's admission: one upload named 64 times was 64 copies and reads

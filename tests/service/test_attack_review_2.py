@@ -175,3 +175,25 @@ def test_a_clients_fit_data_is_read_once_at_a_time(client, long_hash):
         r = submit(client, body)
     assert r.status_code == 429 and r.headers["Retry-After"], r.text
     assert submit(client, body).status_code == 202
+
+
+def test_another_tenants_upload_is_not_fit_data(tmp_path):
+    """Before: a fit could name any stored upload by its hash (the SHA-256 of the file, which
+    a tenant can compute for a file it guesses): tenant b's fit of a's file was queued, and the
+    study's data.csv handed a's rows back; the 202 / 422 told whether anyone had uploaded
+    those bytes. After: only the client's own uploads (an admin's: any); another's is a 422
+    worded as for no upload at all."""
+    keys = {"a": {"key": "a" * 20}, "b": {"key": "b" * 20}, "ops": {"key": "o" * 20, "admin": True}}
+    a, b, ops = ({"X-API-Key": k * 20} for k in "abo")
+    with make_client(tmp_path, api_keys=keys, limit_body_bytes=256 << 10, limit_queue=8) as c:
+        h = c.post("/v1/fits/datasets", params={"name": "d.csv"}, content=LONG, headers=a).json()["hash"]
+        body = {"config": {"parameters": PARAMETERS, "sampler": SMALL}, "data": [{"hash": h, "name": "d.csv"}]}
+        r = c.post("/v1/fits", json=body, headers=b)
+        if r.status_code == 202:
+            c.delete(f"/v1/jobs/{r.json()['id']}", headers=b)
+        assert r.status_code == 422 and "no uploaded fit data file" in r.json()["detail"], r.text
+        for headers in (a, ops):
+            r = c.post("/v1/fits", json=body, headers=headers)
+            assert r.status_code in (200, 202), r.text
+            if r.status_code == 202:
+                c.delete(f"/v1/jobs/{r.json()['id']}", headers=headers)
