@@ -197,3 +197,39 @@ def test_another_tenants_upload_is_not_fit_data(tmp_path):
             assert r.status_code in (200, 202), r.text
             if r.status_code == 202:
                 c.delete(f"/v1/jobs/{r.json()['id']}", headers=headers)
+
+
+def test_another_tenants_measured_file_is_not_a_model(tmp_path):
+    """Before: any client could name any stored measured file by its hash in an evaluation,
+    a lobe, a table or a render (b evaluated a's upload: its values, and a 200 / 422 that told
+    whether those bytes were stored). After: a client's own uploads only (an admin's: any);
+    another's is the 422 of an absent file."""
+    from bsdflab.measured.merl import DIMS, merl_bytes
+
+    keys = {"a": {"key": "a" * 20}, "b": {"key": "b" * 20}, "ops": {"key": "o" * 20, "admin": True}}
+    a, b, ops = ({"X-API-Key": k * 20} for k in "abo")
+    merl = merl_bytes(0.01 + 0.5 * np.random.default_rng(5).random((3, *DIMS)))
+    with make_client(tmp_path, api_keys=keys, limit_measured_bytes=64 << 20, limit_queue=8) as c:
+        r = c.post(
+            "/v1/measured",
+            params={"format": "merl"},
+            content=merl,
+            headers={**a, "content-type": "application/octet-stream"},
+        )
+        assert r.status_code == 200, r.text
+        ref = {"type": "merl", "hash": r.json()["hash"]}
+        angles = {"theta_i": [30.0], "theta_o": [30.0], "phi": [180.0]}
+        requests = [
+            ("/v1/bsdf/eval", {"model": ref, **angles}),
+            ("/v1/bsdf/lobe", {"model": ref, "theta_i": 30.0, "points": 9, "resolution": 5}),
+            ("/v1/tables", {"model": ref, "grid": {"n_theta_i": 2, "n_theta_o": 4, "n_phi": 3}}),
+            ("/v1/renders", {"scene": "sphere", "options": {"material": ref}, "width": 4, "height": 4, "spp": 1}),
+        ]
+        for path, body in requests:
+            r = c.post(path, json=body, headers=b)
+            if r.status_code == 202:
+                c.delete(f"/v1/jobs/{r.json()['id']}", headers=b)
+            assert r.status_code == 422 and "in this server's store" in r.text, (path, r.text)
+        for headers in (a, ops):
+            r = c.post("/v1/bsdf/eval", json={"model": ref, **angles}, headers=headers)
+            assert r.status_code == 200, r.text
