@@ -233,3 +233,24 @@ def test_another_tenants_measured_file_is_not_a_model(tmp_path):
         for headers in (a, ops):
             r = c.post("/v1/bsdf/eval", json={"model": ref, **angles}, headers=headers)
             assert r.status_code == 200, r.text
+
+
+def test_a_sidecars_regular_expression_is_not_run(client):
+    """Before: the sidecar's name_pattern, a client's regular expression, was matched against
+    the client's file and column names in the web process at submission (and in the worker);
+    Python's re holds the GIL while it backtracks, so ``^(?P<angle>(a+)+)$`` against a name of
+    22 a's and a dash took 0.33 s, about 3.3 times more per 2 characters (names may have 128:
+    the server, /healthz included, stops for ever). After: refused over HTTP (422)."""
+    wide = (EXAMPLES / "wide" / "angles.csv").read_bytes()
+    name = "a" * 100 + "-.csv"
+    h = upload(client, wide, name).json()["hash"]
+    sidecar = {"geometry": "specular", "units": "percent", "name_pattern": "^(?P<angle>(a+)+)$"}
+    r = submit(
+        client,
+        {
+            "config": {"parameters": PARAMETERS, "sampler": SMALL},
+            "data": [{"hash": h, "name": name}],
+            "sidecar": sidecar,
+        },
+    )
+    assert r.status_code == 422 and "name_pattern is not accepted over HTTP" in r.json()["detail"], r.text
