@@ -6,7 +6,7 @@ and instrument spectra (Ocean Optics .ProcSpec, OceanView and Avantes text, JCAM
 are read whole; a wide CSV only as text, since its delimiter, decimal mark and wavelength
 column may come from the sidecar that the fit request carries (it is read whole then).
 A reader's complaint names the file by the client's name, its line and column, never a
-server folder. A .ProcSpec is a zip: its members may inflate to at most 64 MiB (its reader,
+server folder. A .ProcSpec is a zip: its members may inflate to at most 4 MiB (its reader,
 bsdflab.fit.readers.oceanoptics_procspec, whatever the name). Uploads count against the same
 per-key quotas as measured files (bsdflab.service.uploads).
 """
