@@ -46,8 +46,22 @@ KEY = Depends(require_key)
 ClientDep = Annotated[Client, Depends(require_key)]
 
 
-def model_spec(spec: dict[str, Any], jobs: JobService, slots=artefact_refs.MODEL_SLOTS) -> dict[str, Any]:
+def model_spec(spec: dict[str, Any], jobs: JobService, slots=artefact_refs.MODEL_SLOTS,
+               client: Client | None = None) -> dict[str, Any]:
     """A request's model spec with tables and measured files named by hash checked in the
     store; any server path refused (bsdflab.service.artefact_refs). ``slots``: where the
-    request holds a model (a render: its ``options.material``)."""
-    return artefact_refs.resolve(spec, jobs.stored_file, jobs.settings.limit_store_refs, slots)
+    request holds a model (a render: its ``options.material``). A measured file is found
+    only among ``client``'s own uploads (an admin's: any): another tenant's is as absent
+    (before: any stored hash, so its values could be evaluated by whoever computed it)."""
+    stored_file = jobs.stored_file
+    if client is not None and not client.admin:
+        def stored_file(model_type: str, content_hash: str):
+            if model_type != "table" and not jobs.store.uploaded(content_hash, client.name):
+                return None
+            return jobs.stored_file(model_type, content_hash)
+    return artefact_refs.resolve(spec, stored_file, jobs.settings.limit_store_refs, slots)
+
+
+def client_of(request: Request) -> Client:
+    """The client of a request (as ``require_key``), for work run off the route's own thread."""
+    return request.scope.get("state", {}).get("client", ANONYMOUS)

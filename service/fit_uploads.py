@@ -6,8 +6,9 @@ and instrument spectra (Ocean Optics .ProcSpec, OceanView and Avantes text, JCAM
 are read whole; a wide CSV only as text, since its delimiter, decimal mark and wavelength
 column may come from the sidecar that the fit request carries (it is read whole then).
 A reader's complaint names the file by the client's name, its line and column, never a
-server folder. A .ProcSpec is a zip: its members may inflate to at most ``MAX_INFLATED``
-bytes. Uploads count against the same per-key quotas as measured files (bsdflab.service.uploads).
+server folder. A .ProcSpec is a zip: its members may inflate to at most 4 MiB (its reader,
+bsdflab.fit.readers.oceanoptics_procspec, whatever the name). Uploads count against the same
+per-key quotas as measured files (bsdflab.service.uploads).
 """
 from __future__ import annotations
 
@@ -22,28 +23,23 @@ from typing import Any
 from fastapi import HTTPException
 
 from bsdflab.fit.job import SUFFIX, check_name
+from bsdflab.fit.readers.oceanoptics_procspec import check_sizes
 from bsdflab.service import uploads
 from bsdflab.service.upload_gate import quota_message
 from bsdflab.util.files import write_atomically
 
 KIND = "fitdata"
-MAX_INFLATED = 64 << 20     # bytes a .ProcSpec's members may inflate to (a zip bomb stops here)
-MAX_MEMBERS = 64
 TEXT_ONLY = ("wide",)        # formats whose reading needs the fit request's sidecar
 
 
 def check_zip(path: str, name: str) -> None:
-    """A zip's declared sizes (zipfile never inflates a member past its declared size)."""
+    """A zip's declared sizes (the ProcSpec reader checks them again whatever the name)."""
     try:
         with zipfile.ZipFile(path) as z:
             infos = z.infolist()
     except (zipfile.BadZipFile, OSError, EOFError) as e:
         raise ValueError(f"{name}: not a readable zip archive ({type(e).__name__})") from None
-    if len(infos) > MAX_MEMBERS:
-        raise ValueError(f"{name}: the archive has {len(infos)} members, more than {MAX_MEMBERS}")
-    inflated = sum(i.file_size for i in infos)
-    if inflated > MAX_INFLATED:
-        raise ValueError(f"{name}: the archive inflates to {inflated} bytes, more than the limit of {MAX_INFLATED}")
+    check_sizes(infos, name)
 
 
 def read_check(path: str, name: str) -> dict[str, Any]:
@@ -108,3 +104,8 @@ def _upload(jobs, data: bytes, name: str, client: str, quota: int | None) -> dic
 def stored(jobs, content_hash: str) -> bool:
     row = jobs.store.artefact(content_hash, KIND)
     return row is not None and (jobs.artefact_dir / f"{content_hash}{SUFFIX}").is_file()
+
+
+def size(jobs, content_hash: str) -> int:
+    """Bytes of a stored fit data file."""
+    return (jobs.artefact_dir / f"{content_hash}{SUFFIX}").stat().st_size

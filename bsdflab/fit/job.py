@@ -89,6 +89,10 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
         if isinstance(ref, dict) and "file" in ref:   # a path on the server: never read for a client
             raise ValueError("sidecar: [reference] file is not accepted over HTTP; give the standard's "
                              "reflectance instead")
+        if "name_pattern" in spec:   # a client's regular expression: re holds the GIL while it backtracks
+            raise ValueError("sidecar: name_pattern is not accepted over HTTP (a regular expression can backtrack "
+                             "for hours in the server); place the curves with [columns] or [files], angles_deg, "
+                             "or angles in the names (R_20deg.csv)")
         parse_spec(spec, "sidecar")
     out = {"config": config, "data": files, "sidecar": spec}
     plain_json(out, "fit")

@@ -22,7 +22,7 @@ from bsdflab.plots.lobe import lobe_figure
 from bsdflab.requests import ModelCache
 from bsdflab.service import artefact_refs
 from bsdflab.service.bodies import ThreadedBody
-from bsdflab.service.deps import HeavyDep, JobsDep, SettingsDep, model_spec
+from bsdflab.service.deps import HeavyDep, JobsDep, SettingsDep, client_of, model_spec
 from bsdflab.service.errors import ERRORS, over_limit
 from bsdflab.service.heavy import check_cancelled, evaluate_in_chunks
 from bsdflab.service.schemas import EvalRequest, EvalResponse, HemisphereView, LobeRequest, LobeResponse, PlaneView
@@ -135,7 +135,7 @@ async def evaluate(body: EvalRequest, request: Request, settings: SettingsDep, j
     binary = wants_npy(request)
 
     def compute():   # on the heavy pool, after its admission: the store lookups too
-        bsdf = MODELS.get(model_spec(body.spec(), jobs))
+        bsdf = MODELS.get(model_spec(body.spec(), jobs, client=client_of(request)))
         wi, wo = _directions(body, settings)
         if body.wavelengths is not None:
             over_limit(settings, "limit_wavelengths", len(body.wavelengths), "wavelengths")
@@ -166,7 +166,7 @@ async def lobe(body: LobeRequest, request: Request, settings: SettingsDep, jobs:
     """The plane of incidence (signed outgoing angle, mirror direction at +theta_i) and the
     upper hemisphere seen from above (orthographic x, y), in linear sRGB, for one incidence."""
     def compute():   # on the heavy pool, after its admission: the store lookups too
-        bsdf = MODELS.get(model_spec(body.spec(), jobs))
+        bsdf = MODELS.get(model_spec(body.spec(), jobs, client=client_of(request)))
         over_limit(settings, "limit_lobe_resolution", body.points, "points")
         over_limit(settings, "limit_lobe_resolution", body.resolution, "resolution")
         wi = lobe_views.incident(body.theta_i)
@@ -232,8 +232,9 @@ def _figure_checks(settings: Settings, bsdf, theta_i: float, samples: int) -> No
         over_limit(settings, "limit_walks", 48 * 48 * 64, "figure walks")
 
 
-def _checked_figure(settings: Settings, jobs, spec: dict, theta_i: float, samples: int, seed: int) -> Response:
-    bsdf = MODELS.get(model_spec(spec, jobs))   # on the heavy pool, after its admission
+def _checked_figure(settings: Settings, jobs, spec: dict, theta_i: float, samples: int, seed: int,
+                    client=None) -> Response:
+    bsdf = MODELS.get(model_spec(spec, jobs, client=client))   # on the heavy pool, after its admission
     _figure_checks(settings, bsdf, theta_i, samples)
     return _figure(bsdf, theta_i, samples, seed)
 
@@ -246,7 +247,7 @@ async def lobe_png(body: LobeRequest, request: Request, settings: SettingsDep, j
     sample count (default 20000); ``points``, ``resolution`` and ``view`` do not apply."""
     samples = body.samples or FIGURE_SAMPLES
     return await heavy.run(request, _checked_figure, settings, jobs, body.spec(), body.theta_i, samples,
-                           body.seed or 0)
+                           body.seed or 0, client_of(request))
 
 
 @router.get("/lobe.png", response_class=Response, responses=PNG, summary="The lobe figure (PNG), by query")
@@ -261,7 +262,8 @@ async def lobe_png_query(request: Request, settings: SettingsDep, jobs: JobsDep,
     """As POST, with the model in the query: ``?preset=xenopeltis&theta_i=45`` or
     ``?model={"type":"diffuse","reflectance":0.5}`` (URL-encoded)."""
     spec = {"preset": preset, "overrides": _json("overrides", overrides), "model": _json("model", model)}
-    return await heavy.run(request, _checked_figure, settings, jobs, spec, theta_i, samples, seed)
+    return await heavy.run(request, _checked_figure, settings, jobs, spec, theta_i, samples, seed,
+                          client_of(request))
 
 
 def _json(name: str, text: str | None):

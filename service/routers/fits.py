@@ -10,7 +10,7 @@ from fastapi.responses import FileResponse, JSONResponse
 from starlette.concurrency import run_in_threadpool
 
 from bsdflab.fit import job as fit_job
-from bsdflab.service import fit_uploads
+from bsdflab.service import fit_uploads, uploads
 from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep
 from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
@@ -57,10 +57,22 @@ def check_limits(settings, request: dict[str, Any]) -> None:
         over_limit(settings, "limit_fit_walker_steps", s.walkers * s.max_steps, "[sampler] walkers x max_steps")
     else:
         over_limit(settings, "limit_fit_live_points", s.live_points, "[sampler] live_points")
-    if config.model.kind == "full" and config.model.emulator_nodes:
-        solves = config.model.emulator_nodes ** len(config.free)
-        over_limit(settings, "limit_fit_emulator_solves", solves, "[model] emulator_nodes ^ free parameters")
+    m = config.model
+    if m.kind == "full":
+        # emulator_nodes = 0 solves the model at every likelihood evaluation (before: uncounted,
+        # 2^21 direct solves passed); the emulator's error checks are direct solves too
+        if m.emulator_nodes:
+            solves, what = m.emulator_nodes ** len(config.free), "[model] emulator_nodes ^ free parameters"
+        elif s.kind == "emcee":
+            solves, what = s.walkers * s.max_steps, "[model] emulator_nodes = 0: walkers x max_steps direct solves"
+        else:
+            raise HTTPException(422, "[model] emulator_nodes = 0 with the nested sampler: its direct solves have "
+                                     "no bound; give emulator_nodes (BSDFLAB_LIMIT_FIT_EMULATOR_SOLVES)")
+        over_limit(settings, "limit_fit_emulator_solves", solves + m.emulator_checks,
+                   f"{what} + emulator_checks")
     ap = config.appearance
+    # each posterior draw is evaluated at every angle (before: angles_deg had no length bound)
+    over_limit(settings, "limit_fit_walker_steps", ap.draws * len(ap.angles_deg), "[appearance] draws x angles_deg")
     over_limit(settings, "limit_render_samples", ap.renders * ap.render_size ** 2 * ap.render_spp,
                "[appearance] renders x render_size^2 x render_spp")
     over_limit(settings, "limit_render_pixels", (ap.renders + 1) * ap.render_size ** 2,
@@ -103,10 +115,25 @@ def create_fit(body: FitRequest, jobs: JobsDep, settings: SettingsDep, client: C
     if found is not None:
         return _info(jobs, key, request, found, client)
     for i, item in enumerate(request["data"]):
-        if not fit_uploads.stored(jobs, item["hash"]):
+        # only the client's own uploads (an admin: any): another tenant's file is as absent
+        # (before: any stored hash, and the study's data.csv handed its rows back)
+        if not fit_uploads.stored(jobs, item["hash"]) or not (
+                client.admin or jobs.store.uploaded(item["hash"], client.name)):
             raise HTTPException(422, f"data[{i}].hash: no uploaded fit data file {item['hash']} "
                                      f"(upload it with POST {DATASETS})")
-    fit_job.load_dataset(request, jobs.artefact_dir)   # what the worker would refuse, refused now (422)
+    # read here, before the queue's admission: one upload named 64 times was 64 copies and reads
+    total = sum(fit_uploads.size(jobs, item["hash"]) for item in request["data"])
+    over_limit(settings, "limit_measured_bytes", total, "the bytes of the fit's data files together")
+    # one read of uploaded files per client at once, as its uploads (before: as many reads at
+    # once as the route's threads, each up to BSDFLAB_LIMIT_MEASURED_BYTES, before any 429)
+    lock = uploads.client_lock(client.name)
+    if not lock.acquire(blocking=False):
+        raise HTTPException(429, f"client {client.name!r} has an upload or a fit's data being read; retry later",
+                            headers={"Retry-After": "2"})
+    try:
+        fit_job.load_dataset(request, jobs.artefact_dir)   # what the worker would refuse, refused now (422)
+    finally:
+        lock.release()
     row, _ = jobs.submit(KIND, request, key, client)
     info = job_info(jobs.job(row["id"]))
     return JSONResponse(info.model_dump(mode="json"), status_code=202, headers={"Location": info.links["self"]})

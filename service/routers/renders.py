@@ -41,7 +41,7 @@ def create_render(body: RenderRequest, jobs: JobsDep, settings: SettingsDep, cli
     """200 with the render when this exact request (scene, options, size, spp, seed) was
     rendered before, else 202 with its job; identical requests in flight share it."""
     # on this route's thread (not the event loop), bounded by BSDFLAB_LIMIT_STORE_REFS
-    request, key = jobs.prepare(KIND, model_spec(body.model_dump(), jobs, artefact_refs.RENDER_SLOTS))
+    request, key = jobs.prepare(KIND, model_spec(body.model_dump(), jobs, artefact_refs.RENDER_SLOTS, client))
     pixels = request["width"] * request["height"]
     over_limit(settings, "limit_render_pixels", pixels, "width x height")
     over_limit(settings, "limit_render_samples", pixels * request["spp"], "width x height x spp")

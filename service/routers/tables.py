@@ -35,7 +35,7 @@ def create_table(body: TableRequest, jobs: JobsDep, settings: SettingsDep, clien
     """200 with the table when it exists already (the same model, grid, target error and
     channels: the table cache's key), else 202 with the job that makes it; identical
     requests in flight share that job."""
-    request, key = jobs.prepare(KIND, model_spec(body.model_dump(exclude_none=True), jobs))
+    request, key = jobs.prepare(KIND, model_spec(body.model_dump(exclude_none=True), jobs, client=client))
     over_limit(settings, "limit_table_cells", tabulate_kind.cells(request), "table cells (both lobes counted)")
     if request["wavelengths"] is not None:
         over_limit(settings, "limit_wavelengths", len(request["wavelengths"]), "wavelengths")

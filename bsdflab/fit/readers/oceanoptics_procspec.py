@@ -22,6 +22,13 @@ from bsdflab.fit.readers.base import Reader, Spectrum
 
 _MEMBER = re.compile(r"(^|/)ps_\d+\.xml$")
 _CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f]")
+# The archive is bounded here, in the reader, from its declared sizes (zipfile never inflates
+# a member past its declared size): any file may reach this reader (a sidecar's format, a
+# name with this suffix), so a check at upload alone let a zip bomb through.
+MAX_MEMBERS = 64
+# bytes the members may inflate to: a real document is under 1 MB; parsing 63 MiB of XML held
+# the GIL 8.8 s and took +412 MB (a 160 KB upload), 4 MiB about half a second
+MAX_INFLATED = 4 << 20
 
 
 def _doubles(root, tag: str, where: str) -> np.ndarray:
@@ -43,6 +50,16 @@ def _doubles(root, tag: str, where: str) -> np.ndarray:
     return v
 
 
+def check_sizes(infos: list[zipfile.ZipInfo], where: str) -> None:
+    """ValueError when an archive has more than MAX_MEMBERS members or would inflate past
+    MAX_INFLATED bytes."""
+    if len(infos) > MAX_MEMBERS:
+        raise ValueError(f"{where}: the archive has {len(infos)} members, more than {MAX_MEMBERS}")
+    inflated = sum(i.file_size for i in infos)
+    if inflated > MAX_INFLATED:
+        raise ValueError(f"{where}: the archive inflates to {inflated} bytes, more than the limit of {MAX_INFLATED}")
+
+
 class ProcSpec(Reader):
     name = "procspec"
     suffixes = (".procspec",)
@@ -51,6 +68,7 @@ class ProcSpec(Reader):
     def read(self, path: str, spec) -> list[Spectrum]:
         try:
             with zipfile.ZipFile(path) as z:
+                check_sizes(z.infolist(), path)
                 members = [m for m in z.namelist() if _MEMBER.search(m)]
                 if len(members) != 1:
                     raise ValueError(f"{path}: expected one ps_<n>.xml document in the archive, found "

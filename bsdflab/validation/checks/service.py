@@ -43,6 +43,8 @@ def serve(folder: Path, timeout: float = 120.0):
             "-m",
             "bsdflab.cli.main",
             "serve",
+            "--host",  # never the environment's (the container image sets BSDFLAB_HOST=0.0.0.0)
+            "127.0.0.1",
             "--port",
             str(port),
             "--data-dir",
