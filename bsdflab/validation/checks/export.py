@@ -28,7 +28,7 @@ def _exporter():
 def exact_film_rgb(ext_ior, film_ior, int_ior, thickness_nm, angles_deg, scales):
     """(A, S, 3) linear sRGB of a single film by the transfer-matrix reflectance (not the
     export's own path)."""
-    from bsdflab.optics import FilmStack, Layer, film_reflectance
+    from bsdflab.optics import FilmLayer, FilmStack, film_reflectance
     from bsdflab.reference.approximations.study import SPECTRAL_GRID_NM
     from bsdflab.spectra import spectrum_to_rgb
 
@@ -36,7 +36,7 @@ def exact_film_rgb(ext_ior, film_ior, int_ior, thickness_nm, angles_deg, scales)
     cols = []
     for k in scales:
         R = film_reflectance(
-            FilmStack(ext_ior, [Layer(film_ior, thickness_nm * k)], int_ior), SPECTRAL_GRID_NM, cos_theta=cos
+            FilmStack(ext_ior, [FilmLayer(film_ior, thickness_nm * k)], int_ior), SPECTRAL_GRID_NM, cos_theta=cos
         )
         cols.append(spectrum_to_rgb(np.asarray(R), SPECTRAL_GRID_NM))
     return np.stack(cols, axis=1)
