@@ -6,7 +6,9 @@ failure names it), and each has power: a deliberate mutation injected through
 
 Mutations (each run once here, figures in the closing report):
 * solvers: the solver given the stack with its slabs' scattering dropped (sigma_s = 0);
-* coverage: a tabulate whose stated cell errors are half the true ones;
+* coverage: a tabulate whose stated cell errors are half the true ones; per pair,
+  ``Layered.estimate`` with error_walks=0 (the value's own spread) on the snake, at level
+  standard (960 pairs: quick's 96 hold too few |z| > 3 to tell it from the normal);
 * fit: posteriors 0.3x too narrow about their mean (an over-confident sampler);
 * measured: a reader 1 % high in eval;
 * export: a report whose Delta E00 map is half the file's colour error;
@@ -80,6 +82,18 @@ def test_coverage_fails_tables_that_understate_their_errors():
     r = _run(check, lambda: {"stack": check.make_model()["stack"], "tabulate": understated})
     assert r.status == "fail", r.message
     print(f"coverage mutated: {r.message}")
+
+
+def test_coverage_fails_pair_errors_from_their_own_walks():
+    def own_walks(stack, wi, wo, seed):
+        return stack.estimate(wi, wo, [450.0, 550.0, 650.0], samples=256, seed=seed, scattered_only=True, error_walks=0)
+
+    check = REGISTRY["coverage/eval-with-error-pairs/xenopeltis"]
+    stack = check.make_model()["stack"]
+    mutated = check.with_model(lambda: {"stack": stack, "estimate": own_walks}, name=f"{check.name}/mutated")
+    r = run_check(mutated, "standard")
+    assert r.status == "fail", r.message
+    print(f"pair coverage mutated: {r.message}")
 
 
 def test_fit_fails_an_overconfident_posterior():

@@ -1,8 +1,9 @@
 """Coverage of PFMC's stated errors against adding-doubling (docs/coverage.md): how often a
-PFMC table cell (and, as a study, an ``eval_with_error`` pair) misses adding-doubling by more
-than k of its own standard errors, against the normal 2 (1 - Phi(k)). The model under test
-is the estimator: ``{"stack": Layered, "tabulate": tabulate}`` for tables, ``{"stack":
-Layered}`` for pairs; a ``tabulate`` that understates its errors must fail."""
+PFMC table cell (or an ``eval_with_error`` pair) misses adding-doubling by more than k of
+its own standard errors, against the normal 2 (1 - Phi(k)). The model under test is the
+estimator: ``{"stack": Layered, "tabulate": tabulate}`` for tables, ``{"stack": Layered,
+"estimate": f(stack, wi, wo, seed)}`` for pairs; a ``tabulate`` that understates its errors,
+or pairs' errors from their own walks alone (error_walks=0), must fail."""
 
 from __future__ import annotations
 
@@ -107,30 +108,53 @@ def _table_cells(ctx):
     return Outcome(ok, worst, PER_K, ">=", message, details)
 
 
-@REGISTRY.check(
-    name="coverage/eval-with-error-pairs/plastic",
-    family="coverage",
-    kind="study",
-    title="Coverage of eval_with_error per pair (a study while the per-pair fix lands)",
-    model="Layered.estimate(scattered_only=True) of the plastic stack at its default 256 walks",
-    reference="bsdflab.solvers.solve(...).eval_with_error(scattered_only=True)",
-    statistic="smallest binomial p-value over k = 2, 3, 4 (reported, no limit yet)",
-    tolerance=TOLERANCE + "; a study: docs/coverage.md records the open per-pair gap",
-    effort=effort({"pairs": 24, "seeds": 4}, {"pairs": 24, "seeds": 40}, {"pairs": 24, "seeds": 200}),
-    make_model=lambda: {"stack": _plastic()},
-    seed=62,
-)
+def _estimate(stack, wi, wo, seed):
+    """The estimator under test: ``Layered.estimate`` at the stack's default 256 walks and its
+    default ``error_walks`` (a mutation passes error_walks=0: the value's own spread)."""
+    return stack.estimate(wi, wo, WAVELENGTHS, samples=256, seed=seed, scattered_only=True)
+
+
+def _pair_estimator(make_stack):
+    return lambda: {"stack": make_stack(), "estimate": _estimate}
+
+
+def _snake():
+    from bsdflab.presets import preset
+
+    return preset("xenopeltis")
+
+
+PAIR_EFFORT = effort({"pairs": 24, "seeds": 4}, {"pairs": 24, "seeds": 40}, {"pairs": 24, "seeds": 200})
+PAIR_MODEL = "Layered.estimate(scattered_only=True) of the {} at its default 256 walks and error_walks (4 x 256)"
+PAIR_REFERENCE = "bsdflab.solvers.solve(...).eval_with_error(scattered_only=True)"
+
+
 def _pairs(ctx):
     from bsdflab.solvers import solve
 
-    stack = ctx.model["stack"]
+    stack, estimate = ctx.model["stack"], ctx.model["estimate"]
     n = int(ctx.effort["pairs"])
     wi = random_unit_vectors(n, seed=ctx.seed, hemisphere="upper")
     wo = random_unit_vectors(n, seed=ctx.seed + 1, hemisphere="upper")
     ref, bound = solve(stack, WAVELENGTHS).eval_with_error(wi, wo, scattered_only=True)
     zs = []
     for seed in range(ctx.seed, ctx.seed + int(ctx.effort["seeds"])):
-        e = stack.estimate(wi, wo, WAVELENGTHS, samples=256, seed=seed, scattered_only=True)
+        e = estimate(stack, wi, wo, seed)
         zs.append(_one_channel((e.value - ref) / np.hypot(e.stderr, bound), seed))
-    _, worst, message, details = _outcome(ctx, np.concatenate(zs), "eval_with_error pairs")
-    return Outcome(True, worst, PER_K, ">=", message, details)
+    ok, worst, message, details = _outcome(ctx, np.concatenate(zs), "eval_with_error pairs")
+    return Outcome(ok, worst, PER_K, ">=", message, details)
+
+
+for _name, _make, _seed in (("plastic", _plastic, 62), ("xenopeltis", _snake, 63)):
+    REGISTRY.check(
+        name=f"coverage/eval-with-error-pairs/{_name}",
+        family="coverage",
+        title=f"eval_with_error's per-pair errors cover adding-doubling at the normal rate ({_name})",
+        model=PAIR_MODEL.format(f"{_name} stack"),
+        reference=PAIR_REFERENCE,
+        statistic="smallest binomial p-value over k = 2, 3, 4",
+        tolerance=TOLERANCE,
+        effort=PAIR_EFFORT,
+        make_model=_pair_estimator(_make),
+        seed=_seed,
+    )(_pairs)

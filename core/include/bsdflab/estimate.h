@@ -68,6 +68,16 @@ class ThreadWorkspace {
     EstimateWorkspace *workspace_;
 };
 
+// How one estimate grouped its walks, for statistics across runs (walk_statistics.h): the
+// mean is over `groups` group means, so its variance is the per-walk variance over
+// `effective_walks` = groups^2 / sum_i(1 / walks in group i), which is the walk count
+// only when the groups are equal (pfmc2's last group may be short: 9 walks in groups of
+// 4, 4, 1 give the lone walk a third of the weight, effective_walks 6).
+struct WalkGroups {
+    int groups = 0;
+    double effective_walks = 0.0;
+};
+
 // What one estimate is asked for: `samples` independent walks seeded from (seed, wi, wo),
 // the per-walk values projected by P (rows x channels, row-major) before the statistics
 // so that errors of derived quantities (RGB, luminance) are exact. P null: the channels.
@@ -82,6 +92,9 @@ struct EstimateRequest {
     // Extra walks for the standard error alone (walk_statistics.h estimate_pooled reads it;
     // StochasticEstimator::estimate itself ignores it). 0: the error of the value's walks.
     int error_walks = 0;
+    // Optional out: the grouping of this estimate's walks (left as is where it returns
+    // before walking, with a zero mean and error).
+    WalkGroups *grouping = nullptr;
     int out_rows(int channels) const { return P ? rows : channels; }
 };
 

@@ -75,6 +75,11 @@ std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_
         out[r] = mean[r] + x[r];
         err[r] = groups > 1 ? std::sqrt(m2[r] / (double(groups) * (groups - 1))) : 0.0;
     }
+    if (req.grouping) { // full groups of per_chain walks, then one of `rest`
+        const int full = samples / per_chain, rest = samples % per_chain;
+        const double inverse_walks = double(full) / per_chain + (rest ? 1.0 / rest : 0.0);
+        *req.grouping = {groups, double(groups) * groups / inverse_walks};
+    }
     if (capped) {
         if (req.capped) *req.capped += capped;
         else capped_.fetch_add(capped, std::memory_order_relaxed);
