@@ -180,6 +180,47 @@ TabulatedBSDF::Weights TabulatedBSDF::thickness_weights(const Query &q) const {
     return {i0, i1, (t - T[i0]) / (T[i1] - T[i0])};
 }
 
+// The scattered part of a smooth interface's side carries its Fresnel transmission at
+// theta_i, which falls to 0 at grazing: interpolating f itself between theta_i nodes (and
+// holding the last node's value up to 90 degrees) gained up to 45 % of the albedo at 89
+// degrees and lost 5 % at 80. Interpolating f / entry and multiplying by entry(theta_i)
+// is exact at the nodes and follows the Fresnel factor between and beyond them.
+double TabulatedBSDF::entry(int side, double theta, const Query &q) const {
+    const BSDF *d = direct(side);
+    if (!d || !(d->lobes() & kDeltaReflection)) return 1.0;
+    const double c = std::cos(theta);
+    Vec3 wi{std::sin(theta), 0.0, side == 0 ? c : -c};
+    if (!(c > 0)) return 0.0;
+    const int C = channels(), D = d->channels();
+    double *r = scratch(2, D);
+    BSDFSample s = d->sample(wi, 0.5, 0.5, 0.5, kDeltaReflection, direct_query(q, side), r);
+    double reflected = 0, all = 0;
+    for (int k = 0; k < C; ++k) {
+        double acc = 0;
+        if (s.lobe)
+            for (int e = 0; e < D; ++e) acc += P_[k * D + e] * r[e];
+        reflected += luminance_[k] * acc;
+        all += luminance_[k];
+    }
+    return all > 0 ? std::clamp(1.0 - reflected / all, 0.0, 1.0) : 1.0;
+}
+
+TabulatedBSDF::Entry TabulatedBSDF::entry_weights(const Vec3 &w, const Weights &wa, int n,
+                                                  const Query &q) const {
+    const int side = side_of(w);
+    if (!direct(side) || !(direct(side)->lobes() & kDeltaReflection)) return {1 - wa.w1, wa.w1};
+    const double at = entry(side, std::acos(std::clamp(std::abs(w.z), 0.0, 1.0)), q);
+    const double n0 = entry(side, (wa.i0 + 0.5) * (0.5 * kPi / n), q);
+    const double n1 = entry(side, (wa.i1 + 0.5) * (0.5 * kPi / n), q);
+    // A node where (almost) nothing crosses (total internal reflection) holds f ~ 0 and
+    // says nothing of f / entry: the other node's ratio stands for both.
+    constexpr double kNone = 1e-6;
+    if (!(n0 > kNone) && !(n1 > kNone)) return {0.0, 0.0};
+    if (!(n1 > kNone)) return {at / n0, 0.0};
+    if (!(n0 > kNone)) return {0.0, at / n1};
+    return {(1 - wa.w1) * at / n0, wa.w1 * at / n1};
+}
+
 void TabulatedBSDF::table_eval(const Vec3 &wi, const Vec3 &wo, const Query &q, double *out) const {
     const int C = channels();
     for (int c = 0; c < C; ++c) out[c] = 0.0;
@@ -189,11 +230,14 @@ void TabulatedBSDF::table_eval(const Vec3 &wi, const Vec3 &wo, const Query &q, d
     Weights wa = angle_weights(std::acos(std::clamp(std::abs(wi.z), 0.0, 1.0)), grid_.n_theta_i);
     Weights wb = angle_weights(std::acos(std::clamp(std::abs(wo.z), 0.0, 1.0)), grid_.n_theta_o);
     Weights wp = phi_weights(wrap_phi(wi, wo));
+    // Both ways, so the lookup stays reciprocal: wo leaves through its own side's interface.
+    const Entry en = entry_weights(wi, wa, grid_.n_theta_i, q),
+                ex = entry_weights(wo, wb, grid_.n_theta_o, q);
     for (int a = 0; a < 2; ++a)
         for (int b = 0; b < 2; ++b)
             for (int d = 0; d < 2; ++d)
                 for (int e = 0; e < 2; ++e) {
-                    double w = (a ? wt.w1 : 1 - wt.w1) * (b ? wa.w1 : 1 - wa.w1) * (d ? wb.w1 : 1 - wb.w1) *
+                    double w = (a ? wt.w1 : 1 - wt.w1) * (b ? en.c1 : en.c0) * (d ? ex.c1 : ex.c0) *
                                (e ? wp.w1 : 1 - wp.w1);
                     if (w == 0) continue;
                     std::size_t cell = grid_.cell_index(lobe, a ? wt.i1 : wt.i0, b ? wa.i1 : wa.i0,
@@ -234,8 +278,10 @@ double TabulatedBSDF::table_albedo(const Vec3 &wi, const Query &q) const {
     Weights wa = angle_weights(std::acos(std::clamp(std::abs(wi.z), 0.0, 1.0)), grid_.n_theta_i);
     const int side = side_of(wi);
     auto A = [&](int t, int ti) { return albedo_[node(side, t, ti)]; };
-    return (1 - wt.w1) * ((1 - wa.w1) * A(wt.i0, wa.i0) + wa.w1 * A(wt.i0, wa.i1)) +
-           wt.w1 * ((1 - wa.w1) * A(wt.i1, wa.i0) + wa.w1 * A(wt.i1, wa.i1));
+    const Entry en = entry_weights(wi, wa, grid_.n_theta_i, q); // as table_eval interpolates
+    const double w0 = en.c0, w1 = en.c1;
+    return (1 - wt.w1) * (w0 * A(wt.i0, wa.i0) + w1 * A(wt.i0, wa.i1)) +
+           wt.w1 * (w0 * A(wt.i1, wa.i0) + w1 * A(wt.i1, wa.i1));
 }
 
 double TabulatedBSDF::table_pdf(const Vec3 &wi, const Vec3 &wo, const Query &q) const {

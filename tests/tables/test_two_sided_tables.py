@@ -13,6 +13,7 @@ import bsdflab as bl
 from bsdflab.tables import TableBSDF, TableGrid, file_format, read_table, tabulate, write_table
 from bsdflab.tables.data import TWO_SIDED_LOBES
 from bsdflab.testing import bsdf_chi2, sidak_z_limit
+from bsdflab.testing.furnace import albedo_sampled
 
 ALPHA = 1e-3
 N_ABOVE, N_BELOW = 1.0, 1.33
@@ -122,7 +123,11 @@ def test_05_a_version_2_file_still_reads(tmp_path, pfmc_table):
     wi = np.array([[0.3, 0.0, 0.9539392014169456]])
     wo = np.array([[-0.2, 0.1, -0.9746794344808963]])
     now, then = TableBSDF(pfmc_table), TableBSDF(back)
-    np.testing.assert_array_equal(then.eval(wi, wo), now.eval(wi, wo))
+    # reflection as before; transmission too but for the base's Fresnel factor at wo, which
+    # a two-sided table's lookup interpolates by (table_bsdf.h: entry) and a version-2 one lacks
+    up = wo * [1, 1, -1]
+    np.testing.assert_array_equal(then.eval(wi, up), now.eval(wi, up))
+    assert np.all(then.eval(wi, wo) > 0)
     below = wi * [1, 1, -1]
     assert np.all(then.eval(below, wo) == 0) and np.all(now.eval(below, wo) > 0)
 
@@ -176,3 +181,25 @@ def test_08_a_rough_base_is_added_exactly_below_and_sampled():
     np.testing.assert_allclose(tb.eval(wi, wo), base.eval(wi, wo), rtol=1e-6, atol=1e-12)
     test = bsdf_chi2(tb, wi[0], sample_count=200_000, seed=3)
     assert test.run(), test.message
+
+
+@pytest.mark.parametrize("side", [1.0, -1.0])
+def test_09_grazing_light_keeps_the_stacks_energy(side):
+    """A lossless smooth stack's albedo through the table, at 80 and 89 degrees from each
+    side, against the direct model's (PFMC walks): the scattered part carries the smooth
+    interface's Fresnel transmission, which falls to 0 at grazing; interpolating f itself
+    (and holding the last theta_i node's value up to 90 degrees) gave 1.31 (from above)
+    and 1.45 (from below) at 89 degrees against 1.00, and lost 5 % at 80. Tolerance: 4
+    sigma of the two estimates (Sidak over the 4 cases at ALPHA would be 3.5) plus 1 %
+    for the table's interpolation (measured now: within 0.16 %, |z| < 1.6; the 89-degree case was
+    +31 % and +45 % before)."""
+    stack = bl.Layered([bl.Dielectric(1.5, N_ABOVE)],
+                       [bl.Slab(20.0, sigma_a=0.0, sigma_s=2.0, phase={"type": "hg", "g": 0.3})],
+                       bl.Dielectric(N_BELOW, 1.5))
+    tb = TableBSDF(tabulate(stack, TableGrid(8, 8, 9), rel_error=0.003, method="adding-doubling",
+                            progress=False))
+    for theta in np.radians([80.0, 89.0]):
+        wi = np.array([np.sin(theta), 0.0, side * np.cos(theta)])
+        table, direct = albedo_sampled(tb, wi, n=200_000, seed=1), albedo_sampled(stack, wi, n=20_000, seed=1)
+        allowed = 4 * np.hypot(table.stderr, direct.stderr) + 0.01 * direct.mean
+        assert np.all(np.abs(table.mean - direct.mean) < allowed), (np.degrees(theta), table, direct)

@@ -60,6 +60,14 @@ class TabulatedBSDF final : public BSDF {
     void table_eval(const Vec3 &wi, const Vec3 &wo, const Query &q, double *out) const;
     double table_pdf(const Vec3 &wi, const Vec3 &wo, const Query &q) const;
     double table_albedo(const Vec3 &wi, const Query &q) const;
+    // Luminance share of light that crosses the side's smooth interface at theta (1 - its
+    // delta reflectance; 1 without one): the table is interpolated in f / (entry(theta_i)
+    // entry(theta_o)), wo leaving through its own side.
+    double entry(int side, double theta, const Query &q) const;
+    struct Entry {
+        double c0, c1; // the two nodes' interpolation weights, times entry(theta) / entry(node)
+    };
+    Entry entry_weights(const Vec3 &w, const Weights &wa, int n, const Query &q) const; // n: nodes
     void direct_eval(const BSDF &d, const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
                      double *out) const;
     void mixture(const Vec3 &wi, const Query &q, double &p_delta, double &p_direct,
