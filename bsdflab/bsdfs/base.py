@@ -51,7 +51,9 @@ class BSDF(abc.ABC):
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
-        if cls.type_name:
+        # only a class that names its own type registers: a subclass inheriting the name
+        # (a test's mutant, a user's wrapper) would otherwise take the type over for everyone
+        if cls.__dict__.get("type_name"):
             TYPES.add(cls.type_name, cls)
 
     def __init__(self) -> None:

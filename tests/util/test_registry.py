@@ -29,8 +29,19 @@ def test_every_type_defined_above_bsdfs_has_a_lazy_entry():
     # comparison models of bsdflab.reference register when their module is imported: they
     # are never product materials, so from_dict need not find them unasked
     above = {c.type_name: c.__module__ for c in _all_subclasses(BSDF)
-             if c.type_name and not c.__module__.startswith(("bsdflab.bsdfs.", "bsdflab.reference."))}
+             if c.__dict__.get("type_name") and not c.__module__.startswith(("bsdflab.bsdfs.", "bsdflab.reference."))}
     assert above and {name: TYPES.lazy().get(name) for name in above} == above
+
+
+def test_a_subclass_inheriting_a_type_name_does_not_take_the_type_over():
+    """Before: a test's mutant (``class High(Measured)``, 1 % high) registered itself as
+    "measured", and every later ``{"type": "measured"}`` in the process read 1 % high."""
+    from bsdflab.measured import Measured
+
+    class Wrapper(Measured):
+        pass
+
+    assert TYPES.get("measured") is Measured and Wrapper.type_name == "measured"
 
 
 def test_a_table_from_its_dict_without_importing_tables_first(tmp_path):
