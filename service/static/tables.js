@@ -12,7 +12,7 @@ const GRIDS = {
 
 function card() {
   const el = document.createElement("article");
-  el.className = "card";
+  el.className = "card wide";
   el.id = "tables-card";
   el.innerHTML = `
     <h2>Table <small>the material being edited, tabulated as a job (the server's table cache)</small></h2>

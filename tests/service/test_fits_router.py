@@ -187,7 +187,7 @@ def test_a_running_fit_is_cancelled(client, long_hash):
     r = client.post("/v1/fits", json={"config": config, "data": [{"hash": long_hash, "name": "data.csv"}]})
     assert r.status_code == 202, r.text
     job_id = r.json()["id"]
-    end = time.monotonic() + 300
+    end = time.monotonic() + 1800   # a hang guard only (the MAP stage takes seconds), never a timing check
     while (job := client.get(f"/v1/jobs/{job_id}").json())["progress"] <= 0.25:
         assert job["state"] in ("queued", "running") and time.monotonic() < end, job
         time.sleep(0.05)
