@@ -154,7 +154,7 @@ class Layered(BSDF):
         options = _core.LayeredOptions(samples=self.samples, seed=self.seed, max_depth=self.max_depth, nee=nee,
                                        pdf_samples=self.pdf_samples, estimator=ESTIMATORS[self.estimator])
         return _core.LayeredBSDF(
-            list(wl), boundaries, thickness=[s.thickness_um for s in self.slabs],
+            list(wl), boundaries, thickness_um=[s.thickness_um for s in self.slabs],
             sigma_a=[list(s.sigma_a_at(wl)) for s in self.slabs], sigma_s=[s.sigma_s for s in self.slabs],
             phase_kind=[s.phase.core_kind for s in self.slabs],
             phase_param=[s.phase.core_parameter for s in self.slabs], options=options)

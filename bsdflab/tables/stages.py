@@ -292,7 +292,7 @@ def _build_tabulator(model, grid, wavelengths, settings):
     _, model_wl, P, lum = table_channels(wavelengths)
     rows = np.vstack([P, lum @ P])
     return _core.Tabulator(_core_model(model, model_wl), n_lobes=len(lobes_of(model)), n_theta_i=grid.n_theta_i,
-                           n_theta_o=grid.n_theta_o, n_phi=grid.n_phi, thickness=list(grid.thickness_nm),
+                           n_theta_o=grid.n_theta_o, n_phi=grid.n_phi, thickness_nm=list(grid.thickness_nm),
                            P=list(rows.ravel()), rows=rows.shape[0], settings=settings)
 
 

@@ -30,7 +30,7 @@ void bind_adding_doubling(py::module_ &m) {
                  return std::make_shared<AddingDoubling>(std::move(wavelengths), std::move(b),
                                                          std::move(media), std::move(slabs), s);
              }),
-             py::arg("wavelengths"), py::arg("boundaries"), py::arg("media"), py::arg("thickness"),
+             py::arg("wavelengths"), py::arg("boundaries"), py::arg("media"), py::arg("thickness_um"),
              py::arg("sigma_a"), py::arg("sigma_s"), py::arg("g"), py::arg("nodes"), py::arg("orders"),
              py::arg("thin_depth"), py::arg("order_tolerance"), py::arg("azimuth_samples"),
              py::arg("film_lookup") = false, py::arg("spectral_stride") = 1, py::arg("fine_step") = 0.25)

@@ -111,11 +111,11 @@ void bind_bsdf(py::module_ &m) {
         .def_property_readonly("wavelengths", &BSDF::wavelengths)
         .def_property_readonly("lobes", &BSDF::lobes)
         .def("eval", &eval_many, py::arg("wi"), py::arg("wo"), py::arg("lobes") = uint32_t(kAll),
-             py::arg("thickness") = py::none(), "f * |cos theta_o| per channel, shape (N, C)")
+             py::arg("thickness_nm") = py::none(), "f * |cos theta_o| per channel, shape (N, C)")
         .def("pdf", &pdf_many, py::arg("wi"), py::arg("wo"), py::arg("lobes") = uint32_t(kAll),
-             py::arg("thickness") = py::none(), "solid-angle density of sample(), shape (N,)")
+             py::arg("thickness_nm") = py::none(), "solid-angle density of sample(), shape (N,)")
         .def("sample", &sample_many, py::arg("wi"), py::arg("u1"), py::arg("u2"),
-             py::arg("lobes") = uint32_t(kAll), py::arg("thickness") = py::none(),
+             py::arg("lobes") = uint32_t(kAll), py::arg("thickness_nm") = py::none(),
              "(wo, weight, pdf, lobe, eta)");
 
     py::class_<Diffuse, BSDF, std::shared_ptr<Diffuse>>(m, "Diffuse")

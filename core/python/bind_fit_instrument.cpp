@@ -69,7 +69,7 @@ void bind_fit_instrument(py::module_ &m) {
              py::arg("cone_u"), py::arg("cone_w"), py::arg("azimuths"))
         .def_property_readonly("angles", &fit::InstrumentStack::angles)
         .def_property_readonly("media", &fit::InstrumentStack::media)
-        .def("evaluate", &evaluate, py::arg("n"), py::arg("wl"), py::arg("d"), py::arg("inst"),
+        .def("evaluate", &evaluate, py::arg("n"), py::arg("wavelengths"), py::arg("d_nm"), py::arg("inst"),
              "Smeared specular reflectance (P, angles, wavelengths); NaN outside the domain.");
     m.def(
         "smear_uniform", &smear, py::arg("r"), py::arg("sigma_nm"), py::arg("step_nm"), py::arg("first"),

@@ -24,7 +24,7 @@ void bind_interfaces(py::module_ &m) {
                 t.eval(cos_i, q, R.data(), T.data());
                 return py::make_tuple(R, T);
             },
-            py::arg("cos_i"), py::arg("thickness") = -1.0, "(R, T) per channel");
+            py::arg("cos_i"), py::arg("thickness_nm") = -1.0, "(R, T) per channel");
     py::class_<DielectricTerm, FresnelTerm, std::shared_ptr<DielectricTerm>>(m, "DielectricTerm")
         .def(py::init<int, double, double>(), py::arg("channels"), py::arg("int_ior"), py::arg("ext_ior"));
     py::class_<ConductorTerm, FresnelTerm, std::shared_ptr<ConductorTerm>>(m, "ConductorTerm")

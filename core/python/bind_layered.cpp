@@ -112,24 +112,25 @@ void bind_layered(py::module_ &m) {
                  return std::make_shared<LayeredBSDF>(std::move(wavelengths), std::move(b), std::move(slabs),
                                                       options);
              }),
-             py::arg("wavelengths"), py::arg("boundaries"), py::kw_only(), py::arg("thickness"),
+             py::arg("wavelengths"), py::arg("boundaries"), py::kw_only(), py::arg("thickness_um"),
              py::arg("sigma_a"), py::arg("sigma_s"), py::arg("phase_kind"), py::arg("phase_param"),
              py::arg("options"))
-        .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"), py::arg("thickness"),
-             py::arg("samples"), py::arg("seed"), py::arg("error_walks") = 0,
+        .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"),
+             py::arg("thickness_nm"), py::arg("samples"), py::arg("seed"), py::arg("error_walks") = 0,
              "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed;\n"
              "error_walks > 0 pools the error with that many extra walks (walk_statistics.h)")
         .def_property_readonly("capped_walks", &LayeredBSDF::capped_walks,
                                "walks of eval(), sample() and pdf() cut by max_depth since construction")
-        .def("delta_reflectance", &delta_reflectance_many, py::arg("wi"), py::arg("thickness") = py::none())
+        .def("delta_reflectance", &delta_reflectance_many, py::arg("wi"),
+             py::arg("thickness_nm") = py::none())
         .def(
             "scattered_part",
             [](const std::shared_ptr<LayeredBSDF> &self) { return std::make_shared<ScatteredPart>(self); },
             "the model without its top boundary's own reflection (a stochastic BSDF)");
 
     py::class_<ScatteredPart, BSDF, std::shared_ptr<ScatteredPart>>(m, "LayeredScatteredPart")
-        .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"), py::arg("thickness"),
-             py::arg("samples"), py::arg("seed"), py::arg("error_walks") = 0,
+        .def("estimate", &estimate_many, py::arg("wi"), py::arg("wo"), py::arg("lobes"),
+             py::arg("thickness_nm"), py::arg("samples"), py::arg("seed"), py::arg("error_walks") = 0,
              "(value, stderr, non-finite walk count, capped walk count) with an explicit effort and seed;\n"
              "error_walks > 0 pools the error with that many extra walks (walk_statistics.h)");
 }

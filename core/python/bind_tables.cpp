@@ -56,7 +56,7 @@ void bind_tables(py::module_ &m) {
                      std::move(P), rows, settings);
              }),
              py::arg("model"), py::kw_only(), py::arg("n_lobes"), py::arg("n_theta_i"), py::arg("n_theta_o"),
-             py::arg("n_phi"), py::arg("thickness"), py::arg("P"), py::arg("rows"), py::arg("settings"))
+             py::arg("n_phi"), py::arg("thickness_nm"), py::arg("P"), py::arg("rows"), py::arg("settings"))
         .def("with_settings", &Tabulator::with_settings, py::arg("settings"),
              "the same model, grid and film lookups (shared) with other settings")
         .def_property_readonly("settings", &Tabulator::settings)
@@ -131,16 +131,17 @@ void bind_tables(py::module_ &m) {
                      direct_below);
              }),
              py::arg("channel_ids"), py::arg("n_lobes"), py::arg("n_theta_i"), py::arg("n_theta_o"),
-             py::arg("n_phi"), py::arg("thickness"), py::arg("values"), py::arg("luminance"),
-             py::arg("direct"), py::arg("P"), py::arg("default_thickness"), py::arg("transmission_eta") = 1.0,
-             py::arg("direct_below") = nullptr);
+             py::arg("n_phi"), py::arg("thickness_nm"), py::arg("values"), py::arg("luminance"),
+             py::arg("direct"), py::arg("P"), py::arg("default_thickness_nm"),
+             py::arg("transmission_eta") = 1.0, py::arg("direct_below") = nullptr);
 
     py::class_<ProjectedFresnelTerm, FresnelTerm, std::shared_ptr<ProjectedFresnelTerm>>(
         m, "ProjectedFresnelTerm")
         .def(py::init<std::shared_ptr<const FresnelTerm>, std::vector<double>, int, double, double, double,
                       int, int>(),
-             py::arg("exact"), py::arg("P"), py::arg("out_channels"), py::arg("thickness_lo"),
-             py::arg("thickness_hi"), py::arg("default_thickness"), py::arg("n_cos"), py::arg("n_thickness"))
+             py::arg("exact"), py::arg("P"), py::arg("out_channels"), py::arg("thickness_lo_nm"),
+             py::arg("thickness_hi_nm"), py::arg("default_thickness_nm"), py::arg("n_cos"),
+             py::arg("n_thickness"))
         .def_property_readonly("n_cos", &ProjectedFresnelTerm::n_cos)
         .def_property_readonly("n_thickness", &ProjectedFresnelTerm::n_thickness);
 

@@ -240,7 +240,7 @@ def test_07_non_finite_walks_are_counted():
     wl = [550.0]
     top = rough_top()._core(np.array(wl))
     base = bl.Diffuse(0.5)._core(np.array(wl))
-    bad = _core.LayeredBSDF(wl, [top, base], thickness=[np.inf], sigma_a=[[0.0]], sigma_s=[0.0], phase_kind=[0],
+    bad = _core.LayeredBSDF(wl, [top, base], thickness_um=[np.inf], sigma_a=[[0.0]], sigma_s=[0.0], phase_kind=[0],
                             phase_param=[0.0], options=_core.LayeredOptions(samples=16, seed=0, max_depth=64))
     wi = random_unit_vectors(20, seed=1, hemisphere="upper")
     wo = random_unit_vectors(20, seed=2, hemisphere="upper")
@@ -261,7 +261,7 @@ def test_08_nested_stochastic_models_keep_their_own_state():
     inner_model = bl.presets.xenopeltis(samples=512, seed=3)
     inner = inner_model._core(wl)
     coat = bl.Dielectric(1.0, 1.0)._core(wl)
-    outer = _core.LayeredBSDF(list(wl), [coat, inner], thickness=[0.0], sigma_a=[[0.0, 0.0]], sigma_s=[0.0],
+    outer = _core.LayeredBSDF(list(wl), [coat, inner], thickness_um=[0.0], sigma_a=[[0.0, 0.0]], sigma_s=[0.0],
                               phase_kind=[0], phase_param=[0.0],
                               options=_core.LayeredOptions(samples=4, seed=0, max_depth=64))
     wi = random_unit_vectors(16, seed=4, hemisphere="upper")
