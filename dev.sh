@@ -5,7 +5,7 @@
 #   ./dev.sh test   set everything up, check the import layers (lint-imports), then run
 #                   the test suite (what CI runs)
 #   ./dev.sh setup  only set up (system packages, .venv, build of the C++ core)
-#   ./dev.sh lint   only check the import layers (after setup)
+#   ./dev.sh lint   only lint: ruff, clang-format, the import layers (after setup)
 # Extra arguments after `test` go to pytest (e.g. ./dev.sh test -m slow).
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -90,7 +90,7 @@ cmd=${1:-demo}
 shift || true
 case "$cmd" in
     setup) setup ;;
-    lint) lint_imports ;;
+    lint) lint ;;
     demo)
         setup
         mkdir -p out
