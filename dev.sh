@@ -2,7 +2,7 @@
 # One entry point for a fresh Debian machine (run as root, or with the system packages
 # below already present):
 #   ./dev.sh demo   set everything up, then run the main job
-#   ./dev.sh test   set everything up, check the import layers (lint-imports), then run
+#   ./dev.sh test   set everything up, lint (ruff, clang-format, import layers), then run
 #                   the test suite (what CI runs)
 #   ./dev.sh setup  only set up (system packages, .venv, build of the C++ core)
 #   ./dev.sh lint   only lint: ruff, clang-format, the import layers (after setup)
