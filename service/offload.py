@@ -63,8 +63,9 @@ class Checker:
             if started:
                 raise HTTPException(422, f"{what}: reading it took longer than {s.check_deadline_s:g} s "
                                          f"({limit_variable('check_deadline_s')})") from None
-            raise HTTPException(503, f"all {s.check_workers} check workers stayed busy for "
-                                     f"{s.check_deadline_s:g} s ({limit_variable('check_workers')}); retry later",
+            raise HTTPException(503, f"all {s.check_workers} check workers ({limit_variable('check_workers')}) "
+                                     f"stayed busy for {s.check_deadline_s:g} s "
+                                     f"({limit_variable('check_deadline_s')}); retry later",
                                 headers={"Retry-After": "5"}) from None
         except JobCancelled:
             raise HTTPException(503, "the server is stopping; retry later", headers={"Retry-After": "5"}) from None

@@ -84,3 +84,10 @@ def check_stored(where: str, d: dict[str, Any]) -> None:
             from_dict(d).render_core()
     except (ValueError, TypeError, OverflowError) as e:
         raise ValueError(f"{where}: {e}") from None
+
+
+def check_materials(materials: list) -> dict[str, Any]:
+    """``check_stored`` of each (where, BSDF dict); how many were checked."""
+    for where, d in materials:
+        check_stored(where, d)
+    return {"materials": len(materials)}
