@@ -48,7 +48,8 @@ class JobService:
         self.executor = make_executor(settings.executor, settings.workers)
         # client files (uploads, a render's stored materials) are read in their own worker
         # processes, whatever the executor: never in the web process, never behind a render
-        self.checker = Checker(settings, self.artefact_dir)
+        self.checker = Checker(settings, self.artefact_dir, {self.table_dir: "<table store>",
+                                                             settings.data_dir: "<data folder>"})
         self._handles: dict[str, JobHandle] = {}
         self._lock = threading.Lock()
         self._stop = threading.Event()

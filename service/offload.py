@@ -34,8 +34,10 @@ CLIENT_ERRORS = ("ValueError", "TypeError", "OverflowError")   # the service's 4
 
 
 class Checker:
-    def __init__(self, settings, out_dir: Path):
-        self.settings, self.out_dir = settings, out_dir
+    def __init__(self, settings, out_dir: Path, folders: dict[str, Path] | None = None):
+        """``folders``: server folders a reader's message may name (a table file's path) and
+        the words that replace them in an answer."""
+        self.settings, self.out_dir, self.folders = settings, out_dir, folders or {}
         self._executor: ProcessJobExecutor | None = None
         self._lock = threading.Lock()
         self._closed = False
@@ -71,7 +73,7 @@ class Checker:
             raise HTTPException(503, "the server is stopping; retry later", headers={"Retry-After": "5"}) from None
         except JobFailed as e:
             if e.error_type in CLIENT_ERRORS:
-                raise ValueError(str(e)) from None   # the reader's own message (no server path: see the checks)
+                raise ValueError(self._public(str(e))) from None   # the reader's own message
             if e.error_type == "MemoryError":
                 raise HTTPException(413, f"{what}: reading it needs more than {s.limit_check_memory_bytes} bytes "
                                          f"of memory ({limit_variable('limit_check_memory_bytes')})") from None
@@ -79,6 +81,12 @@ class Checker:
                 raise HTTPException(422, f"{what}: the process reading it stopped ({cut_message(str(e))}); "
                                          "the file cannot be read here") from None
             raise HTTPException(422, f"{what}: could not be read ({e.error_type})") from None
+
+    def _public(self, message: str) -> str:
+        """No server folder in an answer (a stored table is loaded by its path)."""
+        for folder, word in sorted(self.folders.items(), key=lambda kv: -len(str(kv[0]))):
+            message = message.replace(str(folder), word)
+        return message
 
     def worker_pids(self) -> list[int]:
         with self._lock:

@@ -80,7 +80,7 @@ def check_file(jobs, path: str, fmt: str) -> dict[str, Any]:
 
 
 def _upload(jobs, data: bytes, fmt: str, client: str, quota: int | None) -> dict[str, Any]:
-    model_type, reader, suffix = FORMATS[fmt]
+    suffix = FORMATS[fmt][2]
     h = hashlib.sha256(data).hexdigest()
     if quota is not None and not jobs.store.uploaded(h, client):
         stored = jobs.store.upload_bytes(client)
