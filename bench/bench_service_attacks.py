@@ -10,21 +10,28 @@ for ``--seconds`` each, several attackers at once, every loop bounded by count a
   uploads   8 concurrent 16 MiB chunked uploads of junk (M6)
   renders   furnace renders with subdivisions 2048 against a full queue (M8)
   heavy     8 clients of layered evaluations (the pool's 429s)
-while a prober GETs /healthz every 20 ms on its own connection. Printed: requests sent,
+while a prober GETs /healthz every 20 ms on its own connection, in its own process (with
+``--probe-thread``, as before, on a thread of this process: it then waits for this
+process's GIL behind some thirty attacker threads, which the server is not to blame for).
+``--loop-debug`` runs the server with ``PYTHONASYNCIODEBUG=1`` and prints the callbacks
+that held its event loop longest (asyncio's slow-callback log, over 100 ms). Printed: requests sent,
 the status counts (5xx other than the 503s of the connection cap, which every path but
 /healthz answers while the 40 idle sockets are open, must be 0), /healthz p50 / p99 / max
 and how many answered 200, and the server's peak resident memory (VmHWM). Run ``--python`` with another interpreter to
 measure another checkout the same way; ``--attackers`` picks a subset.
 
     python bench/bench_service_attacks.py --seconds 20
+    python bench/bench_service_attacks.py --seconds 20 --attackers uploads --loop-debug   # who blocks the loop
 """
 from __future__ import annotations
 
 import argparse
 import collections
 import json
+import multiprocessing
 import os
 import random
+import re
 import socket
 import string
 import subprocess
@@ -57,11 +64,17 @@ def main() -> int:
     parser.add_argument("--attackers", default=None,
                         help="comma-separated subset of bodies,methods,refs,idle,uploads,renders,heavy "
                              "(default all; 'none': the prober alone, the same machine's idle figures)")
+    parser.add_argument("--probe-thread", action="store_true",
+                        help="probe /healthz from a thread of this process (as before), not its own process")
+    parser.add_argument("--loop-debug", action="store_true",
+                        help="PYTHONASYNCIODEBUG=1 for the server; print its slowest event-loop callbacks")
     args = parser.parse_args()
     port, data = free_port(), tempfile.mkdtemp(prefix="bsdflab-attacks-")
     url = f"http://127.0.0.1:{port}"
     env = {**os.environ, "BSDFLAB_SERVER_LIMIT_CONCURRENCY": "40", "BSDFLAB_LIMIT_QUEUE": "4",
            "BSDFLAB_HEAVY_CONCURRENCY": "2", "BSDFLAB_LOG_LEVEL": "warning"}
+    if args.loop_debug:
+        env["PYTHONASYNCIODEBUG"] = "1"
     server = subprocess.Popen([args.python, "-m", "bsdflab.cli.main", "serve", "--port", str(port), "--data-dir",
                                data, "--workers", "1"], env=env, cwd=data, stdout=subprocess.DEVNULL,
                               stderr=open(Path(data) / "server.log", "w"))
@@ -74,21 +87,52 @@ def main() -> int:
             except httpx.HTTPError:
                 time.sleep(0.2)
         chosen = None if args.attackers is None else [a for a in args.attackers.split(",") if a != "none"]
-        return attack(url, server.pid, args.seconds, chosen)
+        return attack(url, server.pid, args.seconds, chosen, not args.probe_thread)
     finally:
         server.terminate()
         server.wait(60)
+        if args.loop_debug:
+            slow_callbacks(Path(data) / "server.log")
 
 
-def attack(url: str, pid: int, seconds: float, chosen: list[str] | None = None) -> int:
-    return Attack(url, pid, chosen).run(seconds)
+def slow_callbacks(log: Path, top: int = 8) -> None:
+    """The event loop's slow callbacks in the server's log (asyncio debug mode)."""
+    found = []
+    for line in log.read_text(errors="replace").splitlines():
+        m = re.search(r"Executing (.*) took ([0-9.]+) seconds", line)
+        if m:
+            found.append((float(m.group(2)), m.group(1)[:300]))
+    found.sort(reverse=True)
+    print(f"slow event-loop callbacks (> 100 ms): {len(found)}, total {sum(t for t, _ in found):.2f} s")
+    for t, what in found[:top]:
+        print(f"  {1000 * t:.0f} ms  {what}")
+
+
+def attack(url: str, pid: int, seconds: float, chosen: list[str] | None = None, probe_process: bool = True) -> int:
+    return Attack(url, pid, chosen, probe_process).run(seconds)
+
+
+def probe_main(url: str, stop, out) -> None:
+    """The prober in its own process: /healthz every 20 ms until ``stop``; sends
+    (latencies, answered 200) back on ``out``."""
+    health, ok = [], 0
+    with httpx.Client(base_url=url, timeout=60) as client:
+        while not stop.is_set():
+            start = time.perf_counter()
+            try:
+                ok += client.get("/healthz").status_code == 200
+            except httpx.HTTPError:
+                pass
+            health.append(time.perf_counter() - start)
+            time.sleep(0.02)
+    out.send((health, ok))
 
 
 class Attack:
     """The shared counters, lock and stop event of one run, one method per kind of thread."""
 
-    def __init__(self, url: str, pid: int, chosen: list[str] | None = None) -> None:
-        self.url, self.pid = url, pid
+    def __init__(self, url: str, pid: int, chosen: list[str] | None = None, probe_process: bool = True) -> None:
+        self.url, self.pid, self.probe_process = url, pid, probe_process
         self.statuses: collections.Counter[int | str] = collections.Counter()
         self.lock, self.stop = threading.Lock(), threading.Event()
         self.health: list[float] = []
@@ -167,7 +211,14 @@ class Attack:
         idle = [socket.create_connection((self.host, self.port)) for _ in range(40 if "idle" in self.hostile else 0)]
         threads = [threading.Thread(target=self.loop, args=(a,)) for a in self.attackers]
         threads += [threading.Thread(target=self.trickle) for _ in range(4 if "idle" in self.hostile else 0)]
-        threads += [threading.Thread(target=self.probe)]
+        prober = None
+        if self.probe_process:
+            ctx = multiprocessing.get_context("spawn")
+            stop, (receive, send) = ctx.Event(), ctx.Pipe(duplex=False)
+            prober = ctx.Process(target=probe_main, args=(self.url, stop, send))
+            prober.start()
+        else:
+            threads += [threading.Thread(target=self.probe)]
         peak = 0
         for t in threads:
             t.start()
@@ -176,6 +227,10 @@ class Attack:
             peak = max(peak, vm_hwm_kib(self.pid))
             time.sleep(0.25)
         self.stop.set()
+        if prober is not None:
+            stop.set()
+            self.health, self.health_ok = receive.recv()
+            prober.join(30)
         for t in threads:
             t.join(120)
         peak = max(peak, vm_hwm_kib(self.pid))
@@ -193,7 +248,8 @@ class Attack:
         fives = sum(n for s, n in statuses.items() if isinstance(s, int) and s >= 500 and s != 503)
         print(f"requests: {sum(statuses.values())}  statuses: {dict(sorted(statuses.items(), key=str))}")
         print(f"5xx other than the connection cap's 503: {fives}")
-        print(f"/healthz: {len(h)} probes, {self.health_ok} answered 200; p50 {p(0.5):.1f} ms, "
+        where = "own process" if self.probe_process else "thread of the attackers' process"
+        print(f"/healthz ({where}): {len(h)} probes, {self.health_ok} answered 200; p50 {p(0.5):.1f} ms, "
               f"p99 {p(0.99):.1f} ms, max {1000 * h[-1]:.1f} ms")
         print(f"server peak RSS (VmHWM): {peak / 1024:.0f} MiB")
 

@@ -2,10 +2,12 @@
 from __future__ import annotations
 
 import contextlib
+import gc
 from collections import Counter
 
 from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
+from starlette.concurrency import run_in_threadpool
 
 import bsdflab
 from bsdflab.jobs import register_kind
@@ -41,6 +43,15 @@ exists already. Artefacts are content-addressed: the same request finds the same
 Every request a client can send gets a 2xx or a 4xx with a message."""
 
 
+def _warm_up() -> None:
+    """colour-science's import and the sRGB weights, before the first request: the first
+    spectral evaluation paid them (about a second of the GIL on a heavy thread, while
+    /healthz waited: the bench's profile, docs/service.md "Performance")."""
+    from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
+
+    srgb_weights(DEFAULT_WAVELENGTHS)
+
+
 def create_app(settings: Settings | None = None) -> FastAPI:
     settings = settings or Settings()
 
@@ -51,6 +62,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         # threads serve requests: no process-wide descriptor swapping (it lost the logs)
         capturing = native_output.capture_descriptors(False)
         app.state.jobs = JobService(settings)
+        await run_in_threadpool(_warm_up)
+        # The objects alive now (the imports': about 200 000) are never garbage; frozen, the
+        # cyclic collector no longer walks them: each full collection held the GIL, and the
+        # event loop with it, for 120-160 ms (the loaded 2-core machine), /healthz's p99.
+        gc.collect()
+        gc.freeze()
         try:
             yield
         finally:

@@ -6,7 +6,8 @@ and instrument spectra (Ocean Optics .ProcSpec, OceanView and Avantes text, JCAM
 are read whole; a wide CSV only as text, since its delimiter, decimal mark and wavelength
 column may come from the sidecar that the fit request carries (it is read whole then).
 A reader's complaint names the file by the client's name, its line and column, never a
-server folder. A .ProcSpec is a zip: its members may inflate to at most 4 MiB (its reader,
+server folder. Files are read in a check worker process (bsdflab.service.offload), never
+in the web process. A .ProcSpec is a zip: its members may inflate to at most 4 MiB (its reader,
 bsdflab.fit.readers.oceanoptics_procspec, whatever the name). Uploads count against the same
 per-key quotas as measured files (bsdflab.service.uploads).
 """
@@ -62,6 +63,22 @@ def read_check(path: str, name: str) -> dict[str, Any]:
     return {"format": reader.name, "curves": len(spectra), "points": int(sum(len(s.value) for s in spectra))}
 
 
+def read_summary(path: str, name: str, folder: str) -> dict[str, Any]:
+    """``read_check`` with the reader's complaints as a client sees them: ValueError naming
+    the file (by ``name``), line and column, ``folder`` (the server's) left out."""
+    try:
+        return read_check(path, name)
+    except UnicodeDecodeError as e:
+        raise ValueError(f"{name}: not UTF-8 text (byte {e.start + 1})") from None
+    except (ValueError, TypeError, OverflowError) as e:
+        raise ValueError(str(e).replace(folder + os.sep, "").replace(folder, "")) from None
+
+
+def check_file(jobs, path: str, name: str, folder: str) -> dict[str, Any]:
+    """``read_summary`` in a check worker process (bsdflab.service.offload)."""
+    return jobs.checker.run("fitdata", {"path": path, "name": name, "folder": folder}, name)
+
+
 def upload(jobs, data: bytes, name: str, client: str, quota: int | None = None) -> dict[str, Any]:
     """Check and store one fit data file; its record ``{"hash", "format", "summary"}``.
     ValueError naming the file, line and column when it does not read; 413 past the quota."""
@@ -86,12 +103,7 @@ def _upload(jobs, data: bytes, name: str, client: str, quota: int | None) -> dic
     try:
         path = os.path.join(folder, name)
         Path(path).write_bytes(data)
-        try:
-            summary = read_check(path, name)
-        except UnicodeDecodeError as e:
-            raise ValueError(f"{name}: not UTF-8 text (byte {e.start + 1})") from None
-        except ValueError as e:
-            raise ValueError(str(e).replace(folder + os.sep, "").replace(folder, "")) from None
+        summary = check_file(jobs, path, name, folder)
         write_atomically(target, lambda tmp: shutil.copyfile(path, tmp), suffix=SUFFIX)
     finally:
         shutil.rmtree(folder, ignore_errors=True)

@@ -22,6 +22,7 @@ from bsdflab.measured import store as measured_store
 from bsdflab.service import uploads
 from bsdflab.service.auth import ANONYMOUS, Client
 from bsdflab.service.errors import cut_message
+from bsdflab.service.offload import Checker
 from bsdflab.service.settings import Settings
 from bsdflab.service.store import JobStore
 from bsdflab.tables import cache as table_cache
@@ -45,6 +46,10 @@ class JobService:
         self.table_dir.mkdir(parents=True, exist_ok=True)
         hand_down("cache_dir", self.table_dir)
         self.executor = make_executor(settings.executor, settings.workers)
+        # client files (uploads, a render's stored materials) are read in their own worker
+        # processes, whatever the executor: never in the web process, never behind a render
+        self.checker = Checker(settings, self.artefact_dir, {self.table_dir: "<table store>",
+                                                             settings.data_dir: "<data folder>"})
         self._handles: dict[str, JobHandle] = {}
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -236,6 +241,7 @@ class JobService:
         for job_id, elapsed in asked:   # a client's cancel outlives the stop: never re-queued
             self.store.finish(job_id, "cancelled", elapsed, error="cancelled (the server stopped before the job "
                               "reached a point where it stops)", error_type="JobCancelled")
+        self.checker.close()
         self.executor.shutdown()
         released = self.store.release_running()
         if released:

@@ -45,6 +45,10 @@ class Settings(LibrarySettings):
     heavy_concurrency: int = Field(default_factory=default_concurrency, ge=1, le=1024,
                                    description="computing requests at once (429 beyond; default: the cores)")
     compute_deadline_s: float = Field(10.0, gt=0, le=3600, description="seconds one computing request may take")
+    check_workers: int = Field(2, ge=1, le=64, description="processes that read clients' files (uploads, a "
+                                                           "render's stored materials), started on the first")
+    check_deadline_s: float = Field(60.0, gt=0, le=3600, description="seconds one check of a client's file may "
+                                    "take, waiting for a check worker included (422 / 503 beyond)")
 
     limit_body_bytes: int = Field(4 << 20, ge=1024, description="request body size")
     limit_measured_bytes: int = Field(64 << 20, ge=1024, description="one measured-file upload, POST /v1/measured "
@@ -60,6 +64,8 @@ class Settings(LibrarySettings):
                                               "as BSDFLAB_LIMIT_MEASURED_BYTES)")
     limit_upload_storage_per_key: int = Field(1 << 30, ge=1024, description="bytes of stored uploads of one "
                                               "client key (the same bytes uploaded again cost nothing)")
+    limit_check_memory_bytes: int = Field(1 << 30, ge=16 << 20, description="memory one check of a client's "
+                                          "file (an upload, a render's stored material) may take in its worker")
     limit_directions: int = Field(100_000, ge=1, description="direction pairs per eval request")
     limit_samples: int = Field(65_536, ge=1, description="walks per direction pair (stochastic models)")
     limit_walks: int = Field(1 << 18, ge=1, description="direction pairs x walks per request "

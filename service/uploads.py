@@ -1,7 +1,9 @@
 """Measured files uploaded over HTTP (``POST /v1/measured``), stored by content hash.
 
 The bytes are written to a temporary in the artefact folder, read by the real reader
-(`bsdflab.Measured` for RGL ``.bsdf``, `bsdflab.Merl` for MERL), and only then renamed to
+(`bsdflab.Measured` for RGL ``.bsdf``, `bsdflab.Merl` for MERL) in a check worker process
+(bsdflab.service.offload: the reader holds the GIL for seconds, never the web process's),
+and only then renamed to
 ``<sha256>.bsdf`` / ``<sha256>.binary`` (bsdflab.util.files): a file that does not read never
 enters the store, and a reader's complaint reaches the client without the temporary's path.
 The same bytes give the same hash and one file; each client that uploaded them owns them
@@ -62,8 +64,23 @@ def client_lock(client: str) -> threading.Lock:
         return _CLIENT_LOCKS[client]   # one per configured key (and the anonymous client)
 
 
+def read_summary(path: str, fmt: str) -> dict[str, Any]:
+    """The summary of the ``fmt`` file at ``path`` read by its reader (in a check worker,
+    bsdflab.service.worker_checks); ValueError with the reader's message, the file called
+    "the upload"."""
+    try:
+        return summary(FORMATS[fmt][1](path))
+    except (ValueError, TypeError, OverflowError) as e:
+        raise ValueError(f"format={fmt}: " + str(e).replace(path, "the upload")) from None
+
+
+def check_file(jobs, path: str, fmt: str) -> dict[str, Any]:
+    """``read_summary`` in a check worker process (bsdflab.service.offload)."""
+    return jobs.checker.run("measured", {"path": path, "fmt": fmt}, "the upload")
+
+
 def _upload(jobs, data: bytes, fmt: str, client: str, quota: int | None) -> dict[str, Any]:
-    model_type, reader, suffix = FORMATS[fmt]
+    suffix = FORMATS[fmt][2]
     h = hashlib.sha256(data).hexdigest()
     if quota is not None and not jobs.store.uploaded(h, client):
         stored = jobs.store.upload_bytes(client)
@@ -78,13 +95,10 @@ def _upload(jobs, data: bytes, fmt: str, client: str, quota: int | None) -> dict
 
     def write(tmp: str) -> None:
         Path(tmp).write_bytes(data)
-        try:
-            read["model"] = reader(tmp)
-        except ValueError as e:
-            raise ValueError(f"format={fmt}: " + str(e).replace(tmp, "the upload")) from None
+        read.update(check_file(jobs, tmp, fmt))
 
     write_atomically(target, write, suffix=suffix)
-    result = {"hash": h, "format": fmt, "summary": {"bytes": len(data), **summary(read["model"])},
+    result = {"hash": h, "format": fmt, "summary": {"bytes": len(data), **read},
               "files": {"file": target.name}}
     jobs.store.put_upload(h, KIND, client, {"format": fmt}, result)
     return jobs.store.artefact(h, KIND)["result"]

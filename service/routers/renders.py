@@ -48,8 +48,10 @@ def create_render(body: RenderRequest, jobs: JobsDep, settings: SettingsDep, cli
     found = jobs.cached(KIND, key) or jobs.adopt(KIND, key, request)
     if found is not None:
         return render_info(jobs, key, request, found, client)
-    cells = render_checks.check(request)   # what the worker would refuse, refused now (422)
+    cells, stored = render_checks.check(request)   # what the worker would refuse, refused now (422)
     over_limit(settings, "limit_table_cells", cells, "options.material's table cells (both lobes counted)")
+    if stored:   # stored files loaded in a check worker, under its deadline and memory bound
+        jobs.checker.run("materials", {"materials": stored}, stored[0][0])
     row, _ = jobs.submit(KIND, request, key, client)
     info = job_info(jobs.job(row["id"]))
     return JSONResponse(info.model_dump(mode="json"), status_code=202, headers={"Location": info.links["self"]})

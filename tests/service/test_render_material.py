@@ -128,6 +128,43 @@ def test_a_measured_file_by_hash_is_a_material(client, measured_hash):
         assert client.get(f"/v1/renders/{r.json()['hash']}").json()["request"]["options"]["material"] == material
 
 
+@pytest.fixture(scope="module")
+def rgb_hash(client, tmp_path_factory):
+    path = tmp_path_factory.mktemp("upload-rgb") / "cu-rgb.bsdf"
+    export_model(RoughConductor(alpha=0.2, material="Cu"), path, n_theta_i=4, resolution=8, error_points=100)
+    r = client.post("/v1/measured", params={"format": "rgl"}, content=path.read_bytes(),
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 200 and not r.json()["summary"]["spectral"], r.text
+    return r.json()["hash"]
+
+
+@pytest.mark.parametrize("case, words", [
+    ("rgb-tabulated", ["stores RGB, not spectra"]),
+    ("layered-bad-interface", ["layered"]),
+    ("adding-doubling-of-measured", ["adding-doubling", "Measured"]),
+])
+def test_a_material_naming_a_stored_file_is_checked_with_the_file_at_submission(client, measured_hash, rgb_hash,
+                                                                                case, words):
+    """A material naming a stored file was checked only for the file's existence at
+    submission and failed as a job (each case: 202, then a failed render). Now it is built
+    with the file loaded, in a check worker, before any job: 422 naming options.material,
+    nothing queued. Mutation caught (run once): the route without the check (202)."""
+    material = {
+        "rgb-tabulated": {"type": "tabulated", "model": {"type": "measured", "hash": rgb_hash}, "grid": GRID},
+        "layered-bad-interface": {"type": "layered", "base": {"type": "measured", "hash": measured_hash},
+                                  "interfaces": [{"type": "nonsense"}]},
+        "adding-doubling-of-measured": {"type": "tabulated", "model": {"type": "measured", "hash": measured_hash},
+                                        "grid": GRID, "method": "adding-doubling"},
+    }[case]
+    before = len(client.get("/v1/jobs").json()["jobs"])
+    r = render(client, material)
+    assert r.status_code == 422, r.text
+    for word in ["options.material", *words]:
+        assert word in detail(r), (word, r.text)
+    no_path(client, r)
+    assert len(client.get("/v1/jobs").json()["jobs"]) == before
+
+
 @pytest.mark.parametrize("where", ["variant", "overrides", "parameter"])
 def test_a_hash_where_no_model_goes_is_refused_without_a_path(client, measured_hash, where):
     """Only the material itself (or a tabulated material's model) is a model's place."""

@@ -112,8 +112,10 @@ def test_the_queue_always_leaves_room_for_another_key(tmp_path):
     got only 429. A key that holds jobs may not take the last ``limit_queue_reserve``
     slots; a key that holds none may. Mutation caught: no reserve (alice takes all four
     slots and bob gets 429)."""
-    settings = Settings(data_dir=tmp_path, executor="threads", workers=1, api_keys=KEYS, limit_queue=4,
-                        limit_queue_reserve=1, progress_interval_s=0.05)
+    # its own table cache: an earlier app in this process hands its cache folder down through
+    # BSDFLAB_CACHE_DIR, where another test's tables of LONG answer 200 at once
+    settings = Settings(data_dir=tmp_path, cache_dir=tmp_path / "tables", executor="threads", workers=1,
+                        api_keys=KEYS, limit_queue=4, limit_queue_reserve=1, progress_interval_s=0.05)
     with TestClient(create_app(settings)) as c:
         alice = [c.post("/v1/tables", json={**LONG, "rel_error": 0.1 + 0.01 * i}, headers={"X-API-Key": ALICE})
                  for i in range(4)]

@@ -129,23 +129,24 @@ def test_an_upload_declared_over_the_cap_is_413_not_retry_later(tmp_path):
 
 def test_concurrent_uploads_of_one_key_do_not_overshoot_its_quota(tmp_path, rgl_files, monkeypatch):
     """Two uploads of one key at once (its default concurrency) each passed the quota
-    check before either was stored: both 200, the quota passed by a file. The reader is
-    made to wait (up to 3 s) for the other upload's reader, so without the per-client lock
-    the two always overlap. Mutation caught: no lock around check and store (two 200s)."""
+    check before either was stored: both 200, the quota passed by a file. The file's check
+    (sent to a check worker from the upload's thread) is made to wait (up to 3 s) for the
+    other upload's, so without the per-client lock the two always overlap. Mutation
+    caught: no lock around check and store (two 200s)."""
     import threading
 
     from bsdflab.service import uploads
-    model_type, reader, suffix = uploads.FORMATS["rgl"]
+    check_file = uploads.check_file
     both = threading.Barrier(2, timeout=3)
 
-    def waiting_reader(path):
+    def waiting_check(jobs, path, fmt):
         try:
             both.wait()
         except threading.BrokenBarrierError:   # the other upload waits for this one: no overlap
             pass
-        return reader(path)
+        return check_file(jobs, path, fmt)
 
-    monkeypatch.setitem(uploads.FORMATS, "rgl", (model_type, waiting_reader, suffix))
+    monkeypatch.setattr(uploads, "check_file", waiting_check)
     size = max(p.stat().st_size for p in rgl_files)
     with make_client(tmp_path, limit_measured_bytes=1 << 20, limit_upload_storage_per_key=size + 10) as client:
         codes = []
