@@ -9,8 +9,9 @@ spectral and RGB measured files, a MERL file, a table); every interior interface
 matched, with a film, unmatched to a lower and a higher index, unmatched with a film; rough,
 with and without a film: Layered refuses a matched rough one) over an opaque, a smooth and a
 rough transmissive base; every slab phase (isotropic, HG, HG beyond the range, von
-Mises-Fisher, non-scattering). A stack counts only where PFMC itself evaluates it. Each solved stack is queried with all four kinds of pairs
-(reflection from above and below, transmission down and up, grazing ones included): values
+Mises-Fisher, non-scattering). A stack counts only where PFMC itself evaluates it. Each
+solved stack is queried with all four kinds of pairs (reflection from above and below,
+transmission down and up, grazing ones included): values
 finite, and those of an opaque stack below it exactly 0. The expected outcome is stated here
 from the configuration, not read from the solver."""
 
