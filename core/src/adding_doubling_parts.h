@@ -62,7 +62,8 @@ struct BoundaryOperators {
 };
 
 // Boundary b's operators on `grid` (upward cosines); a smooth interior boundary between
-// media of unequal index (index_matched false) is refused (std::invalid_argument).
+// media of unequal index (index_matched false) is refused (std::invalid_argument): such
+// stacks are solved by AddingDoubling::solve_snell (adding_doubling_snell.cpp) instead.
 BoundaryOperators boundary_operators(const BSDF &b, bool interior, bool index_matched,
                                      const std::vector<double> &grid, const Sizes &s);
 

@@ -13,7 +13,8 @@
 //
 // Radiance is expanded as sum_m L^m(mu) cos(m dphi) and sampled at nodes mu_j (weights
 // w_j) on panels of (0, 1] cut at the critical cosines of every index step (the same
-// node values in every medium). Order m of an operator acts as
+// node values in every medium; with a smooth interior interface between unequal indices,
+// instead the same nodes in p = n sin(theta) in every medium: solve_snell). Order m of an operator acts as
 //     (O L)_i = D_i L_i + sum_j K_ij W_j L_j,   W_j = pi (1 + [m = 0]) mu_j w_j,
 // with its delta part D (unscattered beam, specular bounce) kept apart from its kernel K
 // (a BSDF value f, without the cosine). Each (wavelength, order) is an independent task
