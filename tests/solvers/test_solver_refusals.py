@@ -184,8 +184,18 @@ def test_03_slab_phases(phase):
 
 def test_04_not_layered_and_conductor_tops():
     """A model that is no stack is refused by code; a conductor top is refused by Layered
-    itself (PFMC does not accept it either)."""
+    itself (PFMC does not accept it either), the message saying why (an opaque top hides
+    the stack) and pointing to the film-coated conductor as the material; a conductor
+    below the top is pointed to the base."""
     with pytest.raises(ValueError, match=r"\[not-layered\]"):
         solve(bl.Diffuse(0.5), WL)
-    with pytest.raises(ValueError, match="interfaces\\[0\\] must be a dielectric"):
-        bl.Layered([bl.Conductor(material="Au")], [ISO], bl.Diffuse(0.5))
+    for top in (bl.Conductor(material="Au", film=FILM), bl.RoughConductor(0.3, material="Cu")):
+        with pytest.raises(ValueError, match=r"interfaces\[0\] must be a dielectric.*conductor top is opaque and "
+                                             r"hides every layer below it.*film=\[\.\.\.\] for a coated metal"):
+            bl.Layered([top], [ISO], bl.Diffuse(0.5))
+    with pytest.raises(ValueError, match=r"interfaces\[1\] must be a dielectric.*make it the base"):
+        bl.Layered([bl.Dielectric(1.5, 1.0), bl.Conductor(material="Au")], [ISO, ISO], bl.Diffuse(0.5))
+    # the material that message points to: the film-coated conductor, evaluated as itself
+    coated = bl.Conductor(material="Au", film=FILM)
+    wi, wo = pairs()["above"]
+    assert np.all(np.isfinite(coated.eval(wi, wo, wavelengths=WL)))
