@@ -10,7 +10,7 @@ pair), the solver's value r its a-posteriori bound e; a comparison passes when
 sqrt(pairs) x mean-z test per case and estimator, alpha = 0.01 family-wise,
 Sidak-corrected (the family counts the slow run's estimator too). Pairs: 12 per case; for
 the two-sided stacks 3 of each kind (reflection from above / below, transmission down /
-up), for the opaque one 12 from above; one of each kind grazing (86-88 degrees on the
+up), for the opaque ones 12 from above; one of each kind grazing (86-88 degrees on the
 viewer's or the light's side).
 
 Power (test_02): the same comparison against the solver run on a mutated model (the
@@ -51,6 +51,12 @@ def _case(interior_n=2.0, lower=1.3):
             [ISO, HG],
             bl.Dielectric(1.0, lower),
         ),
+        # the smooth interface beside a rough interior one (GGX 0.5, 2.0 -> 1.3): reflection from above
+        "smooth 1.5 / HG / smooth 1.5-2.0 / iso / GGX 0.5 2.0-1.3 / iso / Lambertian": lambda: bl.Layered(
+            [bl.Dielectric(1.5, 1.0), bl.Dielectric(interior_n, 1.5), bl.RoughDielectric(0.5, 1.3, interior_n)],
+            [HG, ISO, ISO],
+            bl.Diffuse(0.5),
+        ),
         # denser below (1.33 -> 1.7), base to water: all four kinds, water below
         "smooth 1.33 / HG / smooth 1.33-1.7 / iso / base to 1.33": lambda: bl.Layered(
             [bl.Dielectric(1.33, 1.0), bl.Dielectric(1.7, 1.33)], [HG, ISO], bl.Dielectric(1.33, 1.7)
@@ -59,7 +65,13 @@ def _case(interior_n=2.0, lower=1.3):
 
 
 CASES = _case()
-ONE_SIDED = {"smooth 1.5 / HG / smooth 1.5-2.0 / iso / Lambertian"}
+ONE_SIDED = {
+    "smooth 1.5 / HG / smooth 1.5-2.0 / iso / Lambertian",
+    "smooth 1.5 / HG / smooth 1.5-2.0 / iso / GGX 0.5 2.0-1.3 / iso / Lambertian",
+}
+# the rough interior interface's kernels are sampled at the nodes (docs/solvers.md, "Rough
+# interior interfaces"): 24 nodes per panel
+NODES = {"smooth 1.5 / HG / smooth 1.5-2.0 / iso / GGX 0.5 2.0-1.3 / iso / Lambertian": 24}
 # the default estimator in the normal suite, Guo et al.'s reference estimator in the slow one
 ESTIMATORS = ("pfmc2", pytest.param("pfmc", marks=pytest.mark.slow))
 FAMILY = len(ESTIMATORS) * len(CASES) * (len(KINDS) * PER_KIND * len(WL) + 1)
@@ -101,7 +113,7 @@ def estimate(name, estimator):
         model = bl.Layered(list(m.interfaces), list(m.slabs), m.base, estimator=estimator)
         wi, wo = pairs(41, one_sided=name in ONE_SIDED)
         est = model.estimate(wi, wo, wavelengths=WL, samples=SAMPLES, seed=11)
-        sol = solve(model, WL)
+        sol = solve(model, WL, nodes=NODES.get(name, 16))
         assert sol.two_sided == (name not in ONE_SIDED)
         _ESTIMATES[name, estimator] = (wi, wo, est, sol, *sol.eval_with_error(wi, wo))
     return _ESTIMATES[name, estimator]
