@@ -67,6 +67,20 @@ def _model(value, name: str) -> BSDF:
     raise ValueError(f"{name} must be a BSDF or a BSDF dict, got {value!r}")
 
 
+def _interface_refusal(i: int, m) -> str:
+    """Why ``m`` cannot be interface ``i``: a conductor is opaque, so as the top it hides the
+    stack (the material is the conductor itself, with its film: docs/solvers.md,
+    "Conductor tops") and below it is the stack's base."""
+    kind = getattr(m, "type_name", type(m).__name__)
+    must = f"interfaces[{i}] must be a dielectric or roughdielectric, got {kind!r}"
+    if kind not in ("conductor", "roughconductor"):
+        return must
+    if i == 0:
+        return (f"{must}: a conductor top is opaque and hides every layer below it, so the stack is the "
+                f"conductor itself; use the {kind} model (with its film=[...] for a coated metal) as the material")
+    return f"{must}: nothing passes a conductor, so it ends the stack: make it the base"
+
+
 class Layered(BSDF):
     """A layered BSDF by Position-Free Monte Carlo (Guo, Hasan & Zhao 2018).
 
@@ -122,8 +136,7 @@ class Layered(BSDF):
         self.interfaces = tuple(_model(m, f"interfaces[{i}]") for i, m in enumerate(interfaces))
         for i, m in enumerate(self.interfaces):
             if not isinstance(m, INTERFACE_TYPES):
-                raise ValueError(f"interfaces[{i}] must be a dielectric or roughdielectric, "
-                                 f"got {m.type_name!r}")
+                raise ValueError(_interface_refusal(i, m))
         self.slabs = tuple(Slab.coerce(s, i) for i, s in enumerate(slabs))
         self.base = _model(base, "base")
         if isinstance(self.base, Layered):

@@ -65,9 +65,10 @@ GAPS = {
     "phase-kind": "only isotropic and Henyey-Greenstein slabs have Fourier coefficients here "
                   "(von Mises-Fisher is not implemented)",
     "hg-range": f"beyond the validated |g| <= {MAX_G} (the nodes needed grow as 6 / (1 - |g|))",
-    "smooth-interior-unmatched": "the adding-doubling solver needs smooth interior interfaces index-matched "
-                                 "(rough or film-coated matched ones are solved; an unmatched one would need "
-                                 "its own critical cosines and Fresnel operator: not implemented)",
+    "smooth-interior-rough-top": "a smooth interior interface between unequal indices is solved under a smooth "
+                                 "top only (its nodes are one set in n sin(theta) shared by every slab; a rough "
+                                 "top's product integration is built on the first slab's own panels: not "
+                                 "joined, PFMC remains the path)",
     "rgb-base": "the base answers in RGB only and the solver works per wavelength (MERL files, RGB .bsdf "
                 "files; PFMC remains the path)",
     "base-kind": "the solver takes its operators from Diffuse, Conductor, RoughConductor, Dielectric, "
@@ -308,10 +309,12 @@ def model_gap(model) -> tuple[str, str] | None:
         if abs(g) > MAX_G:
             return "hg-range", f"slabs[{i}].phase.g must be in [-{MAX_G}, {MAX_G}], got {g}"
     media = media_indices(model)
-    for j, part in enumerate(model.interfaces[1:], start=1):  # the core's rule (adding_doubling_boundaries.cpp)
-        if not part.lobes & Lobe.SMOOTH and abs(media[j] - media[j + 1]) > 1e-9 * media[j]:
-            return "smooth-interior-unmatched", (f"interfaces[{j}] is a smooth interior interface between "
-                                                 f"different indices ({media[j]} above, {media[j + 1]} below)")
+    rough_top = bool(model.interfaces[0].lobes & Lobe.SMOOTH)
+    for j, part in enumerate(model.interfaces[1:], start=1):  # the core's rule (adding_doubling.cpp)
+        if rough_top and not part.lobes & Lobe.SMOOTH and abs(media[j] - media[j + 1]) > 1e-9 * media[j]:
+            return "smooth-interior-rough-top", (f"interfaces[{j}] is a smooth interior interface between "
+                                                 f"different indices ({media[j]} above, {media[j + 1]} below) "
+                                                 f"under a rough top")
     base = model.base
     kind = getattr(base, "type_name", None)
     if kind in RGB_BASES or (kind == "measured" and not base.spectral):

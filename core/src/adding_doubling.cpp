@@ -63,11 +63,27 @@ AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
     smooth_top_ = ad::is_delta(*boundaries_[0]);
     two_sided_ = smooth_top_ && K >= 1 && ad::is_delta(*boundaries_[K]) && media_[K + 1] > 0;
     inner_ = std::make_shared<Inner>();
-    for (std::size_t j = 0; j + 1 < media_.size(); ++j) {  // critical cosines of every index step
-        double a = media_[j], b = media_[j + 1];
-        if (a > 0 && b > 0 && std::abs(a - b) > kIndexTolerance * std::max(a, b)) {
-            double r = std::min(a, b) / std::max(a, b);
-            breaks_.push_back(std::sqrt((1.0 - r) * (1.0 + r)));
+    for (std::size_t j = 1; j < K; ++j)
+        snell_ = snell_ || (ad::is_delta(*boundaries_[j]) && !index_matched(j));
+    if (snell_) {
+        // One node set in p = n sin(theta) for every slab (solve_snell): the densest slab's
+        // panels cut at the critical cosine of every lower index of the stack.
+        if (!smooth_top_)
+            throw std::invalid_argument("adding-doubling: a smooth interior interface between unequal "
+                                        "indices is solved under a smooth top only");
+        for (std::size_t j = 1; j <= K; ++j) n_max_ = std::max(n_max_, media_[j]);
+        for (double a : media_)
+            if (a > 0 && a < n_max_ * (1.0 - kIndexTolerance)) {
+                double r = a / n_max_;
+                breaks_.push_back(std::sqrt((1.0 - r) * (1.0 + r)));
+            }
+    } else {
+        for (std::size_t j = 0; j + 1 < media_.size(); ++j) {  // critical cosines of every index step
+            double a = media_[j], b = media_[j + 1];
+            if (a > 0 && b > 0 && std::abs(a - b) > kIndexTolerance * std::max(a, b)) {
+                double r = std::min(a, b) / std::max(a, b);
+                breaks_.push_back(std::sqrt((1.0 - r) * (1.0 + r)));
+            }
         }
     }
     ad::panel_nodes(settings_.nodes, breaks_, mu_, w_);
@@ -125,6 +141,10 @@ void AddingDoubling::eval_two_sided(const double *wi_, const double *wo_, std::s
         double r = light_up ? media_[1] / media_[0] : media_[K] / media_[K + 1];
         for (int c = 0; c < C; ++c) scale.push_back(tv[c] * tl[c] * r * r * std::abs(wo.z));
         op.push_back(view_up ? (light_up ? 0 : 3) : (light_up ? 1 : 2));
+        if (snell_) {  // solve_snell's extras are p = n sin(theta), the same in every slab
+            mu_v = (view_up ? media_[1] : media_[K]) * std::sqrt((1.0 - mu_v) * (1.0 + mu_v));
+            mu_l = (light_up ? media_[1] : media_[K]) * std::sqrt((1.0 - mu_l) * (1.0 + mu_l));
+        }
         cosines.push_back(mu_v);
         cosines.push_back(mu_l);
         active.push_back(p);

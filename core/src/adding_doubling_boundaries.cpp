@@ -39,9 +39,6 @@ std::vector<double> kernel_at(const std::vector<double> &coef, std::size_t rows,
     return K;
 }
 
-namespace {
-
-// A delta boundary's weights for `lobe` at every grid cosine (signed by `sign`), as [c][i].
 std::vector<double> delta_table(const BSDF &b, const std::vector<double> &grid, double sign, uint32_t lobe,
                                 int C) {
     const std::size_t N = grid.size();
@@ -52,8 +49,6 @@ std::vector<double> delta_table(const BSDF &b, const std::vector<double> &grid, 
     }
     return d;
 }
-
-} // namespace
 
 Op BoundaryOperators::op(const std::vector<double> &a, const Sizes &s, int c, int m) const {
     Op o;

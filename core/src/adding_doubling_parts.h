@@ -46,6 +46,10 @@ struct Sizes {
 
 // -- boundary operators (adding_doubling_boundaries.cpp) --------------------------------
 
+// A delta boundary's weights for `lobe` at every grid cosine (signed by `sign`), as [c][i].
+std::vector<double> delta_table(const BSDF &b, const std::vector<double> &grid, double sign, uint32_t lobe,
+                                int C);
+
 // What the solve needs of boundary j >= 1 at one grid: kernels in fourier_kernel's layout
 // (non-delta), or delta parts as [channel][cosine] (delta); the transmissions and the
 // reflection from below only for an interior boundary.
@@ -58,7 +62,8 @@ struct BoundaryOperators {
 };
 
 // Boundary b's operators on `grid` (upward cosines); a smooth interior boundary between
-// media of unequal index (index_matched false) is refused (std::invalid_argument).
+// media of unequal index (index_matched false) is refused (std::invalid_argument): such
+// stacks are solved by AddingDoubling::solve_snell (adding_doubling_snell.cpp) instead.
 BoundaryOperators boundary_operators(const BSDF &b, bool interior, bool index_matched,
                                      const std::vector<double> &grid, const Sizes &s);
 

@@ -12,6 +12,7 @@ using ad::Op;
 
 void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector<double> &in_cos,
                            std::vector<double> &values, const Queries *two_sided) const {
+    if (snell_) return solve_snell(out_cos, in_cos, values, two_sided);
     const int C = channels(), M = orders_;
     const int n = static_cast<int>(mu_.size());
     const std::size_t Qo = out_cos.size(), Qi = in_cos.size(), K = slabs_.size();

@@ -6,11 +6,12 @@ The enumeration: every top (smooth, smooth + film, GGX, GGX + film, Beckmann mul
 a roughness below the validated range) on every base
 (Lambertian, smooth conductor + film, rough conductor, smooth and rough dielectric to water,
 spectral and RGB measured files, a MERL file, a table); every interior interface (smooth
-matched, with a film, unmatched; rough, with and without a film: Layered refuses a matched
-rough one) over an opaque, a smooth and a rough transmissive base; every slab phase
-(isotropic, HG, HG beyond the range, von Mises-Fisher, non-scattering). A stack counts only
-where PFMC itself evaluates it. Each solved stack is queried with all four kinds of pairs
-(reflection from above and below, transmission down and up, grazing ones included): values
+matched, with a film, unmatched to a lower and a higher index, unmatched with a film; rough,
+with and without a film: Layered refuses a matched rough one) over an opaque, a smooth and a
+rough transmissive base; every slab phase (isotropic, HG, HG beyond the range, von
+Mises-Fisher, non-scattering). A stack counts only where PFMC itself evaluates it. Each
+solved stack is queried with all four kinds of pairs (reflection from above and below,
+transmission down and up, grazing ones included): values
 finite, and those of an opaque stack below it exactly 0. The expected outcome is stated here
 from the configuration, not read from the solver."""
 
@@ -69,11 +70,14 @@ def _bases(folder):
     }
 
 
-# name -> (interface below slab 0 (top of slab 1), its lower index, expected gap or None)
+# name -> (interface below slab 0 (top of slab 1), its lower index, expected gap under a
+# rough top or None; under a smooth top every one is solved)
 INTERIORS = {
     "smooth matched": (lambda: bl.Dielectric(1.5, 1.5), 1.5, None),
     "smooth matched film": (lambda: bl.Dielectric(1.5, 1.5, film=FILM), 1.5, None),
-    "smooth unmatched": (lambda: bl.Dielectric(1.3, 1.5), 1.3, "smooth-interior-unmatched"),
+    "smooth unmatched": (lambda: bl.Dielectric(1.3, 1.5), 1.3, "smooth-interior-rough-top"),
+    "smooth unmatched film": (lambda: bl.Dielectric(1.3, 1.5, film=FILM), 1.3, "smooth-interior-rough-top"),
+    "smooth unmatched denser": (lambda: bl.Dielectric(2.0, 1.5), 2.0, "smooth-interior-rough-top"),
     "rough film": (lambda: bl.RoughDielectric(0.4, 1.3, 1.5, film=FILM), 1.3, None),
     "rough unmatched": (lambda: bl.RoughDielectric(0.5, 2.0, 1.5), 2.0, None),
 }
@@ -166,7 +170,7 @@ def test_02_interior_interfaces(interior, top):
     make, n_below, gap = INTERIORS[interior]
     for base, transmissive, base_rough in INTERIOR_BASES.values():
         model = bl.Layered([TOPS[top][0](), make()], [ISO, ISO], base(n_below))
-        check(model, {gap} - {None}, transmissive, TOPS[top][1] or base_rough)
+        check(model, {gap} - {None} if TOPS[top][1] else set(), transmissive, TOPS[top][1] or base_rough)
 
 
 @pytest.mark.filterwarnings("ignore::UserWarning")
@@ -180,8 +184,18 @@ def test_03_slab_phases(phase):
 
 def test_04_not_layered_and_conductor_tops():
     """A model that is no stack is refused by code; a conductor top is refused by Layered
-    itself (PFMC does not accept it either)."""
+    itself (PFMC does not accept it either), the message saying why (an opaque top hides
+    the stack) and pointing to the film-coated conductor as the material; a conductor
+    below the top is pointed to the base."""
     with pytest.raises(ValueError, match=r"\[not-layered\]"):
         solve(bl.Diffuse(0.5), WL)
-    with pytest.raises(ValueError, match="interfaces\\[0\\] must be a dielectric"):
-        bl.Layered([bl.Conductor(material="Au")], [ISO], bl.Diffuse(0.5))
+    for top in (bl.Conductor(material="Au", film=FILM), bl.RoughConductor(0.3, material="Cu")):
+        with pytest.raises(ValueError, match=r"interfaces\[0\] must be a dielectric.*conductor top is opaque and "
+                                             r"hides every layer below it.*film=\[\.\.\.\] for a coated metal"):
+            bl.Layered([top], [ISO], bl.Diffuse(0.5))
+    with pytest.raises(ValueError, match=r"interfaces\[1\] must be a dielectric.*make it the base"):
+        bl.Layered([bl.Dielectric(1.5, 1.0), bl.Conductor(material="Au")], [ISO, ISO], bl.Diffuse(0.5))
+    # the material that message points to: the film-coated conductor, evaluated as itself
+    coated = bl.Conductor(material="Au", film=FILM)
+    wi, wo = pairs()["above"]
+    assert np.all(np.isfinite(coated.eval(wi, wo, wavelengths=WL)))

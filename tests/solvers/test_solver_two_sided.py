@@ -201,13 +201,15 @@ def test_05_unsolved_transmissive_stacks_raise():
                 sol.eval(wi, wo)
 
 
-def test_06_unmatched_smooth_interior_interface_raises():
-    """A smooth interior interface between different indices is refused at solve time,
-    naming the interface and its indices."""
+def test_06_unmatched_smooth_interior_interface_under_a_rough_top_raises():
+    """A smooth interior interface between different indices is solved under a smooth top
+    (tests/solvers/test_solver_unmatched_interior.py) and refused under a rough one at
+    solve time, naming the interface and its indices."""
     slab = bl.Slab(1.0, sigma_a=0.1, sigma_s=0.5)
-    model = bl.Layered([bl.Dielectric(1.5, 1.0), bl.Dielectric(1.3, 1.5)], [slab, slab], bl.Dielectric(1.0, 1.3))
-    with pytest.raises(ValueError, match=r"interfaces\[1\] is a smooth interior interface between different "
-                                         r"indices \(1.5 above, 1.3 below\)"):
+    model = bl.Layered([bl.RoughDielectric(0.2, 1.5, 1.0), bl.Dielectric(1.3, 1.5)], [slab, slab],
+                       bl.Dielectric(1.0, 1.3))
+    with pytest.raises(ValueError, match=r"\[smooth-interior-rough-top\]: interfaces\[1\] is a smooth interior "
+                                         r"interface between different indices \(1.5 above, 1.3 below\)"):
         solve(model, [550.0])
 
 

@@ -13,7 +13,8 @@
 //
 // Radiance is expanded as sum_m L^m(mu) cos(m dphi) and sampled at nodes mu_j (weights
 // w_j) on panels of (0, 1] cut at the critical cosines of every index step (the same
-// node values in every medium). Order m of an operator acts as
+// node values in every medium; with a smooth interior interface between unequal indices,
+// instead the same nodes in p = n sin(theta) in every medium: solve_snell). Order m of an operator acts as
 //     (O L)_i = D_i L_i + sum_j K_ij W_j L_j,   W_j = pi (1 + [m = 0]) mu_j w_j,
 // with its delta part D (unscattered beam, specular bounce) kept apart from its kernel K
 // (a BSDF value f, without the cosine). Each (wavelength, order) is an independent task
@@ -96,6 +97,13 @@ class AddingDoubling {
     void solve(const std::vector<double> &out_cos, const std::vector<double> &in_cos,
                std::vector<double> &values, const Queries *two_sided = nullptr) const;
     void eval_two_sided(const double *wi, const double *wo, std::size_t n, double *out) const;
+    // The solve of a stack with a smooth interior interface between unequal indices
+    // (adding_doubling_snell.cpp): one node set in the Snell invariant p = n sin(theta),
+    // the same p in every medium, so its transmission is diagonal (docs/solvers.md).
+    // Query cosines (out_cos, in_cos) lie inside the first slab; a two-sided query's
+    // `cosines` hold p values.
+    void solve_snell(const std::vector<double> &out_cos, const std::vector<double> &in_cos,
+                     std::vector<double> &values, const Queries *two_sided) const;
     // Whether the media on either side of boundary j have one index.
     bool index_matched(std::size_t j) const;
     // The quadrature weights W of order m on a grid of N cosines (0 on the extras).
@@ -112,6 +120,8 @@ class AddingDoubling {
     int half_samples_ = 64;
     bool smooth_top_ = false;
     bool two_sided_ = false;
+    bool snell_ = false;  // a smooth interior interface between unequal indices (solve_snell)
+    double n_max_ = 0.0;  // snell_: the densest slab's index, in which mu_ are the node cosines
     double film_lookup_error_ = -1.0;
     std::shared_ptr<Inner> inner_;
 };
