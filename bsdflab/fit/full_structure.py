@@ -83,7 +83,8 @@ class FullStructure:
     base_material: Medium | None  # None: a Lambertian base (base_albedo)
 
     def parameters(self) -> tuple[P.Parameter, ...]:
-        out = list(self.top.parameters())
+        # the slab's matrix is lossless (its absorption is sigma_a): no substrate_k
+        out = [p for p in self.top.parameters() if p.name != "substrate_k"]
         for name, value in self.defaults.items():
             p = P.ALL[name]
             out.append(P.Parameter(p.name, p.unit, value, p.lo, p.hi, p.description, p.lo_open))
@@ -181,7 +182,7 @@ class FullStructure:
                 "[structure] base: a slab needs a base below it ([structure.base] albedo = ... or material = ...)"
             )
         top = Structure.parse({k: v for k, v in d.items() if k not in ("slab", "base", "interface")})
-        if top.substrate.material.k or top.substrate.material.k_amp or "k" in top.substrate.material.free:
+        if top.substrate.material.k or top.substrate.material.k_amp:
             raise ValueError(
                 "[structure] substrate: the slab's matrix must be lossless (a number, {cauchy = [A, B]} "
                 "or a named lossless material); its absorption is [structure.slab] sigma_a"
@@ -253,6 +254,6 @@ def _base(d, defaults: dict) -> Medium | None:
         defaults["base_albedo"] = _number("[structure.base]", "albedo", base["albedo"], P.ALL["base_albedo"])
         return None
     m: Material = material("[structure.base] material", base["material"])
-    if m.k or m.k_amp or "k" in m.free:
+    if m.k or m.k_amp:
         raise ValueError("[structure.base] material must be lossless (a dielectric half-space)")
     return Medium("base", m)

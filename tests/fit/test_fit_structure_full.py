@@ -89,7 +89,8 @@ def example_rows(wavelengths=(550.0,)):
 def forward_of(config: FullStackConfig, ds):
     """The posterior's own solver (no emulator) and a parameter vector at the config's fixed values."""
     post = FullStackPosterior([ds], config)
-    return post.solver, post._base.copy(), post
+    v = np.array([config.fixed.get(n, post.config.domains[n].default) for n in post.config.names])
+    return post.solver, v, post
 
 
 def test_forward_is_a_solve_of_the_dict_it_writes():
