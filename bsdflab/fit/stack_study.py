@@ -67,21 +67,27 @@ def run_stack_study(config: StackConfig, out, data=None, progress: bool = True, 
         raise
 
 
-def _posterior(datasets, config):
+def _posterior(datasets, config, progress: bool):
     """The posterior of a structure fit: the smooth stack's, or the full model's
-    (bsdflab.fit.full_stack_config, [model] kind = "full")."""
+    (bsdflab.fit.full_stack_config, [model] kind = "full"; its emulator's solves under a
+    progress bar)."""
     from bsdflab.fit.full_stack_config import FullStackConfig
 
     if isinstance(config, FullStackConfig):
+        from bsdflab.fit.emulator import SHOW_PROGRESS
         from bsdflab.fit.full_stack_posterior import FullStackPosterior
 
-        return FullStackPosterior(datasets, config)
+        token = SHOW_PROGRESS.set(progress)
+        try:
+            return FullStackPosterior(datasets, config)
+        finally:
+            SHOW_PROGRESS.reset(token)
     return StackPosterior(datasets, config)
 
 
 def _write(datasets, config: StackConfig, folder: str, progress: bool) -> dict:
     t0 = time.perf_counter()
-    post = _posterior(datasets, config)
+    post = _posterior(datasets, config, progress)
     run = run_sampler(post, config.sampler, progress=progress)
     draws = run.draws()
     rows = []
