@@ -33,7 +33,7 @@ make_data = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(make_data)
 
 TRUTH = tomllib.loads((EXAMPLE / "truth.toml").read_text())["truth"]
-# per-row z bound: two-sided 4.5 sigma is 6.8e-6 per row, Sidak over <= 33 rows: family alpha 2.2e-4
+# per-row z bound: two-sided 4.5 sigma is 6.8e-6 per row, Sidak over the 11 rows of a test: family alpha 7.5e-5
 Z_MAX = 4.5
 PFMC_WALKS = 20000
 # solver accuracy (relative) added to PFMC's standard error in the z denominators (the snake's
