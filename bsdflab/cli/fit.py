@@ -99,10 +99,10 @@ def _report(summary: dict, args: argparse.Namespace) -> int:
 
 def _run_stack(args: argparse.Namespace) -> int:
     """A structure + instrument fit; DATA is '-' when the config lists its [[dataset]] files."""
-    from bsdflab.fit.stack_config import StackConfig
+    from bsdflab.fit.full_stack_config import load_structure_config
     from bsdflab.fit.stack_study import run_stack_study
 
-    config = StackConfig.load(args.config)
+    config = load_structure_config(args.config)   # the smooth stack's, or the full model's
     try:
         summary = run_stack_study(config, args.out, None if args.data == "-" else args.data,
                                   progress=not args.quiet, overwrite=args.overwrite)

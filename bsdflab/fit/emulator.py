@@ -45,10 +45,10 @@ TOP_NAMES = ("roughness", "film_thickness_nm", "film_ior", "film_cauchy_b", "pla
              "exterior_ior")        # prior mass left out of the box on each side of an unbounded prior
 
 
-def prior_box(name: str, prior) -> tuple[float, float]:
+def prior_box(name: str, prior, domain=None) -> tuple[float, float]:
     """The emulator's range of a parameter: a uniform prior's bounds, else its TAIL and 1 - TAIL
-    quantiles; both clipped to the model's domain."""
-    p = parameter(name)
+    quantiles; both clipped to the model's domain (``domain``: a Parameter, else the snake's)."""
+    p = domain or parameter(name)
     lo, hi = prior.support() if prior.kind == "uniform" else (float(prior.ppf(TAIL)), float(prior.ppf(1 - TAIL)))
     lo, hi = max(lo, p.lo), min(hi, p.hi)
     if not lo < hi:
@@ -101,21 +101,29 @@ class EmulatedForward:
         The free solver parameters and their ranges (base_albedo among them or not).
     checks : int
         Direct solves at random points of the box that measure the emulator's error.
+    solver, names
+        Another solver (``evaluate(full)`` of vectors in ``names`` order, optionally
+        ``top_names``; a Lambertian base's albedo named base_albedo) and its parameter
+        names: the full model of a [structure] (bsdflab.fit.full_stack_forward). Default:
+        the snake's full model over ALL_NAMES.
     """
 
     def __init__(self, dataset: Dataset, model: ModelSettings, base, boxes: dict[str, tuple[float, float]],
-                 checks: int = 0, seed: int = 0):
-        self.solver = SolverForwardModel(dataset, model)
+                 checks: int = 0, seed: int = 0, solver=None, names=ALL_NAMES):
+        self.solver = SolverForwardModel(dataset, model) if solver is None else solver
+        self.names = tuple(names)
         self.dataset, self.base = dataset, np.asarray(base, float)
         self.albedo_free = "base_albedo" in boxes
         # the grid loop varies the last axis fastest: the top's parameters there reuse the
         # solution below the top (SolverForwardModel's cache)
-        names = sorted((n for n in boxes if n != "base_albedo"), key=lambda n: n in TOP_NAMES)
+        top = getattr(self.solver, "top_names", TOP_NAMES)
+        names = sorted((n for n in boxes if n != "base_albedo"), key=lambda n: n in top)
         self.axes = [_Axis(n, *boxes[n], model.emulator_nodes) for n in names]
         self.albedo_box = boxes.get("base_albedo")
-        self._cols = [ALL_NAMES.index(a.name) for a in self.axes]
-        self._albedo_col = ALL_NAMES.index("base_albedo")
-        albedos = ALBEDO_NODES if self.albedo_free else (float(self.base[self._albedo_col]),)
+        self._cols = [self.names.index(a.name) for a in self.axes]
+        self._albedo_col = self.names.index("base_albedo") if "base_albedo" in self.names else None
+        albedos = (ALBEDO_NODES if self.albedo_free else
+                   (float(self.base[self._albedo_col]) if self._albedo_col is not None else math.nan,))
         shape = tuple(a.n for a in self.axes)
         grid = np.empty((len(albedos), *shape, len(dataset)))
         nodes = itertools.product(*(range(n) for n in shape))
@@ -130,7 +138,8 @@ class EmulatedForward:
             for k, rho in enumerate(albedos):
                 v = self.base.copy()
                 v[self._cols] = [a.nodes[i] for a, i in zip(self.axes, idx)]
-                v[self._albedo_col] = rho
+                if self._albedo_col is not None:
+                    v[self._albedo_col] = rho
                 y = self.solver.evaluate(v)
                 if not np.all(y > 0):
                     raise ValueError(f"the solver gave a non-positive or undefined value at the emulator node "
@@ -159,7 +168,7 @@ class EmulatedForward:
 
     def evaluate(self, full) -> np.ndarray:
         """Model values (P, rows) for full vectors (P, len(ALL_NAMES)) or (rows,) for one."""
-        t, single = parameter_sets("values", full, ALL_NAMES)
+        t, single = parameter_sets("values", full, self.names)
         y = np.exp(self._interpolate(t))                 # (albedos, P, rows)
         if self.albedo_free:
             rho = t[:, self._albedo_col][:, None]

@@ -67,9 +67,27 @@ def run_stack_study(config: StackConfig, out, data=None, progress: bool = True, 
         raise
 
 
+def _posterior(datasets, config, progress: bool):
+    """The posterior of a structure fit: the smooth stack's, or the full model's
+    (bsdflab.fit.full_stack_config, [model] kind = "full"; its emulator's solves under a
+    progress bar)."""
+    from bsdflab.fit.full_stack_config import FullStackConfig
+
+    if isinstance(config, FullStackConfig):
+        from bsdflab.fit.emulator import SHOW_PROGRESS
+        from bsdflab.fit.full_stack_posterior import FullStackPosterior
+
+        token = SHOW_PROGRESS.set(progress)
+        try:
+            return FullStackPosterior(datasets, config)
+        finally:
+            SHOW_PROGRESS.reset(token)
+    return StackPosterior(datasets, config)
+
+
 def _write(datasets, config: StackConfig, folder: str, progress: bool) -> dict:
     t0 = time.perf_counter()
-    post = StackPosterior(datasets, config)
+    post = _posterior(datasets, config, progress)
     run = run_sampler(post, config.sampler, progress=progress)
     draws = run.draws()
     rows = []
@@ -118,5 +136,9 @@ def _write(datasets, config: StackConfig, folder: str, progress: bool) -> dict:
         "warnings": [a.to_dict() for a in alerts],
         "seconds": time.perf_counter() - t0,
     }
+    if hasattr(post, "material_dict"):     # the full model: the posterior median as a renderable material
+        summary.update(post.summary_extra())
+        median = np.median(draws, axis=0)
+        _text(os.path.join(folder, "material.json"), json.dumps(post.material_dict(median), indent=1) + "\n")
     _text(os.path.join(folder, "summary.json"), json.dumps(summary, indent=1, default=float) + "\n")
     return summary

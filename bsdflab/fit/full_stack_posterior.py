@@ -1,0 +1,132 @@
+"""The log posterior of a full-model structure fit (bsdflab.fit.full_stack_config): one
+structure, one or more datasets of gonio rows, each through its own instrument
+(``<dataset>.scale`` or per-series scales, ``<dataset>.background``):
+
+    reported = scale * pi f(structure) + background
+
+All datasets' rows go through one forward model (one emulator grid when solver parameters
+are free: the structure is shared), then each dataset's instrument applies to its rows.
+Same interface as bsdflab.fit.stack_posterior.StackPosterior (a study and the sampler run it).
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from bsdflab.fit import parameters as P
+from bsdflab.fit.emulator import EmulatedForward, prior_box
+from bsdflab.fit.full_stack_config import FullStackConfig
+from bsdflab.fit.full_stack_forward import StructureSolverForward
+from bsdflab.fit.instrument import BY_NAME as INSTRUMENT
+from bsdflab.fit.posterior import GaussianPosterior
+from bsdflab.fit.stack_posterior import BoundConfig, concatenate, series_scales
+
+MODELLED = ("scale", "background")
+
+
+class FullStackPosterior(GaussianPosterior):
+    def __init__(self, datasets, config: FullStackConfig):
+        datasets = list(datasets)
+        if len(datasets) != len(config.datasets):
+            raise ValueError(f"the config names {len(config.datasets)} dataset(s), got {len(datasets)}")
+        self.datasets, self.stack = datasets, config
+        domains = {p.name: p for p in (*config.structure.parameters(), P.NOISE)}
+        priors, fixed = dict(config.priors), dict(config.fixed)
+        self._series = [
+            series_scales(d) if spec.instrument.scale_per_series else None for spec, d in zip(config.datasets, datasets)
+        ]
+        for spec, per in zip(config.datasets, self._series):
+            inst = spec.instrument
+            for name in MODELLED:
+                names = [spec.prefix(n) for n in per[0]] if name == "scale" and per else [spec.prefix(name)]
+                for full in names:
+                    domains[full] = INSTRUMENT[name]
+                    if name in inst.priors:
+                        priors[full] = inst.priors[name]
+                    else:
+                        fixed[full] = inst.fixed[name]
+        names = tuple(domains)
+        self.config = BoundConfig(names, domains, priors, fixed, config.sampler, config)
+        self.free = self.config.free
+        if config.sampler.walkers < 2 * len(self.free):
+            raise ValueError(
+                f"[sampler] walkers must be at least twice the number of free parameters "
+                f"({2 * len(self.free)}), got {config.sampler.walkers}"
+            )
+        self.col = {n: i for i, n in enumerate(names)}
+        self._noise_col = self.col["noise_scale"]
+        self._base = np.array([fixed.get(n, np.nan) for n in names])
+        self._free_cols = np.array([self.col[n] for n in self.free], dtype=int)
+        self._lo = np.array([domains[n].lo for n in names])
+        self._hi = np.array([domains[n].hi for n in names])
+        self._lo_open = np.array([domains[n].lo_open for n in names])
+        self.dataset = concatenate(datasets, [spec.name for spec in config.datasets])
+        self._slices = np.cumsum([0, *(len(d) for d in datasets)])
+        m = config.model
+        solver = StructureSolverForward(self.dataset, config.structure, names, domains, m.nodes, m.orders)
+        own = {p.name for p in config.structure.parameters()}
+        solver_free = [n for n in self.free if n in own]
+        if m.emulator_nodes and solver_free:
+            boxes = {n: prior_box(n, priors[n], domains[n]) for n in solver_free}
+            self.model = EmulatedForward(
+                self.dataset, m, self._base, boxes, m.emulator_checks, config.sampler.seed, solver=solver, names=names
+            )
+        else:
+            self.model = solver
+        self.solver = solver
+        self.evaluations = 0
+
+    def named(self, x) -> dict[str, np.ndarray]:
+        full = self.full(x)
+        return {n: full[:, i] for i, n in enumerate(self.config.names)}
+
+    def _model_values(self, full: np.ndarray) -> np.ndarray:
+        inside = np.all(
+            np.isfinite(full) & np.where(self._lo_open, full > self._lo, full >= self._lo) & (full <= self._hi), axis=1
+        )
+        out = np.full((len(full), len(self.dataset)), np.nan)
+        if not np.any(inside):
+            return out
+        f = full[inside]
+        y = self.model.evaluate(f)
+        for spec, per, a, b in zip(self.stack.datasets, self._series, self._slices[:-1], self._slices[1:]):
+            if per:
+                scale = np.column_stack([f[:, self.col[spec.prefix(n)]] for n in per[0]])[:, per[1]]
+            else:
+                scale = f[:, self.col[spec.prefix("scale")]][:, None]
+            y[:, a:b] = scale * y[:, a:b] + f[:, self.col[spec.prefix("background")]][:, None]
+        out[inside] = y
+        return out
+
+    def material_dict(self, x) -> dict:
+        """The Layered model dict of one free parameter vector (what material.json holds)."""
+        return self.solver.model_dict(self.full(x)[0])
+
+    def summary_extra(self) -> dict:
+        """The emulator's measured error (summary.json), where there is one."""
+        if not isinstance(self.model, EmulatedForward):
+            return {"emulator": None}
+        return {
+            "emulator": {
+                "solves": self.model.solves,
+                "max_relative_error": self.model.max_relative_error,
+                "max_error_sigma": self.model.max_error_sigma,
+            }
+        }
+
+    def with_data(self, dataset) -> FullStackPosterior:
+        """The same posterior (the emulator shared) for other values at the same rows."""
+        same = len(dataset) == len(self.dataset) and all(
+            np.array_equal(getattr(dataset, k), getattr(self.dataset, k), equal_nan=True)
+            for k in ("geometry", "angle_deg", "angle_out_deg", "phi_deg", "wavelength_nm")
+        )
+        if not same:
+            raise ValueError("with_data needs a dataset with the same rows (geometry, angles, wavelengths)")
+        new = copy.copy(self)
+        new.dataset, new.evaluations = dataset, 0
+        return new
+
+    def sample_prior(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        return np.column_stack([self.config.priors[name].dist.rvs(size=n, random_state=rng) for name in self.free])
