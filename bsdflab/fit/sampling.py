@@ -5,6 +5,18 @@ autocorrelation time tau of every parameter; stop when the chain is longer than
 ``tau_multiple`` x max tau AND every tau changed by < 1 % since the last check, or at
 ``max_steps`` (the step cap). ``RunResult.stop_reason`` says which happened.
 Burn-in = 2 max tau, thinning = max(1, min tau / 2) for the posterior draws.
+
+Moves: 80 % emcee's differential-evolution move (DEMove: ter Braak 2006, with Nelson et al.
+2014's random gamma), 20 % the stretch move (Goodman & Weare 2010), not the stretch move alone.
+Each keeps the posterior invariant (DEMove's proposal is symmetric; the stretch move carries
+its z^(d-1) factor), so the target is unchanged;
+what changes is the mixing. A free film index makes a thin, curved thickness-index ridge
+(n d fixed to the fringe positions, only the angle dependence separating n from d; correlation
+-0.995): there the stretch move's tau was ~80 steps (12 walkers, 5 parameters), its 500-step
+runs reported sds 0.85x the true ones (mean z^2 1.5-1.9 in SBC), and its tau estimate on such
+short runs (~36) hid it. The DE proposals step along the ensemble's own differences, i.e.
+along the ridge: tau ~21 on the same posterior, sds equal to nested sampling's and a long
+stretch run's (docs/fit.md, "Structures and instruments").
 """
 from __future__ import annotations
 
@@ -23,6 +35,7 @@ emcee = require("emcee", "fit")
 
 TAU_CHANGE = 0.01
 FD_STEP = 1e-6   # finite-difference step of the MAP gradient, in prior sds
+HESS_STEP = 1e-4   # ... of the Laplace approximation's Hessian
 
 
 @dataclass
@@ -115,9 +128,46 @@ def find_map(logpost: LogPosterior, starts: int, rng: np.random.Generator, progr
     return MapResult(x, float(-best.fun), starts, logpost.evaluations - before, optima)
 
 
+def laplace_covariance(logpost: LogPosterior, centre: np.ndarray) -> np.ndarray | None:
+    """The Laplace approximation's covariance at the MAP, (-Hessian of log p)^-1, from central
+    differences (step HESS_STEP prior sds, the 2 ndim^2 points as one batch); the stencil's
+    centre kept 2 steps inside the prior's support (a MAP on a bound). None where the
+    Hessian is not finite or -H not positive definite."""
+    scale = np.array([logpost.config.priors[n].dist.std() for n in logpost.free])
+    lo, hi = np.array([logpost.config.priors[n].support() for n in logpost.free]).T / scale
+    h, nd = HESS_STEP, len(centre)
+    c = np.clip(centre / scale, lo + 2 * h, hi - 2 * h)
+    e = np.eye(nd) * h
+    pts = [c] + [c + s1 * e[a] + s2 * e[b] for a in range(nd) for b in range(nd) for s1 in (1, -1) for s2 in (1, -1)]
+    v = logpost(np.array(pts) * scale)
+    if not np.all(np.isfinite(v)):
+        return None
+    q = v[1:].reshape(nd, nd, 4)
+    hess = (q[..., 0] - q[..., 1] - q[..., 2] + q[..., 3]) / (4 * h * h)
+    try:
+        cov = np.linalg.inv(-0.5 * (hess + hess.T))
+        np.linalg.cholesky(cov)
+    except np.linalg.LinAlgError:
+        return None
+    return cov * np.outer(scale, scale)
+
+
 def initial_ball(logpost: LogPosterior, centre: np.ndarray, walkers: int,
                  rng: np.random.Generator) -> np.ndarray:
-    """Walkers in a tiny Gaussian ball around the MAP, all with a finite posterior."""
+    """Walkers drawn from the Laplace approximation at the MAP (N(MAP, (-H)^-1), redrawn
+    outside the support), all with a finite posterior; a tiny Gaussian ball (1e-4 prior sd)
+    where the Hessian is unusable. Why not always the tiny ball: the ensemble needs ~100 steps
+    to expand from it (measured on the film thickness-index ridge), longer than the burn-in
+    of 2 tau (~40 steps), so the kept draws began too narrow."""
+    cov = laplace_covariance(logpost, centre)
+    if cov is not None:
+        chol = np.linalg.cholesky(cov)
+        p0 = centre + rng.standard_normal((walkers, len(centre))) @ chol.T
+        for _ in range(100):
+            bad = ~np.isfinite(logpost(p0))
+            if not np.any(bad):
+                return p0
+            p0[bad] = centre + rng.standard_normal((int(bad.sum()), len(centre))) @ chol.T
     scale = 1e-4 * np.array([logpost.config.priors[n].dist.std() for n in logpost.free])
     p0 = centre + scale * rng.standard_normal((walkers, len(centre)))
     for _ in range(100):
@@ -154,13 +204,18 @@ def stop_reason(steps: int, tau: np.ndarray, history: list[tuple[int, np.ndarray
     return f"step cap {settings.max_steps} reached; " + "; ".join(failed) + " (not converged)"
 
 
+def moves():
+    """The proposal mixture (see the module docstring)."""
+    return [(emcee.moves.DEMove(), 0.8), (emcee.moves.StretchMove(), 0.2)]
+
+
 def run_sampler(logpost: LogPosterior, settings: SamplerSettings, progress: bool = True) -> RunResult:
     rng = np.random.default_rng(settings.seed)
     t0 = time.perf_counter()
     map_result = find_map(logpost, settings.map_starts, rng, progress)
     p0 = initial_ball(logpost, map_result.x, settings.walkers, rng)
     before = logpost.evaluations
-    sampler = emcee.EnsembleSampler(settings.walkers, logpost.ndim, logpost, vectorize=True)
+    sampler = emcee.EnsembleSampler(settings.walkers, logpost.ndim, logpost, moves=moves(), vectorize=True)
     # emcee's moves draw from its own RandomState; seed it from our generator for repeatability
     sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
     history: list[tuple[int, np.ndarray]] = []
