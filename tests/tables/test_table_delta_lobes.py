@@ -114,22 +114,46 @@ def test_delta_lobes_match_pfmc_walks(tables, name, side, theta):
         assert our_eta == pytest.approx(eta, rel=1e-12)
 
 
+LOSSLESS = stack(1.0, WATER, sigma_a=0.0, sigma_s=0.3)  # tau = 0.3, no absorption anywhere
+
+
+def energy(sample, wi: np.ndarray) -> np.ndarray:
+    """Per-draw energy of sample weights (radiance-mode transmitted weights times eta^2)."""
+    w = np.where((np.asarray(sample.lobe) == 0)[:, None], 0.0, sample.weight)
+    through = np.asarray(sample.wo)[:, 2] * wi[2] < 0
+    return w * np.where(through, np.asarray(sample.eta) ** 2, 1.0)[:, None]
+
+
+@pytest.fixture(scope="module")
+def lossless_table():
+    return TableBSDF(tabulate(LOSSLESS, TableGrid(8, 8, 9), rel_error=0.003, method="adding-doubling", progress=False))
+
+
 @pytest.mark.parametrize("side", [1.0, -1.0])
-def test_a_lossless_stack_keeps_its_energy_through_the_table(side):
+def test_a_lossless_stack_keeps_its_energy(lossless_table, side):
     """No absorption, a clear scattering slab (tau = 0.3) between a smooth top and a smooth
-    dielectric base: R + T of the table, delta lobes included (transmitted weights times
-    eta^2: energy, not radiance), is 1 at 0, 40, 70 and 85 degrees from each side, within
-    4 standard errors (Sidak over the 8 cases at ALPHA is 3.2) plus 1 % for the table's
-    interpolation of the scattered part (as in test_two_sided_tables.py). Without the delta
-    lobes the sum was 0.27-0.35 (the unscattered part is ~74 % at normal incidence)."""
-    model = stack(1.0, WATER, sigma_a=0.0, sigma_s=0.3)
-    tb = TableBSDF(tabulate(model, TableGrid(8, 8, 9), rel_error=0.003, method="adding-doubling", progress=False))
-    n = 100_000
+    dielectric base, at 0, 40, 70 and 85 degrees from each side (from below 70 and 85 are
+    beyond the top's critical angle: no delta transmission, every bounce reflected):
+
+    1. the table's delta lobes (exact) plus PFMC's non-delta albedo (its walks) is 1 within
+       PFMC's noise: z-test, Sidak over the 8 cases at ALPHA (|z| < 3.2);
+    2. the table's own R + T (sampled, delta lobes included) is 1 within 4 standard errors
+       plus 1.5 %: the tabulated scattered part reads 0.4-1.3 % high against PFMC's
+       (measured at the theta_i nodes, where the lookup is exact in theta_i: +0.4 % from
+       above, +0.8-1.3 % from below; it is the table's, not the delta lobes').
+    Without the delta lobes the sums were 0.25-0.65."""
+    limit = sidak_z_limit(ALPHA, 2 * len(ANGLES))
+    n_walks, n_table = 40_000, 100_000
     for theta in ANGLES:
         wi = direction(theta, side)
-        s = tb.sample(np.tile(wi, (n, 1)), seed=5)
-        w = np.where((np.asarray(s.lobe) == 0)[:, None], 0.0, s.weight)
-        through = np.asarray(s.wo)[:, 2] * wi[2] < 0
-        energy = w * np.where(through, np.asarray(s.eta) ** 2, 1.0)[:, None]
-        mean, se = energy.mean(axis=0), energy.std(axis=0, ddof=1) / np.sqrt(n)
-        assert np.all(np.abs(mean - 1.0) < 4 * se + 0.01), (theta, side, mean, se)
+        parts = table_delta(lossless_table, wi)
+        delta = sum(
+            value * (eta**2 if lobe == int(Lobe.DELTA_TRANSMISSION) else 1.0) for lobe, (value, _, eta) in parts.items()
+        )
+        walks = energy(LOSSLESS.sample(np.tile(wi, (n_walks, 1)), seed=9, lobes=Lobe.SMOOTH), wi)
+        total = delta + walks.mean(axis=0)
+        z = (total - 1.0) / (walks.std(axis=0, ddof=1) / np.sqrt(n_walks))
+        assert np.all(np.abs(z) < limit), (theta, side, total, z)
+        table = energy(lossless_table.sample(np.tile(wi, (n_table, 1)), seed=5), wi)
+        mean, se = table.mean(axis=0), table.std(axis=0, ddof=1) / np.sqrt(n_table)
+        assert np.all(np.abs(mean - 1.0) < 4 * se + 0.015), (theta, side, mean, se)
