@@ -56,7 +56,9 @@ def mutant(table, shape: str):
     below dropped (a version-2, one-sided table). Swapping the two transmission parts is
     not caught (run once: max |z| 3.44 at a sheet seen from above, 3.06 at the ball, limit 4.72): for
     this stack f(wi, wo) from below is within ~2 % of f(wi, wo) from above at the same
-    angles, and through the closed ball only their product counts."""
+    angles, and through the closed ball only their product counts. The clear ball without
+    the stack's delta lobes at lookup (run once): max |z| 16.0 (limit 4.72), the image 40 %
+    darker; with them max |z| 3.06, mean ratio 1.003."""
     if shape.endswith("ball"):
         return type(table)(**{**table.__dict__, "values": table.values[[2, 1, 0, 3]]})
     return type(table)(**{**table.__dict__, "lobes": table.lobes[:2], "values": table.values[:2],
