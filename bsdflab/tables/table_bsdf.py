@@ -102,9 +102,8 @@ class TableBSDF(BSDF):
             # The stack's delta lobes (unscattered reflection and transmission), summed per
             # wavelength before any projection: the series is not linear in the Fresnel terms.
             wl = DEFAULT_WAVELENGTHS if self._wavelengths is None else self._wavelengths
-            delta = delta_stack(t.model, wl)
-            if delta is not None:
-                delta_P = (srgb_weights(wl) if self._wavelengths is None else np.eye(len(wl))).ravel().tolist()
+            W = srgb_weights(wl) if self._wavelengths is None else np.eye(len(wl))
+            delta, delta_P = delta_stack(t.model, wl, W)
             model = from_dict(t.model)
             top = model.exact_part
             # A two-sided table leaves out the base's own reflection of light from below
