@@ -3,7 +3,9 @@
 Lookup is multilinear over (film thickness, theta_i, theta_o, phi) in the C++ core; for
 layered tables the top interface's reflection (glossy and delta) is added back exactly
 from the model stored in the table, and in a two-sided table (four lobes, a transmissive
-model) the base's reflection of light from below likewise. Sampling and pdf are described in
+model) the base's reflection of light from below likewise. A layered model's delta lobes (its
+unscattered reflection and transmission, from either side: bsdflab/tables/delta.py) are
+added at lookup from the model too. Sampling and pdf are described in
 core/include/bsdflab/table_bsdf.h.
 """
 from __future__ import annotations
@@ -21,6 +23,7 @@ from bsdflab.lobes import Lobe
 from bsdflab.spectra import DEFAULT_WAVELENGTHS, srgb_weights
 from bsdflab.tables.channels import LUMINANCE_RGB, channel_wavelengths
 from bsdflab.tables.data import TableData
+from bsdflab.tables.delta import delta_stack
 from bsdflab.tables.file_format import read_table
 
 
@@ -94,7 +97,13 @@ class TableBSDF(BSDF):
         t = self.table
         g = t.grid
         direct, below, P = None, None, []
+        delta, delta_P = None, []
         if t.split_direct:
+            # The stack's delta lobes (unscattered reflection and transmission), summed per
+            # wavelength before any projection: the series is not linear in the Fresnel terms.
+            wl = DEFAULT_WAVELENGTHS if self._wavelengths is None else self._wavelengths
+            W = srgb_weights(wl) if self._wavelengths is None else np.eye(len(wl))
+            delta, delta_P = delta_stack(t.model, wl, W)
             model = from_dict(t.model)
             top = model.exact_part
             # A two-sided table leaves out the base's own reflection of light from below
@@ -121,7 +130,7 @@ class TableBSDF(BSDF):
         return _core.TabulatedBSDF(list(channel_ids), len(t.lobes), g.n_theta_i, g.n_theta_o, g.n_phi,
                                    list(g.thickness_nm), t.values.ravel().tolist(), list(lum), direct,
                                    list(P), default_film_thickness(t.model), transmission_eta(t.model),
-                                   direct_below=below)
+                                   direct_below=below, delta=delta, delta_P=delta_P)
 
     def _params(self) -> dict[str, Any]:
         if self.path is None:

@@ -2,10 +2,12 @@
 // progress and cancel, and a distributed driver can run blocks of cells) and of the
 // table BSDF.
 #include <pybind11/stl.h>
+#include <array>
 #include "arrays.h"
 #include "bsdflab/film_lookup.h"
 #include "bsdflab/projected_term.h"
 #include "bsdflab/table_bsdf.h"
+#include "bsdflab/table_delta.h"
 #include "bsdflab/tabulation.h"
 
 namespace py = pybind11;
@@ -119,21 +121,51 @@ void bind_tables(py::module_ &m) {
         .def_property_readonly("capped", [](const TabulationStageJob &j) { return j.finished.capped; });
 
     py::class_<TabulatedBSDF, BSDF, std::shared_ptr<TabulatedBSDF>>(m, "TabulatedBSDF")
-        .def(py::init([](std::vector<double> channel_ids, int n_lobes, int n_theta_i, int n_theta_o,
-                         int n_phi, std::vector<double> thickness, std::vector<float> values,
-                         std::vector<double> luminance, std::shared_ptr<BSDF> direct, std::vector<double> P,
-                         double default_thickness, double transmission_eta,
-                         std::shared_ptr<BSDF> direct_below) {
-                 return std::make_shared<TabulatedBSDF>(
-                     std::move(channel_ids),
-                     make_grid(n_lobes, n_theta_i, n_theta_o, n_phi, std::move(thickness)), std::move(values),
-                     std::move(luminance), direct, std::move(P), default_thickness, transmission_eta,
-                     direct_below);
+        .def(
+            py::init([](std::vector<double> channel_ids, int n_lobes, int n_theta_i, int n_theta_o, int n_phi,
+                        std::vector<double> thickness, std::vector<float> values,
+                        std::vector<double> luminance, std::shared_ptr<BSDF> direct, std::vector<double> P,
+                        double default_thickness, double transmission_eta, std::shared_ptr<BSDF> direct_below,
+                        std::shared_ptr<TableDeltaStack> delta, std::vector<double> delta_P) {
+                return std::make_shared<TabulatedBSDF>(
+                    std::move(channel_ids),
+                    make_grid(n_lobes, n_theta_i, n_theta_o, n_phi, std::move(thickness)), std::move(values),
+                    std::move(luminance), direct, std::move(P), default_thickness, transmission_eta,
+                    direct_below, delta, std::move(delta_P));
+            }),
+            py::arg("channel_ids"), py::arg("n_lobes"), py::arg("n_theta_i"), py::arg("n_theta_o"),
+            py::arg("n_phi"), py::arg("thickness_nm"), py::arg("values"), py::arg("luminance"),
+            py::arg("direct"), py::arg("P"), py::arg("default_thickness_nm"),
+            py::arg("transmission_eta") = 1.0, py::arg("direct_below") = nullptr, py::arg("delta") = nullptr,
+            py::arg("delta_P") = std::vector<double>{});
+
+    // The delta lobes of a layered stack (table_delta.h), exposed for the tests.
+    py::class_<TableDeltaStack, std::shared_ptr<TableDeltaStack>>(m, "TableDeltaStack")
+        .def(py::init([](std::vector<std::shared_ptr<BSDF>> boundaries, std::vector<double> thickness_um,
+                         std::vector<std::vector<double>> sigma_t) {
+                 std::vector<std::shared_ptr<const BSDF>> b(boundaries.begin(), boundaries.end());
+                 return std::make_shared<TableDeltaStack>(std::move(b), std::move(thickness_um),
+                                                          std::move(sigma_t));
              }),
-             py::arg("channel_ids"), py::arg("n_lobes"), py::arg("n_theta_i"), py::arg("n_theta_o"),
-             py::arg("n_phi"), py::arg("thickness_nm"), py::arg("values"), py::arg("luminance"),
-             py::arg("direct"), py::arg("P"), py::arg("default_thickness_nm"),
-             py::arg("transmission_eta") = 1.0, py::arg("direct_below") = nullptr);
+             py::arg("boundaries"), py::kw_only(), py::arg("thickness_um"), py::arg("sigma_t"))
+        .def_property_readonly("channels", &TableDeltaStack::channels)
+        .def_property_readonly("transmits", &TableDeltaStack::transmits)
+        .def_property_readonly("extends", &TableDeltaStack::extends)
+        .def(
+            "solve",
+            [](const TableDeltaStack &d, std::array<double, 3> wi, double thickness_nm) {
+                const int C = d.channels();
+                std::vector<double> R(C), T(C);
+                Vec3 wt{0.0, 0.0, 0.0};
+                double eta = 1.0;
+                Query q;
+                q.film_thickness_nm = thickness_nm;
+                d.solve(Vec3{wi[0], wi[1], wi[2]}, q, R.data(), T.data(), wt, eta);
+                return py::make_tuple(py::array_t<double>(C, R.data()), py::array_t<double>(C, T.data()),
+                                      std::array<double, 3>{wt.x, wt.y, wt.z}, eta);
+            },
+            py::arg("wi"), py::arg("thickness_nm") = -1.0,
+            "(R, T, wt, eta): the delta reflectance and transmittance of light along wi (radiance mode)");
 
     py::class_<ProjectedFresnelTerm, FresnelTerm, std::shared_ptr<ProjectedFresnelTerm>>(
         m, "ProjectedFresnelTerm")

@@ -22,10 +22,12 @@ double wrap_phi(const Vec3 &wi, const Vec3 &wo) {
 TabulatedBSDF::TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, std::vector<float> values,
                              std::vector<double> luminance, std::shared_ptr<const BSDF> direct,
                              std::vector<double> P, double default_thickness, double transmission_eta,
-                             std::shared_ptr<const BSDF> direct_below)
+                             std::shared_ptr<const BSDF> direct_below,
+                             std::shared_ptr<const TableDeltaStack> delta, std::vector<double> delta_P)
     : BSDF(std::move(channel_ids)), grid_(std::move(grid)), values_(std::move(values)),
       luminance_(std::move(luminance)), direct_(std::move(direct)), direct_below_(std::move(direct_below)),
-      P_(std::move(P)), default_thickness_(default_thickness), transmission_eta_(transmission_eta) {
+      delta_(std::move(delta)), delta_P_(std::move(delta_P)), P_(std::move(P)),
+      default_thickness_(default_thickness), transmission_eta_(transmission_eta) {
     if (!(transmission_eta_ > 0) || !std::isfinite(transmission_eta_))
         throw std::invalid_argument("transmission_eta must be finite and > 0");
     const int C = channels();
@@ -42,6 +44,8 @@ TabulatedBSDF::TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, st
     for (const BSDF *d : {direct_.get(), direct_below_.get()})
         if (d && P_.size() != std::size_t(C) * d->channels())
             throw std::invalid_argument("P must map the direct model's channels to the table's");
+    if (delta_ && delta_P_.size() != std::size_t(C) * delta_->channels())
+        throw std::invalid_argument("delta_P must map the delta stack's channels to the table's");
     if (direct_ && direct_below_ && direct_->channels() != direct_below_->channels())
         throw std::invalid_argument("the exact parts above and below must share their channels");
 
@@ -119,6 +123,7 @@ uint32_t TabulatedBSDF::lobes() const {
     uint32_t l = kGlossyReflection | (grid_.n_lobes > 1 ? kGlossyTransmission : 0u);
     for (const BSDF *d : {direct_.get(), direct_below_.get()})
         if (d) l |= d->lobes() & kReflection;
+    if (delta_) l |= kDeltaReflection | (delta_->transmits() ? kDeltaTransmission : 0u);
     return l;
 }
 
@@ -307,40 +312,77 @@ double TabulatedBSDF::table_pdf(const Vec3 &wi, const Vec3 &wo, const Query &q) 
     return prob / area;
 }
 
-void TabulatedBSDF::mixture(const Vec3 &wi, const Query &q, double &p_delta, double &p_direct,
-                            double *delta_weight) const {
+void TabulatedBSDF::delta_lobes(const Vec3 &wi, const Query &q, double *R, double *T, Vec3 &wt,
+                                double &eta) const {
     const int C = channels();
-    double a_delta = 0, a_direct = 0;
-    if (delta_weight)
-        for (int c = 0; c < C; ++c) delta_weight[c] = 0.0;
-    const int side = side_of(wi);
-    if (const BSDF *d = direct(side)) {
-        if (d->lobes() & kDeltaReflection) {
-            double *r = scratch(2, d->channels());
-            BSDFSample s = d->sample(wi, 0.5, 0.5, 0.5, kDeltaReflection, direct_query(q, side), r);
-            if (s.lobe) {
-                const int D = d->channels();
-                for (int c = 0; c < C; ++c) {
-                    double acc = 0;
-                    for (int d = 0; d < D; ++d) acc += P_[c * D + d] * r[d];
-                    if (delta_weight) delta_weight[c] = acc;
-                    a_delta += luminance_[c] * acc;
-                }
+    for (int c = 0; c < C; ++c) {
+        if (R) R[c] = 0.0;
+        if (T) T[c] = 0.0;
+    }
+    eta = 1.0;
+    if (delta_) {
+        // The stack's delta lobes per channel of the model, then projected (the series is
+        // not linear in the Fresnel factors: it is summed before the projection).
+        const int D = delta_->channels();
+        thread_local std::vector<double> buf;
+        buf.resize(std::size_t(2) * D);
+        double *r = buf.data(), *t = r + D;
+        // Every boundary sees the query's film thickness, as PFMC's walk passes it.
+        if (!delta_->solve(wi, direct_query(q, 0), r, t, wt, eta)) eta = 1.0;
+        for (int c = 0; c < C; ++c) {
+            double ar = 0, at = 0;
+            for (int e = 0; e < D; ++e) {
+                ar += delta_P_[c * D + e] * r[e];
+                at += delta_P_[c * D + e] * t[e];
             }
+            if (R) R[c] = ar;
+            if (T) T[c] = at;
         }
+        return;
+    }
+    const int side = side_of(wi);
+    const BSDF *d = direct(side);
+    if (!d || !(d->lobes() & kDeltaReflection) || !R) return;
+    double *r = scratch(2, d->channels());
+    BSDFSample s = d->sample(wi, 0.5, 0.5, 0.5, kDeltaReflection, direct_query(q, side), r);
+    if (!(s.lobe & kDeltaReflection)) return;
+    const int D = d->channels();
+    for (int c = 0; c < C; ++c) {
+        double acc = 0;
+        for (int e = 0; e < D; ++e) acc += P_[c * D + e] * r[e];
+        R[c] = acc;
+    }
+}
+
+TabulatedBSDF::Mixture TabulatedBSDF::mixture(const Vec3 &wi, const Query &q, double *delta_weight,
+                                              double *transmit_weight) const {
+    const int C = channels();
+    Mixture m;
+    thread_local std::vector<double> own;
+    own.resize(std::size_t(2) * C);
+    double *R = delta_weight ? delta_weight : own.data();
+    double *T = transmit_weight ? transmit_weight : own.data() + C;
+    delta_lobes(wi, q, R, T, m.wt, m.eta);
+    double a_delta = 0, a_transmit = 0, a_direct = 0;
+    for (int c = 0; c < C; ++c) {
+        a_delta += luminance_[c] * R[c];
+        a_transmit += luminance_[c] * T[c];
+    }
+    a_delta = std::max(a_delta, 0.0);
+    a_transmit = std::max(a_transmit, 0.0);
+    const int side = side_of(wi);
+    if (direct(side)) {
         Weights wa = angle_weights(std::acos(std::clamp(std::abs(wi.z), 0.0, 1.0)), grid_.n_theta_i);
         const double *da = &direct_albedo_[std::size_t(side) * grid_.n_theta_i];
         a_direct = (1 - wa.w1) * da[wa.i0] + wa.w1 * da[wa.i1];
     }
     double a_table = table_albedo(wi, q);
-    double total = std::max(a_delta, 0.0) + a_direct + a_table;
-    if (!(total > 0)) {
-        p_delta = 0;
-        p_direct = 0;
-        return;
-    }
-    p_delta = std::max(a_delta, 0.0) / total;
-    p_direct = a_direct / total;
+    double total = a_delta + a_transmit + a_direct + a_table;
+    if (!(total > 0) || !std::isfinite(total)) return m;
+    m.p_delta = a_delta / total;
+    m.p_transmit = a_transmit / total;
+    m.p_direct = a_direct / total;
+    return m;
 }
 
 double TabulatedBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const {
@@ -349,12 +391,11 @@ double TabulatedBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const 
     // the density of what it returns is the mixture's inside the mask and 0 outside.
     const bool reflect = wi.z * wo.z > 0;
     if (!(lobes & (reflect ? kGlossyReflection : kGlossyTransmission))) return 0.0;
-    double p_delta, p_direct;
-    mixture(wi, q, p_delta, p_direct, nullptr);
-    double p = (1.0 - p_delta - p_direct) * table_pdf(wi, wo, q);
+    const Mixture m = mixture(wi, q, nullptr, nullptr);
+    double p = std::max(0.0, 1.0 - m.p_delta - m.p_transmit - m.p_direct) * table_pdf(wi, wo, q);
     const int side = side_of(wi);
-    if (const BSDF *d = direct(side); d && p_direct > 0 && reflect)
-        p += p_direct * d->pdf(wi, wo, kGlossyReflection | kDiffuseReflection, direct_query(q, side));
+    if (const BSDF *d = direct(side); d && m.p_direct > 0 && reflect)
+        p += m.p_direct * d->pdf(wi, wo, kGlossyReflection | kDiffuseReflection, direct_query(q, side));
     return p;
 }
 
@@ -363,14 +404,16 @@ BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u
     zero(weight);
     if (!usable_direction(wi) || wi.z == 0 || side_of(wi) >= sides_) return {};
     const int C = channels(), side = side_of(wi);
-    double small[16]; // RGB tables: no allocation in the render loop
-    std::vector<double> large(C > 16 ? C : 0);
-    double *delta_w = C > 16 ? large.data() : small;
-    double p_delta, p_direct;
-    mixture(wi, q, p_delta, p_direct, delta_w);
+    double small[32]; // RGB tables: no allocation in the render loop
+    std::vector<double> large(C > 16 ? 2 * C : 0);
+    double *delta_w = C > 16 ? large.data() : small, *transmit_w = delta_w + C;
+    const Mixture m = mixture(wi, q, delta_w, transmit_w);
+    const double p_delta = m.p_delta, p_transmit = m.p_transmit, p_direct = m.p_direct;
     PCG32 rng(hash_directions(0x7ab1e, wi, Vec3{u1, u2x, u2y}));
     BSDFSample s;
-    if (u1 < p_delta) { // the exact delta reflection of the top interface
+    // Delta lobes: picked with probability p proportional to their luminance, weight
+    // (reflectance or transmittance) / p, so the expected weight is the lobe's own.
+    if (u1 < p_delta) { // the exact delta reflection (the stack's, or the entry boundary's)
         if (!(lobes & kDeltaReflection)) return {};
         s.wo = reflect(wi);
         s.pdf = p_delta;
@@ -378,7 +421,16 @@ BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u
         for (int c = 0; c < C; ++c) weight[c] = delta_w[c] / p_delta;
         return s;
     }
-    if (u1 < p_delta + p_direct) {
+    if (u1 < p_delta + p_transmit) { // the stack's unscattered transmission
+        if (!(lobes & kDeltaTransmission)) return {};
+        s.wo = m.wt;
+        s.pdf = p_transmit;
+        s.lobe = kDeltaTransmission;
+        s.eta = m.eta;
+        for (int c = 0; c < C; ++c) weight[c] = transmit_w[c] / p_transmit;
+        return s;
+    }
+    if (u1 < p_delta + p_transmit + p_direct) {
         const BSDF *direct_side = direct(side);
         double *wd = scratch(3, direct_side->channels());
         const double u_lobe = rng.uniform();

@@ -14,6 +14,12 @@
 // (lobes 2, 3 of table_grid.h): each side has its own CDFs, and its own exact part
 // (`direct` above: the top interface; `direct_below` below: the base, asked with its own
 // film), added to reflection on its side.
+// With a delta stack (table_delta.h: a layered model's smooth boundaries and slabs) the
+// delta parts are the stack's complete delta lobes instead of the side's own delta
+// reflection: reflection (the entry boundary's own plus every path that crosses it, is
+// reflected by smooth boundaries below and crosses back, all unscattered) and the
+// unscattered transmission, from either side; the mixture picks each with probability
+// proportional to its luminance, as the delta reflection alone before.
 // Film thicknesses outside a multi-node thickness range are clamped to its ends, for the
 // table part and the exact part alike. Transmitted samples report eta = n_t / n_i of the
 // whole stack (their weights carry (n_i / n_t)^2); from below its inverse.
@@ -21,6 +27,7 @@
 #include <memory>
 #include <vector>
 #include "bsdf.h"
+#include "table_delta.h"
 #include "table_grid.h"
 
 namespace bsdflab {
@@ -32,7 +39,8 @@ class TabulatedBSDF final : public BSDF {
     TabulatedBSDF(std::vector<double> channel_ids, TableGrid grid, std::vector<float> values,
                   std::vector<double> luminance, std::shared_ptr<const BSDF> direct, std::vector<double> P,
                   double default_thickness, double transmission_eta = 1.0,
-                  std::shared_ptr<const BSDF> direct_below = nullptr);
+                  std::shared_ptr<const BSDF> direct_below = nullptr,
+                  std::shared_ptr<const TableDeltaStack> delta = nullptr, std::vector<double> delta_P = {});
     uint32_t lobes() const override;
     void eval(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q, double *out) const override;
     double pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q) const override;
@@ -70,8 +78,18 @@ class TabulatedBSDF final : public BSDF {
     Entry entry_weights(const Vec3 &w, const Weights &wa, int n, const Query &q) const; // n: nodes
     void direct_eval(const BSDF &d, const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Query &q,
                      double *out) const;
-    void mixture(const Vec3 &wi, const Query &q, double &p_delta, double &p_direct,
-                 double *delta_weight) const;
+    // The one-sample mixture's probabilities for wi: delta reflection, delta transmission
+    // (toward `wt`, reporting `eta`), the direct model's glossy part; the rest is the table.
+    // The weights (channels(), may be null) are the delta lobes' reflectance and transmittance.
+    struct Mixture {
+        double p_delta = 0, p_transmit = 0, p_direct = 0;
+        Vec3 wt{0.0, 0.0, 1.0};
+        double eta = 1.0;
+    };
+    Mixture mixture(const Vec3 &wi, const Query &q, double *delta_weight, double *transmit_weight) const;
+    // The delta lobes' weights projected to the table's channels (R, T may be null); the
+    // delta stack's when there is one, else the side's own delta reflection.
+    void delta_lobes(const Vec3 &wi, const Query &q, double *R, double *T, Vec3 &wt, double &eta) const;
     // Patch geometry of (theta_o cell k, phi cell m).
     void patch_bounds(int k, int m, double &cos_hi, double &cos_lo, double &phi_lo, double &phi_hi) const;
     // Patches of one side: (lobe of the side, theta_o cell, phi cell).
@@ -81,6 +99,8 @@ class TabulatedBSDF final : public BSDF {
     std::vector<float> values_;
     std::vector<double> luminance_;
     std::shared_ptr<const BSDF> direct_, direct_below_;
+    std::shared_ptr<const TableDeltaStack> delta_;
+    std::vector<double> delta_P_; // (C x delta channels) row-major
     int sides_ = 1, per_side_ = 1; // sides lit (1: above only, 2: both) and lobes per side
     std::vector<double> P_; // (C x direct channels) row-major, or empty
     double default_thickness_;
