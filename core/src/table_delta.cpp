@@ -42,8 +42,15 @@ TableDeltaStack::TableDeltaStack(std::vector<std::shared_ptr<const BSDF>> bounda
     extends_ = transmits_ || ((boundaries_.front()->lobes() & kDeltaTransmission) && below_top) ||
                ((boundaries_.back()->lobes() & kDeltaTransmission) && above_base);
     for (std::size_t j = 0; j < thickness_.size(); ++j) {
-        if (!(thickness_[j] >= 0) || static_cast<int>(sigma_t_[j].size()) != C_)
-            throw std::invalid_argument("each slab needs a thickness >= 0 and one sigma_t per channel");
+        if (!(thickness_[j] >= 0) || !std::isfinite(thickness_[j]) ||
+            static_cast<int>(sigma_t_[j].size()) != C_)
+            throw std::invalid_argument(
+                "each slab needs a finite thickness >= 0 and one sigma_t per channel");
+        // A negative extinction would amplify (T > 1 through a glass plate) and NaN would
+        // silently drop the transmission: both are refused, as the Python Slab does.
+        for (double s : sigma_t_[j])
+            if (!(s >= 0) || !std::isfinite(s))
+                throw std::invalid_argument("each slab's sigma_t must be finite and >= 0 (1/um)");
     }
 }
 
