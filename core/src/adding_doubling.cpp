@@ -76,8 +76,9 @@ AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
             if (a > 0 && a < n_max_ * (1.0 - kIndexTolerance)) {
                 double r = a / n_max_;
                 breaks_.push_back(std::sqrt((1.0 - r) * (1.0 + r)));
-                // reviewer experiment: grade the panel after a small critical cosine c (the
-                // Fresnel knee from the denser side has width ~c there)
+                // Graded cuts after a small critical cosine c: seen from the denser side the
+                // Fresnel knee past the critical angle is ~c wide, which neither the solve nor
+                // its coarse twin resolved at a vanishing contrast (error 9e-4, bound 1e-5).
                 const double c = breaks_.back();
                 for (double f = 4.0; c * f < 0.2; f *= 4.0) breaks_.push_back(c * f);
             }
