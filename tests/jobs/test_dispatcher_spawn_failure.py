@@ -9,8 +9,7 @@ from __future__ import annotations
 
 import time
 
-from bsdflab.jobs import register_kind
-from bsdflab.jobs import processes
+from bsdflab.jobs import processes, register_kind
 from bsdflab.jobs.processes import ProcessJobExecutor
 
 register_kind("test-steps", "support.job_kinds")

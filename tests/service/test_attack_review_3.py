@@ -14,6 +14,7 @@ import threading
 from pathlib import Path
 
 import numpy as np
+
 from bsdflab.measured.rgl import write_rgl
 from bsdflab.measured.rgl_file import RGLData
 from support.service_client import make_client
