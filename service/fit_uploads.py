@@ -74,9 +74,9 @@ def read_summary(path: str, name: str, folder: str) -> dict[str, Any]:
         raise ValueError(str(e).replace(folder + os.sep, "").replace(folder, "")) from None
 
 
-def check_file(jobs, path: str, name: str, folder: str) -> dict[str, Any]:
+def check_file(jobs, path: str, name: str, folder: str, client: str | None = None) -> dict[str, Any]:
     """``read_summary`` in a check worker process (bsdflab.service.offload)."""
-    return jobs.checker.run("fitdata", {"path": path, "name": name, "folder": folder}, name)
+    return jobs.checker.run("fitdata", {"path": path, "name": name, "folder": folder}, name, client)
 
 
 def upload(jobs, data: bytes, name: str, client: str, quota: int | None = None) -> dict[str, Any]:
@@ -103,7 +103,7 @@ def _upload(jobs, data: bytes, name: str, client: str, quota: int | None) -> dic
     try:
         path = os.path.join(folder, name)
         Path(path).write_bytes(data)
-        summary = check_file(jobs, path, name, folder)
+        summary = check_file(jobs, path, name, folder, client)
         write_atomically(target, lambda tmp: shutil.copyfile(path, tmp), suffix=SUFFIX)
     finally:
         shutil.rmtree(folder, ignore_errors=True)

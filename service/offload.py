@@ -15,14 +15,18 @@ died reading it, 503 when every worker stayed busy until the deadline. Never a 5
 """
 from __future__ import annotations
 
+import asyncio
+import collections
+import contextlib
 import threading
+import time
 from pathlib import Path
 from typing import Any
 
 from fastapi import HTTPException
 
 from bsdflab.jobs import register_kind
-from bsdflab.jobs.executor import JobFailed
+from bsdflab.jobs.executor import JobFailed, JobHandle
 from bsdflab.jobs.processes import ProcessJobExecutor
 from bsdflab.service import worker_checks
 from bsdflab.service.errors import cut_message
@@ -41,6 +45,7 @@ class Checker:
         self._executor: ProcessJobExecutor | None = None
         self._lock = threading.Lock()
         self._closed = False
+        self._in_flight: collections.Counter[str | None] = collections.Counter()   # checks per client key
 
     def _pool(self) -> ProcessJobExecutor:
         with self._lock:
@@ -51,24 +56,113 @@ class Checker:
                                                     name="bsdflab-check-worker")
             return self._executor
 
-    def run(self, check: str, args: dict[str, Any], what: str) -> dict[str, Any]:
-        """The summary of check ``check`` on ``args`` (bsdflab.service.worker_checks);
-        ``what`` names the checked thing in an error ("the upload", "options.material")."""
-        s = self.settings
-        handle = self._pool().submit(worker_checks.KIND, {"check": check, "args": args,
-                                                          "memory_bytes": s.limit_check_memory_bytes}, self.out_dir)
+    @contextlib.contextmanager
+    def _slot(self, client: str | None):
+        """One of ``client``'s BSDFLAB_LIMIT_CHECKS_PER_KEY checks, taken before its check
+        is queued (429 when none is free): one key's checks cannot fill the queue that
+        every key's uploads wait in. None: not counted."""
+        limit = self.settings.limit_checks_per_key
+        with self._lock:
+            if client is not None and self._in_flight[client] >= limit:
+                raise HTTPException(429, f"client {client!r} has {self._in_flight[client]} checks of files waiting "
+                                         f"or running, its share ({limit_variable('limit_checks_per_key')}); "
+                                         "retry when they end", headers={"Retry-After": "5"})
+            self._in_flight[client] += 1
         try:
-            return handle.result(s.check_deadline_s)
-        except TimeoutError:
-            started = handle.state == "running"
-            handle.cancel()   # a running check's worker is killed (its reader does not look)
-            if started:
-                raise HTTPException(422, f"{what}: reading it took longer than {s.check_deadline_s:g} s "
-                                         f"({limit_variable('check_deadline_s')})") from None
+            yield
+        finally:
+            with self._lock:
+                self._in_flight[client] -= 1
+                if self._in_flight[client] <= 0:
+                    del self._in_flight[client]
+
+    def _submit(self, check: str, args: dict[str, Any]) -> JobHandle:
+        return self._pool().submit(worker_checks.KIND, {"check": check, "args": args,
+                                                        "memory_bytes": self.settings.limit_check_memory_bytes},
+                                   self.out_dir)
+
+    def run(self, check: str, args: dict[str, Any], what: str, client: str | None = None) -> dict[str, Any]:
+        """The summary of check ``check`` on ``args`` (bsdflab.service.worker_checks);
+        ``what`` names the checked thing in an error ("the upload", "options.material");
+        ``client``: the key whose share of checks it takes. Blocks this thread."""
+        with self._slot(client):
+            handle = self._submit(check, args)
+            changed = threading.Event()
+            handle.on_change(lambda h: changed.set())
+
+            def wait(done, timeout: float) -> bool:
+                end = time.monotonic() + timeout
+                while not done():
+                    changed.clear()
+                    if done():
+                        break
+                    if not changed.wait(max(0.0, end - time.monotonic())):
+                        return done()
+                return True
+
+            return self._answer(handle, what, wait)
+
+    async def run_async(self, check: str, args: dict[str, Any], what: str, client: str | None = None
+                        ) -> dict[str, Any]:
+        """``run`` awaited on the event loop: the wait holds no thread (a route's thread
+        waiting for a queued check was one of the 40 that every sync route shares)."""
+        with self._slot(client):
+            handle = self._submit(check, args)
+            loop, changed = asyncio.get_running_loop(), asyncio.Event()
+
+            def watcher(h) -> None:   # on the dispatcher's thread: it must never raise there
+                try:
+                    loop.call_soon_threadsafe(changed.set)
+                except RuntimeError:   # the loop is closed
+                    pass
+
+            handle.on_change(watcher)
+
+            async def wait(done, timeout: float) -> bool:
+                end = time.monotonic() + timeout
+                while not done():
+                    changed.clear()
+                    if done():
+                        break
+                    try:
+                        await asyncio.wait_for(changed.wait(), max(0.0, end - time.monotonic()))
+                    except asyncio.TimeoutError:
+                        return done()
+                return True
+
+            try:
+                started = await wait(lambda: handle.state != "queued", self.settings.check_deadline_s)
+                finished = started and await wait(handle.done, self._left(handle))
+            except BaseException:   # the request was dropped: its check is not wanted
+                handle.cancel()
+                raise
+            return self._outcome(handle, what, started, finished)
+
+    def _left(self, handle: JobHandle) -> float:
+        """What is left of the deadline for a running check: its running time counts, its wait did not."""
+        return max(0.0, self.settings.check_deadline_s - handle.progress()[1])
+
+    def _answer(self, handle: JobHandle, what: str, wait) -> dict[str, Any]:
+        started = wait(lambda: handle.state != "queued", self.settings.check_deadline_s)
+        finished = started and wait(handle.done, self._left(handle))
+        return self._outcome(handle, what, started, finished)
+
+    def _outcome(self, handle: JobHandle, what: str, started: bool, finished: bool) -> dict[str, Any]:
+        """The check's summary, or the client's error. A check that waited out the deadline
+        for a worker is a 503 (the server is busy); one that ran past it is a 422 (its file)."""
+        s = self.settings
+        if not started:
+            handle.cancel()
             raise HTTPException(503, f"all {s.check_workers} check workers ({limit_variable('check_workers')}) "
                                      f"stayed busy for {s.check_deadline_s:g} s "
                                      f"({limit_variable('check_deadline_s')}); retry later",
-                                headers={"Retry-After": "5"}) from None
+                                headers={"Retry-After": "5"})
+        if not finished:
+            handle.cancel()   # a running check's worker is killed (its reader does not look)
+            raise HTTPException(422, f"{what}: reading it took longer than {s.check_deadline_s:g} s "
+                                     f"({limit_variable('check_deadline_s')})")
+        try:
+            return handle.result(0)
         except JobCancelled:
             raise HTTPException(503, "the server is stopping; retry later", headers={"Retry-After": "5"}) from None
         except JobFailed as e:
@@ -77,6 +171,9 @@ class Checker:
             if e.error_type == "MemoryError":
                 raise HTTPException(413, f"{what}: reading it needs more than {s.limit_check_memory_bytes} bytes "
                                          f"of memory ({limit_variable('limit_check_memory_bytes')})") from None
+            if e.error_type == "WorkerStartFailed":   # the server's trouble (EMFILE, ENOMEM), not the file's
+                raise HTTPException(503, "no check worker could be started; retry later",
+                                    headers={"Retry-After": "5"}) from None
             if e.error_type == "WorkerDied":
                 raise HTTPException(422, f"{what}: the process reading it stopped ({cut_message(str(e))}); "
                                          "the file cannot be read here") from None
