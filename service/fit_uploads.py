@@ -79,6 +79,19 @@ def check_file(jobs, path: str, name: str, folder: str, client: str | None = Non
     return jobs.checker.run("fitdata", {"path": path, "name": name, "folder": folder}, name, client)
 
 
+def read_dataset(request: dict[str, Any], out_dir: str) -> dict[str, Any]:
+    """A fit request's data files read together with its sidecar, as its job reads them
+    (bsdflab.fit.job.load_dataset), in a check worker: ValueError naming the file, line and
+    column when they do not make a dataset; how many files they were."""
+    from bsdflab.fit.job import load_dataset
+
+    try:
+        load_dataset(request, Path(out_dir))
+    except LookupError as e:   # an upload deleted since the route found it
+        raise ValueError(str(e)) from None
+    return {"files": len(request["data"])}
+
+
 def upload(jobs, data: bytes, name: str, client: str, quota: int | None = None) -> dict[str, Any]:
     """Check and store one fit data file; its record ``{"hash", "format", "summary"}``.
     ValueError naming the file, line and column when it does not read; 413 past the quota."""

@@ -8,6 +8,8 @@ check's summary (JSON) or raises ValueError with the message a client gets. Chec
               (bsdflab.service.uploads): its summary.
 ``fitdata``   an uploaded fit data file read by the fit's readers
               (bsdflab.service.fit_uploads): its summary.
+``dataset``   a fit request's data files read together with its sidecar, as its job
+              reads them (bsdflab.service.fit_uploads): how many files.
 ``materials`` a render's materials that name stored files, built with the files loaded
               (bsdflab.service.render_checks): what the render job would refuse.
 
@@ -98,4 +100,5 @@ def _address_space() -> int:
 
 CHECKS = {"measured": ("bsdflab.service.uploads", "read_summary"),
           "fitdata": ("bsdflab.service.fit_uploads", "read_summary"),
-          "materials": ("bsdflab.service.render_checks", "check_materials")}
+          "materials": ("bsdflab.service.render_checks", "check_materials"),
+          "dataset": ("bsdflab.service.fit_uploads", "read_dataset")}
