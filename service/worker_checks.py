@@ -10,6 +10,9 @@ check's summary (JSON) or raises ValueError with the message a client gets. Chec
               (bsdflab.service.fit_uploads): its summary.
 ``dataset``   a fit request's data files read together with its sidecar, as its job
               reads them (bsdflab.service.fit_uploads): how many files.
+``table``     a table request whose model names stored files, normalised with the model
+              built once (bsdflab.jobs.tabulate.prepared): the request, its key, cells
+              and the table when it exists.
 ``materials`` a render's materials that name stored files, built with the files loaded
               (bsdflab.service.render_checks): what the render job would refuse.
 
@@ -101,4 +104,5 @@ def _address_space() -> int:
 CHECKS = {"measured": ("bsdflab.service.uploads", "read_summary"),
           "fitdata": ("bsdflab.service.fit_uploads", "read_summary"),
           "materials": ("bsdflab.service.render_checks", "check_materials"),
-          "dataset": ("bsdflab.service.fit_uploads", "read_dataset")}
+          "dataset": ("bsdflab.service.fit_uploads", "read_dataset"),
+          "table": ("bsdflab.jobs.tabulate", "prepared")}
