@@ -5,13 +5,16 @@ that hold the GIL for seconds (a 63 MiB .ProcSpec of XML: 8.8 s), and a render m
 that names a stored file loads that file to be checked: both run as jobs of the kind
 ``check`` (bsdflab.service.worker_checks) on their own `ProcessJobExecutor`, the
 mechanism of the service's jobs, with ``BSDFLAB_CHECK_WORKERS`` processes started on the
-first check. Each check has ``BSDFLAB_CHECK_DEADLINE_S`` from its submission (its worker is
-killed past it) and may grow its worker by ``BSDFLAB_LIMIT_CHECK_MEMORY_BYTES``.
+first check. A check waits at most ``BSDFLAB_CHECK_DEADLINE_S`` for a worker and then runs
+at most as long (its worker is killed past it), and may grow its worker by
+``BSDFLAB_LIMIT_CHECK_MEMORY_BYTES``; one client key has at most
+``BSDFLAB_LIMIT_CHECKS_PER_KEY`` checks waiting or running (429 beyond, before queueing).
 
-``Checker.run`` blocks its caller (a route's thread, which waits without the GIL) and
-answers the check's summary, or the client's error: the reader's ValueError as it is (a
-422 naming the file), 413 past the memory bound, 422 past the deadline or when the worker
-died reading it, 503 when every worker stayed busy until the deadline. Never a 500.
+``Checker.run`` blocks its caller (an upload's thread, which waits without the GIL);
+``Checker.run_async`` awaits the check on the event loop, holding no thread. Both answer
+the check's summary, or the client's error: the reader's ValueError as it is (a 422 naming
+the file), 413 past the memory bound, 422 past the deadline's running time or when the
+worker died reading it, 503 when no worker was free within the deadline. Never a 500.
 """
 from __future__ import annotations
 
