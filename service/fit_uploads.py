@@ -74,9 +74,22 @@ def read_summary(path: str, name: str, folder: str) -> dict[str, Any]:
         raise ValueError(str(e).replace(folder + os.sep, "").replace(folder, "")) from None
 
 
-def check_file(jobs, path: str, name: str, folder: str) -> dict[str, Any]:
+def check_file(jobs, path: str, name: str, folder: str, client: str | None = None) -> dict[str, Any]:
     """``read_summary`` in a check worker process (bsdflab.service.offload)."""
-    return jobs.checker.run("fitdata", {"path": path, "name": name, "folder": folder}, name)
+    return jobs.checker.run("fitdata", {"path": path, "name": name, "folder": folder}, name, client)
+
+
+def read_dataset(request: dict[str, Any], out_dir: str) -> dict[str, Any]:
+    """A fit request's data files read together with its sidecar, as its job reads them
+    (bsdflab.fit.job.load_dataset), in a check worker: ValueError naming the file, line and
+    column when they do not make a dataset; how many files they were."""
+    from bsdflab.fit.job import load_dataset
+
+    try:
+        load_dataset(request, Path(out_dir))
+    except LookupError as e:   # an upload deleted since the route found it
+        raise ValueError(str(e)) from None
+    return {"files": len(request["data"])}
 
 
 def upload(jobs, data: bytes, name: str, client: str, quota: int | None = None) -> dict[str, Any]:
@@ -103,7 +116,7 @@ def _upload(jobs, data: bytes, name: str, client: str, quota: int | None) -> dic
     try:
         path = os.path.join(folder, name)
         Path(path).write_bytes(data)
-        summary = check_file(jobs, path, name, folder)
+        summary = check_file(jobs, path, name, folder, client)
         write_atomically(target, lambda tmp: shutil.copyfile(path, tmp), suffix=SUFFIX)
     finally:
         shutil.rmtree(folder, ignore_errors=True)

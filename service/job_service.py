@@ -124,6 +124,11 @@ class JobService:
             self._start(row)
         return row, created
 
+    def room(self, kind: str, content_hash: str, client: Client = ANONYMOUS) -> None:
+        """QueueFull when ``submit`` would refuse this job of ``client`` now."""
+        self.store.room(kind, content_hash, self.settings.limit_queue, owner=client.name,
+                        owner_limit=client.max_jobs, reserve=self._reserve(client))
+
     def _reserve(self, client: Client) -> int:
         """Slots a tenant key with jobs leaves free for other keys; an admin key (and the
         open service's anonymous client) is the operator and may use them."""

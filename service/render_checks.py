@@ -23,19 +23,19 @@ STORED = ("table", "measured", "merl")   # checked by the store (bsdflab.service
 OWN = ("object", "skin", "head")          # the scenes' materials a dict options.material replaces
 
 
-def _stored(value: Any) -> bool:
+def names_stored(value: Any) -> bool:
     """Whether a model dict names a stored file anywhere (building it would load the file)."""
     if isinstance(value, dict):
-        return value.get("type") in STORED or any(_stored(v) for v in value.values())
+        return value.get("type") in STORED or any(names_stored(v) for v in value.values())
     if isinstance(value, list):
-        return any(_stored(v) for v in value)
+        return any(names_stored(v) for v in value)
     return False
 
 
 def _model(d: dict[str, Any]) -> int:
     """The model checked; the cells of its table (both lobes; 0 when it is not tabulated)."""
     tabulated = d.get("type") == TABULATED
-    if not _stored(d):   # a stored file is not loaded here
+    if not names_stored(d):   # a stored file is not loaded here
         if tabulated:
             table_request(d)   # as the worker asks: the model, the grid, the target, the method
         else:
@@ -64,7 +64,7 @@ def check(request: dict[str, Any]) -> tuple[int, list[tuple[str, dict[str, Any]]
                     cells = max(cells, _model(d))
                 except ValueError as e:
                     raise ValueError(f"{where}: {e}") from None
-                if _stored(d) and (where, d) not in stored:
+                if names_stored(d) and (where, d) not in stored:
                     stored.append((where, d))
     for shape in scene.shapes:
         mesh_size(shape.geometry)   # parameters and size checked, nothing built: the worker builds

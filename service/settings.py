@@ -48,7 +48,9 @@ class Settings(LibrarySettings):
     check_workers: int = Field(2, ge=1, le=64, description="processes that read clients' files (uploads, a "
                                                            "render's stored materials), started on the first")
     check_deadline_s: float = Field(60.0, gt=0, le=3600, description="seconds one check of a client's file may "
-                                    "take, waiting for a check worker included (422 / 503 beyond)")
+                                    "wait for a check worker (503 beyond), and then run (422 beyond)")
+    limit_checks_per_key: int = Field(1, ge=1, description="checks of clients' files (uploads, a render's stored "
+                                      "materials) one client key may have waiting or running (429 beyond)")
 
     limit_body_bytes: int = Field(4 << 20, ge=1024, description="request body size")
     limit_measured_bytes: int = Field(64 << 20, ge=1024, description="one measured-file upload, POST /v1/measured "

@@ -124,6 +124,30 @@ class JobStore:
             self._db.close()
 
     # -- jobs ------------------------------------------------------------------------------
+    def room(self, kind: str, content_hash: str, queue_limit: int, owner: str | None = None,
+             owner_limit: int | None = None, reserve: int = 0) -> None:
+        """QueueFull when ``submit`` would refuse this job now (a job it would join is never
+        refused): asked before a job's submission costs a check worker's time."""
+        with self._lock:
+            found = self._db.execute("SELECT 1 FROM jobs WHERE kind = ? AND hash = ? AND state IN ('queued', "
+                                     "'running') LIMIT 1", (kind, content_hash)).fetchone()
+            if found is None:
+                self._check_room(queue_limit, owner, owner_limit, reserve)
+
+    def _check_room(self, queue_limit: int, owner: str | None, owner_limit: int | None, reserve: int) -> None:
+        active = self._db.execute(
+            "SELECT count(*) AS n FROM jobs WHERE state IN ('queued', 'running')").fetchone()["n"]
+        if active >= queue_limit:
+            raise QueueFull(f"{active} jobs are queued or running, the limit", "limit_queue")
+        mine = self._db.execute("SELECT count(*) AS n FROM jobs WHERE owner IS ? AND state IN "
+                                "('queued', 'running')", (owner,)).fetchone()["n"]
+        if owner_limit is not None and mine >= owner_limit:
+            raise QueueFull(f"client {owner!r} has {mine} jobs queued or running, its share",
+                            "limit_queue_per_key")
+        if mine and queue_limit - active - 1 < reserve:   # a key with no job may take the reserve
+            raise QueueFull(f"client {owner!r} has {mine} jobs queued or running and the last {reserve} "
+                            "slots are kept for other keys", "limit_queue_reserve")
+
     def submit(self, kind: str, content_hash: str, request: dict[str, Any], queue_limit: int,
                owner: str | None = None, owner_limit: int | None = None, reserve: int = 0
                ) -> tuple[dict[str, Any], bool]:
@@ -143,18 +167,7 @@ class JobStore:
                                      (found["id"], owner))
                     self._db.execute("COMMIT")
                     return found, False
-                active = self._db.execute(
-                    "SELECT count(*) AS n FROM jobs WHERE state IN ('queued', 'running')").fetchone()["n"]
-                if active >= queue_limit:
-                    raise QueueFull(f"{active} jobs are queued or running, the limit", "limit_queue")
-                mine = self._db.execute("SELECT count(*) AS n FROM jobs WHERE owner IS ? AND state IN "
-                                        "('queued', 'running')", (owner,)).fetchone()["n"]
-                if owner_limit is not None and mine >= owner_limit:
-                    raise QueueFull(f"client {owner!r} has {mine} jobs queued or running, its share",
-                                    "limit_queue_per_key")
-                if mine and queue_limit - active - 1 < reserve:   # a key with no job may take the reserve
-                    raise QueueFull(f"client {owner!r} has {mine} jobs queued or running and the last {reserve} "
-                                    "slots are kept for other keys", "limit_queue_reserve")
+                self._check_room(queue_limit, owner, owner_limit, reserve)
                 job_id = uuid.uuid4().hex
                 self._db.execute(
                     "INSERT INTO jobs (id, kind, hash, state, request, created, owner) "

@@ -74,9 +74,9 @@ def read_summary(path: str, fmt: str) -> dict[str, Any]:
         raise ValueError(f"format={fmt}: " + str(e).replace(path, "the upload")) from None
 
 
-def check_file(jobs, path: str, fmt: str) -> dict[str, Any]:
+def check_file(jobs, path: str, fmt: str, client: str | None = None) -> dict[str, Any]:
     """``read_summary`` in a check worker process (bsdflab.service.offload)."""
-    return jobs.checker.run("measured", {"path": path, "fmt": fmt}, "the upload")
+    return jobs.checker.run("measured", {"path": path, "fmt": fmt}, "the upload", client)
 
 
 def _upload(jobs, data: bytes, fmt: str, client: str, quota: int | None) -> dict[str, Any]:
@@ -95,7 +95,7 @@ def _upload(jobs, data: bytes, fmt: str, client: str, quota: int | None) -> dict
 
     def write(tmp: str) -> None:
         Path(tmp).write_bytes(data)
-        read.update(check_file(jobs, tmp, fmt))
+        read.update(check_file(jobs, tmp, fmt, client))
 
     write_atomically(target, write, suffix=suffix)
     result = {"hash": h, "format": fmt, "summary": {"bytes": len(data), **read},

@@ -56,6 +56,7 @@ class JobHandle:
         self._result: dict[str, Any] | None = None
         self._error: BaseException | None = None
         self._on_cancel = None   # set by the executor: called once when cancel() is asked
+        self._watchers: list = []   # called after it starts and after it finishes (on_change)
 
     # -- what callers use ------------------------------------------------------------------
     @property
@@ -105,6 +106,22 @@ class JobHandle:
             raise self._error
         return self._result
 
+    def on_change(self, watcher) -> None:
+        """Call ``watcher(self)`` after the job starts and after it finishes (on the
+        executor's thread; once at once when it has started already), so that an event loop
+        can wait for it without a thread."""
+        with self._lock:
+            self._watchers.append(watcher)
+            now = self._state != "queued"
+        if now:
+            watcher(self)
+
+    def _changed(self) -> None:
+        with self._lock:
+            watchers = list(self._watchers)
+        for watcher in watchers:
+            watcher(self)
+
     def error(self) -> BaseException | None:
         """The exception of a failed or cancelled job (None otherwise)."""
         return self._error if self._finished.is_set() else None
@@ -116,7 +133,8 @@ class JobHandle:
             if self._state != "queued":
                 return False
             self._state, self._start = "running", time.monotonic()
-            return True
+        self._changed()
+        return True
 
     def _progress(self, fraction: float) -> None:
         with self._lock:
@@ -139,6 +157,7 @@ class JobHandle:
                 self._state = "cancelled" if isinstance(error, JobCancelled) else "failed"
                 self._error = error
         self._finished.set()
+        self._changed()
         return True
 
 

@@ -23,6 +23,8 @@ from bsdflab.util.progress import JobCancelled
 
 PROGRESS_INTERVAL_S = 0.1   # at most ten progress messages a second per worker
 POLL_S = 0.5
+SPAWN_BACKOFF_S = 0.1       # after a worker failed to start: the first wait before the next try
+SPAWN_BACKOFF_MAX_S = 5.0   # the longest
 
 
 class _Worker:
@@ -57,6 +59,7 @@ class ProcessJobExecutor(JobExecutor):
         self._pending: collections.deque[JobHandle] = collections.deque()
         self._pool: list[_Worker] = []
         self._spawned = 0
+        self._backoff, self._retry_at = 0.0, None   # after a failed worker start (_spawn)
         self._stopping = False
         self._wake_r, self._wake_w = self._ctx.Pipe(duplex=False)
         self._thread = threading.Thread(target=self._loop, name="bsdflab-job-dispatcher", daemon=True)
@@ -104,14 +107,32 @@ class ProcessJobExecutor(JobExecutor):
                 self._dispatch()
                 self._apply_cancels()
                 waitables = [self._wake_r] + [w.conn for w in self._pool] + [w.process.sentinel for w in self._pool]
-                for ready in multiprocessing.connection.wait(waitables, timeout=POLL_S):
+                timeout = POLL_S if self._retry_at is None else min(POLL_S, max(0.0, self._retry_at - time.monotonic()))
+                for ready in multiprocessing.connection.wait(waitables, timeout=timeout):
                     self._on_ready(ready)
         finally:
             self._stop_all()
 
     def _spawn(self) -> None:
+        """Start a worker. When the start fails (fork/spawn's OSError: EMFILE, EAGAIN,
+        ENOMEM), the job that waited for it fails with that error and the next start waits a
+        back-off (doubling, at most SPAWN_BACKOFF_MAX_S): the dispatcher lives on, and later
+        jobs run once a start succeeds."""
+        if self._retry_at is not None and time.monotonic() < self._retry_at:
+            return
         self._spawned += 1
-        worker = _Worker(self._ctx, self._spawned, self.warm, self.name)
+        try:
+            worker = _Worker(self._ctx, self._spawned, self.warm, self.name)
+        except Exception as e:   # noqa: BLE001 - whatever the start raised, the loop must go on
+            self._backoff = min(SPAWN_BACKOFF_MAX_S, 2 * self._backoff) if self._backoff else SPAWN_BACKOFF_S
+            self._retry_at = time.monotonic() + self._backoff
+            with self._lock:
+                waiting = self._pending.popleft() if self._pending else None
+            if waiting is not None:
+                waiting._finish(error=JobFailed(f"could not start a worker process ({type(e).__name__}: {e}); "
+                                                f"retrying in {self._backoff:g} s", "WorkerStartFailed"))
+            return
+        self._backoff, self._retry_at = 0.0, None
         with self._lock:
             self._pool.append(worker)
 

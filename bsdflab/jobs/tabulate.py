@@ -36,13 +36,17 @@ SPEC = ("model", "preset", "overrides")  # the model's request form (bsdflab.req
 
 def normalise(request: dict[str, Any]) -> dict[str, Any]:
     """The request validated (ValueError naming the field) with its method chosen."""
+    return _normalised(_checked(request))
+
+
+def _checked(request: dict[str, Any]) -> TableRequest:
     if not isinstance(request, dict):
         raise ValueError(f"a tabulate request must be a dict, got {type(request).__name__}")
     rest = {k: v for k, v in request.items() if k not in SPEC}
     model = model_from_spec({k: v for k, v in request.items() if k in SPEC})
     table_request = TableRequest.from_dict(rest, model=model)
     _check_spectral(model, table_request.wavelengths)
-    return _normalised(table_request)
+    return table_request
 
 
 def _normalised(request: TableRequest) -> dict[str, Any]:
@@ -78,8 +82,21 @@ def key(request: dict[str, Any]) -> str:
     return _request(request).key()
 
 
+def prepared(request: dict[str, Any], out_dir: Path) -> dict[str, Any]:
+    """``normalise``, ``key``, ``cells`` and ``existing`` with the model built once (each
+    builds it: a model naming a measured file read that file each time), for a service's
+    check worker: ``{"request", "key", "cells", "existing"}``."""
+    table_request = _checked(request)
+    normalised, k = _normalised(table_request), table_request.key()
+    return {"request": normalised, "key": k, "cells": table_request.cells(),
+            "existing": _existing(Path(out_dir) / f"{k}.exr", normalised)}
+
+
 def existing(request: dict[str, Any], out_dir: Path) -> dict[str, Any] | None:
-    path = Path(out_dir) / f"{key(request)}.exr"
+    return _existing(Path(out_dir) / f"{key(request)}.exr", request)
+
+
+def _existing(path: Path, request: dict[str, Any]) -> dict[str, Any] | None:
     if not path.is_file():
         return None
     try:

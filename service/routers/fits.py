@@ -105,10 +105,31 @@ def list_datasets(jobs: JobsDep, client: ClientDep, limit: Annotated[int, Query(
 
 @router.post("", response_model=FitInfo, responses={**QUEUED, **ERRORS},
              summary="Fit a model to uploaded data (or get the existing study)")
-def create_fit(body: FitRequest, jobs: JobsDep, settings: SettingsDep, client: ClientDep):
+async def create_fit(body: FitRequest, jobs: JobsDep, settings: SettingsDep, client: ClientDep):
     """The config is checked first (422 naming the TOML section and key), then the limits,
     then the data (422 naming the upload, file, line and column); 202 with the job, or 200
     with the study when this exact request ran before."""
+    prepared = await run_in_threadpool(_prepare, body, jobs, settings, client)
+    if isinstance(prepared, FitInfo):
+        return prepared
+    request, key = prepared
+    # one read of uploaded files per client at once, as its uploads (before: as many reads at
+    # once as the route's threads, each up to BSDFLAB_LIMIT_MEASURED_BYTES, before any 429)
+    lock = uploads.client_lock(client.name)
+    if not lock.acquire(blocking=False):
+        raise HTTPException(429, f"client {client.name!r} has an upload or a fit's data being read; retry later",
+                            headers={"Retry-After": "2"})
+    try:   # what the worker would refuse, refused now (422): read in a check worker, awaited without a thread
+        await jobs.checker.run_async("dataset", {"request": request, "out_dir": str(jobs.artefact_dir)},
+                                     "the fit's data", client.name)
+    finally:
+        lock.release()
+    return await run_in_threadpool(_submit, jobs, request, key, client)
+
+
+def _prepare(body: FitRequest, jobs: JobService, settings, client):
+    """On a route's thread: the existing study, or (request, key) with its uploads found,
+    its limits and the key's queue share checked (before its data takes a check worker)."""
     request, key = jobs.prepare(KIND, body.model_dump())
     check_limits(settings, request)
     found = jobs.cached(KIND, key) or jobs.adopt(KIND, key, request)
@@ -124,16 +145,11 @@ def create_fit(body: FitRequest, jobs: JobsDep, settings: SettingsDep, client: C
     # read here, before the queue's admission: one upload named 64 times was 64 copies and reads
     total = sum(fit_uploads.size(jobs, item["hash"]) for item in request["data"])
     over_limit(settings, "limit_measured_bytes", total, "the bytes of the fit's data files together")
-    # one read of uploaded files per client at once, as its uploads (before: as many reads at
-    # once as the route's threads, each up to BSDFLAB_LIMIT_MEASURED_BYTES, before any 429)
-    lock = uploads.client_lock(client.name)
-    if not lock.acquire(blocking=False):
-        raise HTTPException(429, f"client {client.name!r} has an upload or a fit's data being read; retry later",
-                            headers={"Retry-After": "2"})
-    try:
-        fit_job.load_dataset(request, jobs.artefact_dir)   # what the worker would refuse, refused now (422)
-    finally:
-        lock.release()
+    jobs.room(KIND, key, client)
+    return request, key
+
+
+def _submit(jobs: JobService, request: dict[str, Any], key: str, client) -> JSONResponse:
     row, _ = jobs.submit(KIND, request, key, client)
     info = job_info(jobs.job(row["id"]))
     return JSONResponse(info.model_dump(mode="json"), status_code=202, headers={"Location": info.links["self"]})

@@ -5,6 +5,7 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, HTTPException, Path
 from fastapi.responses import FileResponse, JSONResponse
+from starlette.concurrency import run_in_threadpool
 
 from bsdflab.service import artefact_refs, render_checks
 from bsdflab.service.bodies import ThreadedBody
@@ -37,10 +38,21 @@ def render_info(jobs: JobService, h: str, request: dict[str, Any], result: dict[
 
 @router.post("", response_model=RenderInfo, responses={**QUEUED, **ERRORS},
              summary="Render a scene (or get the existing image)")
-def create_render(body: RenderRequest, jobs: JobsDep, settings: SettingsDep, client: ClientDep):
+async def create_render(body: RenderRequest, jobs: JobsDep, settings: SettingsDep, client: ClientDep):
     """200 with the render when this exact request (scene, options, size, spp, seed) was
     rendered before, else 202 with its job; identical requests in flight share it."""
-    # on this route's thread (not the event loop), bounded by BSDFLAB_LIMIT_STORE_REFS
+    prepared = await run_in_threadpool(_prepare, body, jobs, settings, client)
+    if isinstance(prepared, RenderInfo):
+        return prepared
+    request, key, stored = prepared
+    if stored:   # stored files loaded in a check worker, under its deadline and memory bound; awaited without a thread
+        await jobs.checker.run_async("materials", {"materials": stored}, stored[0][0], client.name)
+    return await run_in_threadpool(_submit, jobs, request, key, client)
+
+
+def _prepare(body: RenderRequest, jobs: JobService, settings, client):
+    """On a route's thread (not the event loop), bounded by BSDFLAB_LIMIT_STORE_REFS: the
+    existing render, or (request, key, the materials that name stored files)."""
     request, key = jobs.prepare(KIND, model_spec(body.model_dump(), jobs, artefact_refs.RENDER_SLOTS, client))
     pixels = request["width"] * request["height"]
     over_limit(settings, "limit_render_pixels", pixels, "width x height")
@@ -50,8 +62,12 @@ def create_render(body: RenderRequest, jobs: JobsDep, settings: SettingsDep, cli
         return render_info(jobs, key, request, found, client)
     cells, stored = render_checks.check(request)   # what the worker would refuse, refused now (422)
     over_limit(settings, "limit_table_cells", cells, "options.material's table cells (both lobes counted)")
-    if stored:   # stored files loaded in a check worker, under its deadline and memory bound
-        jobs.checker.run("materials", {"materials": stored}, stored[0][0])
+    if stored:   # the key's queue share before its check takes a check worker's time (429)
+        jobs.room(KIND, key, client)
+    return request, key, stored
+
+
+def _submit(jobs: JobService, request: dict[str, Any], key: str, client) -> JSONResponse:
     row, _ = jobs.submit(KIND, request, key, client)
     info = job_info(jobs.job(row["id"]))
     return JSONResponse(info.model_dump(mode="json"), status_code=202, headers={"Location": info.links["self"]})

@@ -5,9 +5,10 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, HTTPException, Path, Query
 from fastapi.responses import FileResponse, JSONResponse
+from starlette.concurrency import run_in_threadpool
 
 from bsdflab.jobs import tabulate as tabulate_kind
-from bsdflab.service import artefact_refs
+from bsdflab.service import artefact_refs, render_checks
 from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
@@ -31,15 +32,44 @@ def table_info(result: dict[str, Any]) -> TableInfo:
 
 @router.post("", response_model=TableInfo, responses={**QUEUED, **ERRORS},
              summary="Tabulate a model (or get the existing table)")
-def create_table(body: TableRequest, jobs: JobsDep, settings: SettingsDep, client: ClientDep):
+async def create_table(body: TableRequest, jobs: JobsDep, settings: SettingsDep, client: ClientDep):
     """200 with the table when it exists already (the same model, grid, target error and
     channels: the table cache's key), else 202 with the job that makes it; identical
-    requests in flight share that job."""
-    request, key = jobs.prepare(KIND, model_spec(body.model_dump(exclude_none=True), jobs, client=client))
-    over_limit(settings, "limit_table_cells", tabulate_kind.cells(request), "table cells (both lobes counted)")
+    requests in flight share it. A model that names stored files (a measured file, a table)
+    is built in a check worker (bsdflab.service.offload), once, never in the web process."""
+    spec = await run_in_threadpool(_spec, body, jobs, client)
+    if render_checks.names_stored(spec.get("model")):
+        checked = await jobs.checker.run_async("table", {"request": spec, "out_dir": str(jobs.folder(KIND))},
+                                               "model", client.name)
+    else:
+        checked = None
+    return await run_in_threadpool(_create, spec, checked, jobs, settings, client)
+
+
+def _spec(body: TableRequest, jobs: JobService, client) -> dict[str, Any]:
+    """The request with its stored files found (bounded by BSDFLAB_LIMIT_STORE_REFS); when
+    one is named, the key's queue share checked before a check worker reads it."""
+    spec = model_spec(body.model_dump(exclude_none=True), jobs, client=client)
+    if render_checks.names_stored(spec.get("model")):
+        jobs.room(KIND, "", client)   # its key is known after the check
+    return spec
+
+
+def _create(spec: dict[str, Any], checked: dict[str, Any] | None, jobs: JobService, settings, client):
+    if checked is None:
+        request, key = jobs.prepare(KIND, spec)
+        cells, existing = tabulate_kind.cells(request), None
+    else:   # tabulate.prepared in a check worker
+        request, key, cells, existing = checked["request"], checked["key"], checked["cells"], checked["existing"]
+    over_limit(settings, "limit_table_cells", cells, "table cells (both lobes counted)")
     if request["wavelengths"] is not None:
         over_limit(settings, "limit_wavelengths", len(request["wavelengths"]), "wavelengths")
-    found = jobs.cached(KIND, key) or jobs.adopt(KIND, key, request)
+    found = jobs.cached(KIND, key)
+    if found is None and checked is None:
+        found = jobs.adopt(KIND, key, request)
+    elif found is None and existing is not None:   # as adopt, from the check worker's look
+        jobs.store.put_artefact(key, KIND, request, existing)
+        found = existing
     if found is not None:
         return table_info(found)
     row, _ = jobs.submit(KIND, request, key, client)

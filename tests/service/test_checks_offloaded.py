@@ -73,3 +73,22 @@ def test_a_check_past_its_deadline_answers_a_4xx_or_503_naming_it(tmp_path, rgl)
         if r.status_code == 503:
             assert r.headers["retry-after"]
         assert client.get("/v1/measured").json()["measured"] == []
+
+
+def test_a_keys_check_beyond_its_share_is_429_before_it_is_queued(tmp_path, rgl):
+    """BSDFLAB_LIMIT_CHECKS_PER_KEY (1): while key a holds its check (held here by its slot,
+    so no race decides it), a's upload is 429 with Retry-After naming the setting and no
+    check is sent to a worker; key b's upload is read. Mutation caught (run once): the slot
+    not counted (a's upload 200)."""
+    keys = {"a": {"key": "a-key-0123456789abcdef"}, "b": {"key": "b-key-0123456789abcdef"}}
+    with make_client(tmp_path, api_keys=keys, key_rate_per_s=1000, limit_measured_bytes=1 << 20) as client:
+        checker = client.app.state.jobs.checker
+        with checker._slot("a"):
+            sent = checker.submitted
+            r = client.post("/v1/measured", params={"format": "rgl"}, content=rgl,
+                            headers={**OCTETS, "X-API-Key": keys["a"]["key"]})
+            assert r.status_code == 429 and r.headers["Retry-After"], r.text
+            assert "BSDFLAB_LIMIT_CHECKS_PER_KEY" in r.text and checker.submitted == sent
+            r = client.post("/v1/measured", params={"format": "rgl"}, content=rgl,
+                            headers={**OCTETS, "X-API-Key": keys["b"]["key"]})
+            assert r.status_code == 200, r.text

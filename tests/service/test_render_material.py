@@ -128,6 +128,24 @@ def test_a_measured_file_by_hash_is_a_material(client, measured_hash):
         assert client.get(f"/v1/renders/{r.json()['hash']}").json()["request"]["options"]["material"] == material
 
 
+def test_a_stored_material_that_passed_its_check_is_not_checked_again(client, measured_hash):
+    """The check of a render's stored materials is kept by its canonical JSON (the files are
+    named by content hash): renders of the same material with other seeds send no second
+    check to a worker. Mutation caught (run once): nothing kept (REMEMBERED empty: one
+    more check per render)."""
+    material = {"type": "measured", "hash": measured_hash}
+    checker = client.app.state.jobs.checker
+    first = render(client, material, seed=7001)
+    cancel(client, first)
+    assert first.status_code == 202, first.text
+    sent = checker.submitted
+    for seed in (7002, 7003):
+        r = render(client, material, seed=seed)
+        cancel(client, r)
+        assert r.status_code == 202, r.text
+    assert checker.submitted == sent
+
+
 @pytest.fixture(scope="module")
 def rgb_hash(client, tmp_path_factory):
     path = tmp_path_factory.mktemp("upload-rgb") / "cu-rgb.bsdf"

@@ -139,12 +139,12 @@ def test_concurrent_uploads_of_one_key_do_not_overshoot_its_quota(tmp_path, rgl_
     check_file = uploads.check_file
     both = threading.Barrier(2, timeout=3)
 
-    def waiting_check(jobs, path, fmt):
+    def waiting_check(*args):
         try:
             both.wait()
         except threading.BrokenBarrierError:   # the other upload waits for this one: no overlap
             pass
-        return check_file(jobs, path, fmt)
+        return check_file(*args)
 
     monkeypatch.setattr(uploads, "check_file", waiting_check)
     size = max(p.stat().st_size for p in rgl_files)
