@@ -54,6 +54,50 @@ def row_directions(dataset: Dataset) -> tuple[np.ndarray, np.ndarray]:
     return detector, source
 
 
+class RowPairs:
+    """A dataset's brdf/diffuse rows as the distinct (wi, wo) pairs and wavelengths a solution
+    is evaluated at, and the pick that spreads pi f back over the rows."""
+
+    def __init__(self, dataset: Dataset):
+        self.wavelengths, wl_index = np.unique(dataset.wavelength_nm, return_inverse=True)
+        detector, source = row_directions(dataset)
+        pairs, pair_index = np.unique(np.hstack([detector, source]), axis=0, return_inverse=True)
+        self.wi, self.wo = np.ascontiguousarray(pairs[:, :3]), np.ascontiguousarray(pairs[:, 3:])
+        self.pick = (pair_index.ravel(), wl_index.ravel())
+
+    def pi_f(self, sol) -> np.ndarray:
+        """pi f per row from a solution's f |cos theta_o| at the distinct pairs."""
+        return (np.pi * sol.eval(self.wi, self.wo) / self.wo[:, 2:3])[self.pick]
+
+
+class BelowTopSolutions:
+    """Adding-doubling solutions keyed by what lies below the top: a model that differs from a
+    cached one in its top only reuses that solve (``Solution.with_model``); at most CACHE kept."""
+
+    def __init__(self, wavelengths, nodes: int, orders: int):
+        self.wavelengths, self.nodes, self.orders = wavelengths, nodes, orders
+        self._cache: dict[str, object] = {}
+        self.solves = 0        # full solves (what lies below the top solved anew)
+        self.top_solves = 0    # solves that reused the layers below the top
+
+    def __call__(self, model):
+        d = model.to_dict()
+        key = json.dumps({**d, "interfaces": d["interfaces"][1:]}, sort_keys=True)
+        if key in self._cache:
+            self.top_solves += 1
+            return self._cache[key].with_model(model)
+        with warnings.catch_warnings():
+            # the solver raises the nodes to resolve the slab's phase function and says so;
+            # in a fit that is expected for every parameter set (docs/fit.md)
+            warnings.filterwarnings("ignore", message="adding-doubling: nodes raised", category=UserWarning)
+            sol = solve(model, wavelengths=self.wavelengths, nodes=self.nodes, orders=self.orders or None)
+        self.solves += 1
+        if len(self._cache) >= CACHE:
+            self._cache.pop(next(iter(self._cache)))
+        self._cache[key] = sol
+        return sol
+
+
 class SolverForwardModel:
     """Observables (P, rows) of ``dataset`` for full parameter vectors (P, len(ALL_NAMES)).
 
@@ -70,15 +114,18 @@ class SolverForwardModel:
         if model.kind != "full":
             raise ValueError(f"SolverForwardModel needs [model] kind = 'full', got {model.kind!r}")
         self.dataset, self.settings = dataset, model
-        self.wavelengths, wl_index = np.unique(dataset.wavelength_nm, return_inverse=True)
-        detector, source = row_directions(dataset)
-        pairs, pair_index = np.unique(np.hstack([detector, source]), axis=0, return_inverse=True)
-        self._wi, self._wo = np.ascontiguousarray(pairs[:, :3]), np.ascontiguousarray(pairs[:, 3:])
-        self._pick = (pair_index.ravel(), wl_index.ravel())
+        self._rows = RowPairs(dataset)
+        self.wavelengths = self._rows.wavelengths
         self._names = model.names()
-        self._cache: dict[str, object] = {}
-        self.solves = 0        # full solves (what lies below the top solved anew)
-        self.top_solves = 0    # solves that reused the layers below the top
+        self._solutions = BelowTopSolutions(self.wavelengths, model.nodes, model.orders)
+
+    @property
+    def solves(self) -> int:
+        return self._solutions.solves
+
+    @property
+    def top_solves(self) -> int:
+        return self._solutions.top_solves
 
     @property
     def rows(self) -> int:
@@ -88,36 +135,16 @@ class SolverForwardModel:
         """The ``Layered`` model of one full parameter vector (what material.json holds)."""
         return from_dict(material_dict(values, model=self.settings))
 
-    def _solution(self, model):
-        d = model.to_dict()
-        key = json.dumps({**d, "interfaces": d["interfaces"][1:]}, sort_keys=True)
-        if key in self._cache:
-            self.top_solves += 1
-            return self._cache[key].with_model(model)
-        with warnings.catch_warnings():
-            # the solver raises the nodes to resolve the slab's phase function and says so;
-            # in a fit that is expected for every parameter set (docs/fit.md)
-            warnings.filterwarnings("ignore", message="adding-doubling: nodes raised", category=UserWarning)
-            sol = solve(model, wavelengths=self.wavelengths, nodes=self.settings.nodes,
-                        orders=self.settings.orders or None)
-        self.solves += 1
-        if len(self._cache) >= CACHE:
-            self._cache.pop(next(iter(self._cache)))
-        self._cache[key] = sol
-        return sol
-
     def predict_one(self, values) -> np.ndarray:
         """pi f for every row of one full parameter vector (NaN outside the domain)."""
         v = dict(zip(ALL_NAMES, map(float, values)))
         if not all(in_domain(n, v[n]) for n in self._names) or v["substrate_ior"] <= v["exterior_ior"]:
             return np.full(self.rows, np.nan)
         try:
-            sol = self._solution(self.layered(v))
+            sol = self._solutions(self.layered(v))
         except ValueError:
             return np.full(self.rows, np.nan)
-        f_cos = sol.eval(self._wi, self._wo)          # f |cos theta_source|, (pairs, wavelengths)
-        factor = np.pi * f_cos / self._wo[:, 2:3]
-        return factor[self._pick]
+        return self._rows.pi_f(sol)
 
     def evaluate(self, full) -> np.ndarray:
         """Model values (P, rows) for full parameter vectors (P, len(ALL_NAMES)), or (rows,)."""

@@ -8,17 +8,13 @@ the top changes (``Solution.with_model``), as there.
 
 from __future__ import annotations
 
-import json
-import warnings
-
 import numpy as np
 
 from bsdflab.bsdfs import from_dict
 from bsdflab.fit.data import Dataset
 from bsdflab.fit.forward import parameter_sets
-from bsdflab.fit.full_forward import CACHE, row_directions
+from bsdflab.fit.full_forward import BelowTopSolutions, RowPairs
 from bsdflab.fit.full_structure import FullStructure
-from bsdflab.solvers import solve
 
 
 class StructureSolverForward:
@@ -46,13 +42,17 @@ class StructureSolverForward:
         self._domains = [domains[n] for n in self._own]
         self.top_names = structure.top_names()
         self.nodes, self.orders = nodes, orders
-        self.wavelengths, wl_index = np.unique(dataset.wavelength_nm, return_inverse=True)
-        detector, source = row_directions(dataset)
-        pairs, pair_index = np.unique(np.hstack([detector, source]), axis=0, return_inverse=True)
-        self._wi, self._wo = np.ascontiguousarray(pairs[:, :3]), np.ascontiguousarray(pairs[:, 3:])
-        self._pick = (pair_index.ravel(), wl_index.ravel())
-        self._cache: dict[str, object] = {}
-        self.solves = self.top_solves = 0
+        self._rows = RowPairs(dataset)
+        self.wavelengths = self._rows.wavelengths
+        self._solutions = BelowTopSolutions(self.wavelengths, nodes, orders)
+
+    @property
+    def solves(self) -> int:
+        return self._solutions.solves
+
+    @property
+    def top_solves(self) -> int:
+        return self._solutions.top_solves
 
     @property
     def rows(self) -> int:
@@ -66,33 +66,16 @@ class StructureSolverForward:
     def model_dict(self, vector, samples: int = 256) -> dict:
         return self.structure.model_dict(self.values(vector), samples)
 
-    def _solution(self, model):
-        d = model.to_dict()
-        key = json.dumps({**d, "interfaces": d["interfaces"][1:]}, sort_keys=True)
-        if key in self._cache:
-            self.top_solves += 1
-            return self._cache[key].with_model(model)
-        with warnings.catch_warnings():
-            # the solver raises the nodes for the slab's phase function and says so; expected here
-            warnings.filterwarnings("ignore", message="adding-doubling: nodes raised", category=UserWarning)
-            sol = solve(model, wavelengths=self.wavelengths, nodes=self.nodes, orders=self.orders or None)
-        self.solves += 1
-        if len(self._cache) >= CACHE:
-            self._cache.pop(next(iter(self._cache)))
-        self._cache[key] = sol
-        return sol
-
     def predict_one(self, vector) -> np.ndarray:
         v = self.values(vector)
         inside = all((x > p.lo if p.lo_open else x >= p.lo) and x <= p.hi for x, p in zip(v.values(), self._domains))
         if not inside:
             return np.full(self.rows, np.nan)
         try:
-            sol = self._solution(from_dict(self.structure.model_dict(v)))
+            sol = self._solutions(from_dict(self.structure.model_dict(v)))
         except ValueError:  # indices that do not chain, an index ratio outside the solver's range
             return np.full(self.rows, np.nan)
-        f_cos = sol.eval(self._wi, self._wo)
-        return (np.pi * f_cos / self._wo[:, 2:3])[self._pick]
+        return self._rows.pi_f(sol)
 
     def evaluate(self, full) -> np.ndarray:
         t, single = parameter_sets("values", full, self.names)

@@ -3,6 +3,7 @@ analytic Gaussian log-posterior (exact for central differences up to round-off),
 every bound of the prior box (where a stencil 2 steps inside the support rounded outside it
 for a quarter to a half of such MAPs and the start fell back silently to the 1e-4 ball), and
 None for a saddle."""
+
 from __future__ import annotations
 
 from types import SimpleNamespace
@@ -19,11 +20,13 @@ CORR[0, 1] = CORR[1, 0] = -0.995
 CORR[2, 3] = CORR[3, 2] = -0.84
 COV = CORR * np.outer(SD, SD)
 MU = np.array([900.0, 1.83, 0.85, 0.01, 15.0])
-PRIORS = {"t": {"prior": "uniform", "low": 850.0, "high": 950.0},
-          "n": {"prior": "uniform", "low": 1.75, "high": 1.9},
-          "s": {"prior": "uniform", "low": 0.7, "high": 1.0},
-          "b": {"prior": "normal", "mean": 0.01, "sd": 0.005},
-          "w": {"prior": "uniform", "low": 5.0, "high": 25.0}}
+PRIORS = {
+    "t": {"prior": "uniform", "low": 850.0, "high": 950.0},
+    "n": {"prior": "uniform", "low": 1.75, "high": 1.9},
+    "s": {"prior": "uniform", "low": 0.7, "high": 1.0},
+    "b": {"prior": "normal", "mean": 0.01, "sd": 0.005},
+    "w": {"prior": "uniform", "low": 5.0, "high": 25.0},
+}
 
 
 class GaussianPosterior:

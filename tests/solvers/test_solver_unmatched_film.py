@@ -40,13 +40,13 @@ def _pairs():
 
 def test_interior_film_continuous_with_the_matched_solve():
     def model(n):
-        return bl.Layered([bl.Dielectric(1.5, 1.0), bl.Dielectric(n, 1.5, film=FILM)], [HG, ISO],
-                          bl.Dielectric(1.0, n))
+        return bl.Layered([bl.Dielectric(1.5, 1.0), bl.Dielectric(n, 1.5, film=FILM)], [HG, ISO], bl.Dielectric(1.0, n))
 
     wi, wo = _pairs()
     matched = solve(model(1.5), WL).eval(wi, wo)
-    bare = solve(bl.Layered([bl.Dielectric(1.5, 1.0), bl.Dielectric(1.5, 1.5)], [HG, ISO],
-                            bl.Dielectric(1.0, 1.5)), WL).eval(wi, wo)
+    bare = solve(
+        bl.Layered([bl.Dielectric(1.5, 1.0), bl.Dielectric(1.5, 1.5)], [HG, ISO], bl.Dielectric(1.0, 1.5)), WL
+    ).eval(wi, wo)
     film_effect = np.max(np.abs(bare - matched) / matched)
     up, down = (solve(model(1.5 * (1 + e)), WL).eval(wi, wo) for e in (1e-3, -1e-3))
     rel = np.max(np.abs(0.5 * (up + down) - matched) / matched)

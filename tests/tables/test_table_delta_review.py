@@ -41,8 +41,11 @@ def table_lobe(tb, wi, lobe):
     return np.zeros(3)
 
 
-@pytest.mark.xfail(strict=True, reason="known: a per-query film thickness rescales every boundary's film "
-                   "(docs/known_limits.md); strict, so the fix is noticed")
+@pytest.mark.xfail(
+    strict=True,
+    reason="known: a per-query film thickness rescales every boundary's film "
+    "(docs/known_limits.md); strict, so the fix is noticed",
+)
 @pytest.mark.parametrize(("side", "lobe"), [(1.0, int(Lobe.DELTA_TRANSMISSION)), (-1.0, int(Lobe.DELTA_REFLECTION))])
 def test_default_thickness_keeps_the_base_film(table, side, lobe):
     t = np.radians(30.0)
