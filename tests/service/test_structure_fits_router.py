@@ -228,3 +228,33 @@ def test_another_tenants_hash_is_refused(tmp_path):
         }
         r = c.post("/v1/fits", json=body, headers=bob)
         assert r.status_code == 422 and f"data[1].hash: no uploaded fit data file {ha}" in r.text, r.text
+
+
+def test_a_running_structure_fit_streams_progress_and_is_cancelled(client):
+    """A co-refinement far too long to finish (2^21 walker steps, at the limit) reports its
+    sampling stage (progress past 25 %) over the job's events, is cancelled within a sampler
+    step, and serves no study. (The time guard only stops a hang; nothing is timed.)"""
+    import json
+    import time
+
+    ha, hb = upload(client, A, "at15.csv"), upload(client, B, "rest.csv")
+    config = tomllib.loads(two(ha, hb, "hash"))
+    config["sampler"].update(max_steps=1 << 18, check_every=1 << 17)
+    files = [{"hash": ha, "name": "at15.csv"}, {"hash": hb, "name": "rest.csv"}]
+    r = client.post("/v1/fits", json={"config": config, "data": files})
+    assert r.status_code == 202, r.text
+    job_id = r.json()["id"]
+    end = time.monotonic() + 1800
+    while (job := client.get(f"/v1/jobs/{job_id}").json())["progress"] <= 0.25:
+        assert job["state"] in ("queued", "running") and time.monotonic() < end, job
+        time.sleep(0.05)
+    with client.stream("GET", f"/v1/jobs/{job_id}/events") as events:
+        lines = events.iter_lines()
+        first = [next(lines), next(lines)]   # the job as it is now: a progress event
+        assert first[0] == "event: progress" and json.loads(first[1].removeprefix("data:"))["progress"] > 0.25
+        assert client.delete(f"/v1/jobs/{job_id}").status_code == 200
+        rest = [line for line in lines if line.startswith("event:")]
+    assert rest[-1] == "event: cancelled", rest
+    job = wait_job(client, job_id, timeout=120)
+    assert job["state"] == "cancelled" and "sampling cancelled" in job["error"], job
+    assert client.get(f"/v1/fits/{job['hash']}/files/summary.json").status_code == 404
