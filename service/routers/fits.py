@@ -69,6 +69,9 @@ def check_limits(settings, request: dict[str, Any]) -> None:
         elif s.kind == "emcee":
             why = "no free structure parameter" if m.emulator_nodes else "emulator_nodes = 0"
             solves, what = s.walkers * s.max_steps, f"[model] {why}: walkers x max_steps direct solves"
+        elif m.emulator_nodes:   # a structure with no free structure parameter: no emulator to bound
+            raise HTTPException(422, "[model] no free structure parameter with the nested sampler: its direct solves "
+                                     "have no bound; use [sampler] kind = 'emcee' (BSDFLAB_LIMIT_FIT_EMULATOR_SOLVES)")
         else:
             raise HTTPException(422, "[model] emulator_nodes = 0 with the nested sampler: its direct solves have "
                                      "no bound; give emulator_nodes (BSDFLAB_LIMIT_FIT_EMULATOR_SOLVES)")

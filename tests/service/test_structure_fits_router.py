@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import tomllib
 
-from bsdflab.fit.full_stack_config import load_structure_config
+from bsdflab.fit.full_stack_config import load_structure_config, parse_structure_config
 from bsdflab.fit.stack_study import run_stack_study
 from support.service_client import make_client, wait_job
 
@@ -113,7 +113,7 @@ def run_job(client, body) -> dict:
     assert info["state"] == "done" and {"summary.json", "parameters.csv", "corner.png", "draws.npz"} <= set(
         info["files"]
     ), info
-    return client.get(info["links"]["summary.json"]).json()
+    return {**client.get(info["links"]["summary.json"]).json(), "files": info["files"]}
 
 
 def same(got: dict, want: dict) -> None:
@@ -250,7 +250,7 @@ def test_a_running_structure_fit_streams_progress_and_is_cancelled(client):
         time.sleep(0.05)
     with client.stream("GET", f"/v1/jobs/{job_id}/events") as events:
         lines = events.iter_lines()
-        first = [next(lines), next(lines)]   # the job as it is now: a progress event
+        first = [next(lines), next(lines)]  # the job as it is now: a progress event
         assert first[0] == "event: progress" and json.loads(first[1].removeprefix("data:"))["progress"] > 0.25
         assert client.delete(f"/v1/jobs/{job_id}").status_code == 200
         rest = [line for line in lines if line.startswith("event:")]
@@ -258,3 +258,24 @@ def test_a_running_structure_fit_streams_progress_and_is_cancelled(client):
     job = wait_job(client, job_id, timeout=120)
     assert job["state"] == "cancelled" and "sampling cancelled" in job["error"], job
     assert client.get(f"/v1/fits/{job['hash']}/files/summary.json").status_code == 404
+
+
+def test_a_full_model_structure_fit_as_a_job(client, tmp_path):
+    """The full model of a [structure] (its emulator: 3 nodes over one free structure
+    parameter, 3 solves) over HTTP: the study ``bsdflab fit`` writes for the same config,
+    and the emulator's solves counted as the limit counts them."""
+    text = (EXAMPLES / "structure_full" / "structure.toml").read_text()
+    data = (EXAMPLES / "structure_full" / "data.csv").read_bytes()
+    config = tomllib.loads(text)
+    config["model"].update(nodes=4, emulator_nodes=3, emulator_checks=1)
+    config["parameters"] = {"base_albedo": config["parameters"]["base_albedo"]}
+    config["sampler"] = {"walkers": 4, "max_steps": 20, "check_every": 10, "map_starts": 1, "seed": 3}
+    h = upload(client, data, "full.csv")
+    summary = run_job(client, {"config": config, "data": [{"hash": h, "name": "full.csv"}]})
+    assert summary["emulator"]["solves"] == 3**1, summary["emulator"]
+    assert "material.json" in summary["files"]  # the full model's posterior median, renderable
+    (tmp_path / "data.csv").write_bytes(data)
+    want = run_stack_study(
+        parse_structure_config(config), tmp_path / "study", str(tmp_path / "data.csv"), progress=False
+    )
+    same(summary, want)
