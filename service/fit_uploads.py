@@ -83,10 +83,10 @@ def read_dataset(request: dict[str, Any], out_dir: str) -> dict[str, Any]:
     """A fit request's data files read together with its sidecar, as its job reads them
     (bsdflab.fit.job.load_dataset), in a check worker: ValueError naming the file, line and
     column when they do not make a dataset; how many files they were."""
-    from bsdflab.fit.job import load_dataset
+    from bsdflab.fit.job import check_inputs
 
-    try:
-        load_dataset(request, Path(out_dir))
+    try:   # a structure fit's [[dataset]] uploads each as its job reads them
+        check_inputs(request, Path(out_dir))
     except LookupError as e:   # an upload deleted since the route found it
         raise ValueError(str(e)) from None
     return {"files": len(request["data"])}

@@ -353,7 +353,8 @@ class FitFile(Request):
 class FitRequest(Request):
     model_config = whole(FIT_EXAMPLE, exclusive=False)
     config: dict[str, Any] = Field(description="the fit's TOML (docs/fit_data.md) as JSON: [parameters], "
-                                               "[sampler], [model], [appearance]")
+                                               "[sampler], [model], [appearance]; or a [structure] fit's, its "
+                                               "[[dataset]] uploads named by hash (docs/fit.md)")
     data: Annotated[list[FitFile], Field(min_length=1, max_length=256)] = Field(
         description="the uploaded data files: one long CSV, or spectra files with an import sidecar")
     sidecar: dict[str, Any] | None = Field(None, description="the import sidecar's TOML as JSON (wide CSV, "

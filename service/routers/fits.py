@@ -58,18 +58,27 @@ def check_limits(settings, request: dict[str, Any]) -> None:
     else:
         over_limit(settings, "limit_fit_live_points", s.live_points, "[sampler] live_points")
     m = config.model
-    if m.kind == "full":
+    structure = fit_job.is_structure(request)
+    if getattr(m, "kind", None) == "full":
         # emulator_nodes = 0 solves the model at every likelihood evaluation (before: uncounted,
-        # 2^21 direct solves passed); the emulator's error checks are direct solves too
-        if m.emulator_nodes:
-            solves, what = m.emulator_nodes ** len(config.free), "[model] emulator_nodes ^ free parameters"
+        # 2^21 direct solves passed); the emulator's error checks are direct solves too.
+        # A structure's emulator spans its free structure parameters (bsdflab.fit.full_stack_posterior)
+        free = [n for n in config.priors if n != "noise_scale"] if structure else config.free
+        if m.emulator_nodes and (free or not structure):
+            solves, what = m.emulator_nodes ** len(free), "[model] emulator_nodes ^ free parameters"
         elif s.kind == "emcee":
-            solves, what = s.walkers * s.max_steps, "[model] emulator_nodes = 0: walkers x max_steps direct solves"
+            why = "no free structure parameter" if m.emulator_nodes else "emulator_nodes = 0"
+            solves, what = s.walkers * s.max_steps, f"[model] {why}: walkers x max_steps direct solves"
+        elif m.emulator_nodes:   # a structure with no free structure parameter: no emulator to bound
+            raise HTTPException(422, "[model] no free structure parameter with the nested sampler: its direct solves "
+                                     "have no bound; use [sampler] kind = 'emcee' (BSDFLAB_LIMIT_FIT_EMULATOR_SOLVES)")
         else:
             raise HTTPException(422, "[model] emulator_nodes = 0 with the nested sampler: its direct solves have "
                                      "no bound; give emulator_nodes (BSDFLAB_LIMIT_FIT_EMULATOR_SOLVES)")
         over_limit(settings, "limit_fit_emulator_solves", solves + m.emulator_checks,
                    f"{what} + emulator_checks")
+    if structure:   # a structure's study has no appearance draws or renders (bsdflab.fit.stack_study)
+        return
     ap = config.appearance
     # each posterior draw is evaluated at every angle (before: angles_deg had no length bound)
     over_limit(settings, "limit_fit_walker_steps", ap.draws * len(ap.angles_deg), "[appearance] draws x angles_deg")
