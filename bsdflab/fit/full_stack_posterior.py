@@ -15,13 +15,11 @@ import copy
 
 import numpy as np
 
-from bsdflab.fit import parameters as P
 from bsdflab.fit.emulator import EmulatedForward, prior_box
 from bsdflab.fit.full_stack_config import FullStackConfig
 from bsdflab.fit.full_stack_forward import StructureSolverForward
-from bsdflab.fit.instrument import BY_NAME as INSTRUMENT
 from bsdflab.fit.posterior import GaussianPosterior
-from bsdflab.fit.stack_posterior import BoundConfig, concatenate, series_scales
+from bsdflab.fit.stack_posterior import bind, concatenate
 
 MODELLED = ("scale", "background")
 
@@ -32,36 +30,8 @@ class FullStackPosterior(GaussianPosterior):
         if len(datasets) != len(config.datasets):
             raise ValueError(f"the config names {len(config.datasets)} dataset(s), got {len(datasets)}")
         self.datasets, self.stack = datasets, config
-        domains = {p.name: p for p in (*config.structure.parameters(), P.NOISE)}
-        priors, fixed = dict(config.priors), dict(config.fixed)
-        self._series = [
-            series_scales(d) if spec.instrument.scale_per_series else None for spec, d in zip(config.datasets, datasets)
-        ]
-        for spec, per in zip(config.datasets, self._series):
-            inst = spec.instrument
-            for name in MODELLED:
-                names = [spec.prefix(n) for n in per[0]] if name == "scale" and per else [spec.prefix(name)]
-                for full in names:
-                    domains[full] = INSTRUMENT[name]
-                    if name in inst.priors:
-                        priors[full] = inst.priors[name]
-                    else:
-                        fixed[full] = inst.fixed[name]
-        names = tuple(domains)
-        self.config = BoundConfig(names, domains, priors, fixed, config.sampler, config)
-        self.free = self.config.free
-        if config.sampler.walkers < 2 * len(self.free):
-            raise ValueError(
-                f"[sampler] walkers must be at least twice the number of free parameters "
-                f"({2 * len(self.free)}), got {config.sampler.walkers}"
-            )
-        self.col = {n: i for i, n in enumerate(names)}
-        self._noise_col = self.col["noise_scale"]
-        self._base = np.array([fixed.get(n, np.nan) for n in names])
-        self._free_cols = np.array([self.col[n] for n in self.free], dtype=int)
-        self._lo = np.array([domains[n].lo for n in names])
-        self._hi = np.array([domains[n].hi for n in names])
-        self._lo_open = np.array([domains[n].lo_open for n in names])
+        domains, priors = bind(self, config, datasets, MODELLED)
+        names = self.config.names
         self.dataset = concatenate(datasets, [spec.name for spec in config.datasets])
         self._slices = np.cumsum([0, *(len(d) for d in datasets)])
         m = config.model

@@ -76,6 +76,40 @@ def concatenate(datasets, names=None) -> Dataset:
                    cat("reflectance"), cat("sigma"), [c for d in datasets for c in d.comments], cat("phi_deg"), series)
 
 
+def bind(post, config, datasets, modelled) -> tuple[dict, dict]:
+    """Binds a structure posterior's parameters: the structure's, noise_scale and each
+    dataset's instrument parameters in ``modelled`` (per series where asked), in that order;
+    sets ``post.config``, ``free``, ``col`` and the domain arrays. Returns (domains, priors)."""
+    domains = {p.name: p for p in (*config.structure.parameters(), P.NOISE)}
+    priors, fixed = dict(config.priors), dict(config.fixed)
+    post._series = [series_scales(d) if spec.instrument.scale_per_series else None
+                    for spec, d in zip(config.datasets, datasets)]
+    for spec, per in zip(config.datasets, post._series):
+        inst = spec.instrument
+        for name in modelled:
+            names = ([spec.prefix(n) for n in per[0]] if name == "scale" and per else [spec.prefix(name)])
+            for full in names:
+                domains[full] = INSTRUMENT[name]
+                if name in inst.priors:
+                    priors[full] = inst.priors[name]
+                else:
+                    fixed[full] = inst.fixed[name]
+    names = tuple(domains)
+    post.config = BoundConfig(names, domains, priors, fixed, config.sampler, config)
+    post.free = post.config.free
+    if config.sampler.walkers < 2 * len(post.free):
+        raise ValueError(f"[sampler] walkers must be at least twice the number of free parameters "
+                         f"({2 * len(post.free)}), got {config.sampler.walkers}")
+    post.col = {n: i for i, n in enumerate(names)}
+    post._noise_col = post.col["noise_scale"]
+    post._base = np.array([fixed.get(n, np.nan) for n in names])
+    post._free_cols = np.array([post.col[n] for n in post.free], dtype=int)
+    post._lo = np.array([domains[n].lo for n in names])
+    post._hi = np.array([domains[n].hi for n in names])
+    post._lo_open = np.array([domains[n].lo_open for n in names])
+    return domains, priors
+
+
 class StackPosterior(GaussianPosterior):
     def __init__(self, datasets, config: StackConfig):
         """``datasets``: one Dataset per [[dataset]] entry, in the config's order."""
@@ -86,33 +120,7 @@ class StackPosterior(GaussianPosterior):
         m = config.model
         self.models = [StackForward(d, config.structure, m.bandwidth_nodes, m.cone_nodes, m.cone_azimuths)
                        for d in datasets]
-        domains = {p.name: p for p in (*config.structure.parameters(), P.NOISE)}
-        priors, fixed = dict(config.priors), dict(config.fixed)
-        self._series = [series_scales(d) if spec.instrument.scale_per_series else None
-                        for spec, d in zip(config.datasets, datasets)]
-        for spec, per in zip(config.datasets, self._series):
-            inst = spec.instrument
-            for name, p in INSTRUMENT.items():
-                names = ([spec.prefix(n) for n in per[0]] if name == "scale" and per else [spec.prefix(name)])
-                for full in names:
-                    domains[full] = p
-                    if name in inst.priors:
-                        priors[full] = inst.priors[name]
-                    else:
-                        fixed[full] = inst.fixed[name]
-        names = tuple(domains)
-        self.config = BoundConfig(names, domains, priors, fixed, config.sampler, config)
-        self.free = self.config.free
-        if config.sampler.walkers < 2 * len(self.free):
-            raise ValueError(f"[sampler] walkers must be at least twice the number of free parameters "
-                             f"({2 * len(self.free)}), got {config.sampler.walkers}")
-        self.col = {n: i for i, n in enumerate(names)}
-        self._noise_col = self.col["noise_scale"]
-        self._base = np.array([fixed.get(n, np.nan) for n in names])
-        self._free_cols = np.array([self.col[n] for n in self.free], dtype=int)
-        self._lo = np.array([domains[n].lo for n in names])
-        self._hi = np.array([domains[n].hi for n in names])
-        self._lo_open = np.array([domains[n].lo_open for n in names])
+        bind(self, config, datasets, tuple(INSTRUMENT))
         self.dataset = concatenate(datasets, [spec.name for spec in config.datasets])
         self.evaluations = 0
 
