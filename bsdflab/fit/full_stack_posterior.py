@@ -11,8 +11,6 @@ Same interface as bsdflab.fit.stack_posterior.StackPosterior (a study and the sa
 
 from __future__ import annotations
 
-import copy
-
 import numpy as np
 
 from bsdflab.fit.emulator import EmulatedForward, prior_box
@@ -85,18 +83,3 @@ class FullStackPosterior(GaussianPosterior):
                 "max_error_sigma": self.model.max_error_sigma,
             }
         }
-
-    def with_data(self, dataset) -> FullStackPosterior:
-        """The same posterior (the emulator shared) for other values at the same rows."""
-        same = len(dataset) == len(self.dataset) and all(
-            np.array_equal(getattr(dataset, k), getattr(self.dataset, k), equal_nan=True)
-            for k in ("geometry", "angle_deg", "angle_out_deg", "phi_deg", "wavelength_nm")
-        )
-        if not same:
-            raise ValueError("with_data needs a dataset with the same rows (geometry, angles, wavelengths)")
-        new = copy.copy(self)
-        new.dataset, new.evaluations = dataset, 0
-        return new
-
-    def sample_prior(self, n: int, rng: np.random.Generator) -> np.ndarray:
-        return np.column_stack([self.config.priors[name].dist.rvs(size=n, random_state=rng) for name in self.free])

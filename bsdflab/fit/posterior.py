@@ -29,9 +29,29 @@ class GaussianPosterior(abc.ABC):
     fixed value, NaN where free), ``_free_cols``, ``_noise_col`` and ``evaluations``, and
     gives the model's values for full parameter rows (``_model_values``)."""
 
+    # the row columns with_data compares (a specular-only posterior has no angle_out/phi)
+    ROW_KEYS = ("geometry", "angle_deg", "angle_out_deg", "phi_deg", "wavelength_nm")
+
     @property
     def ndim(self) -> int:
         return len(self.free)
+
+    def with_data(self, dataset: Dataset) -> GaussianPosterior:
+        """The same posterior (priors, forward model: an emulator is shared) for other values
+        at the same rows (simulation-based calibration, repeated measurements)."""
+        same = len(dataset) == len(self.dataset) and all(
+            np.array_equal(getattr(dataset, k), getattr(self.dataset, k), equal_nan=True)
+            for k in self.ROW_KEYS)
+        if not same:
+            raise ValueError("with_data needs a dataset with the same rows (geometry, angles, wavelengths)")
+        new = copy.copy(self)
+        new.dataset, new.evaluations = dataset, 0
+        return new
+
+    def sample_prior(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """n draws (n, ndim) from the priors."""
+        return np.column_stack([self.config.priors[name].dist.rvs(size=n, random_state=rng)
+                                for name in self.free])
 
     def full(self, x) -> np.ndarray:
         """All parameters (P, all names) from free values (P, ndim)."""
@@ -102,19 +122,3 @@ class LogPosterior(GaussianPosterior):
     def _model_values(self, full: np.ndarray) -> np.ndarray:
         return self.model.evaluate(full)
 
-    def with_data(self, dataset: Dataset) -> LogPosterior:
-        """The same posterior (priors, forward model: an emulator is shared) for other values
-        at the same rows (simulation-based calibration, repeated measurements)."""
-        same = len(dataset) == len(self.dataset) and all(
-            np.array_equal(getattr(dataset, k), getattr(self.dataset, k), equal_nan=True)
-            for k in ("geometry", "angle_deg", "angle_out_deg", "phi_deg", "wavelength_nm"))
-        if not same:
-            raise ValueError("with_data needs a dataset with the same rows (geometry, angles, wavelengths)")
-        new = copy.copy(self)
-        new.dataset, new.evaluations = dataset, 0
-        return new
-
-    def sample_prior(self, n: int, rng: np.random.Generator) -> np.ndarray:
-        """n draws (n, ndim) from the priors."""
-        return np.column_stack([self.config.priors[name].dist.rvs(size=n, random_state=rng)
-                                for name in self.free])

@@ -9,7 +9,6 @@ Same interface as bsdflab.fit.posterior.LogPosterior, so bsdflab.fit.sampling ru
 """
 from __future__ import annotations
 
-import copy
 import re
 from dataclasses import dataclass
 
@@ -111,6 +110,8 @@ def bind(post, config, datasets, modelled) -> tuple[dict, dict]:
 
 
 class StackPosterior(GaussianPosterior):
+    ROW_KEYS = ("geometry", "angle_deg", "wavelength_nm")  # specular rows
+
     def __init__(self, datasets, config: StackConfig):
         """``datasets``: one Dataset per [[dataset]] entry, in the config's order."""
         datasets = list(datasets)
@@ -150,18 +151,3 @@ class StackPosterior(GaussianPosterior):
                                         inst("acceptance_deg"), inst("bandwidth_nm")))
         out[inside] = np.concatenate(parts, axis=1)
         return out
-
-    def with_data(self, dataset: Dataset) -> StackPosterior:
-        """The same posterior for other values at the same rows (all datasets concatenated)."""
-        same = len(dataset) == len(self.dataset) and all(
-            np.array_equal(getattr(dataset, k), getattr(self.dataset, k), equal_nan=True)
-            for k in ("geometry", "angle_deg", "wavelength_nm"))
-        if not same:
-            raise ValueError("with_data needs a dataset with the same rows (geometry, angles, wavelengths)")
-        new = copy.copy(self)
-        new.dataset, new.evaluations = dataset, 0
-        return new
-
-    def sample_prior(self, n: int, rng: np.random.Generator) -> np.ndarray:
-        return np.column_stack([self.config.priors[name].dist.rvs(size=n, random_state=rng)
-                                for name in self.free])
