@@ -67,6 +67,14 @@ def _real(section: str, key: str, value, lo: float, hi: float = math.inf, lo_ope
     return float(value)
 
 
+def _table(section: str, d) -> dict:
+    """``d`` itself when it is a TOML table (before: a number or list there raised an
+    AttributeError, a 500 over HTTP)."""
+    if not isinstance(d, dict):
+        raise ValueError(f"[{section}] must be a table, got {type(d).__name__}")
+    return d
+
+
 def _settings(cls, section: str, d: dict, ranges: dict) -> dict:
     """Values of the keys in ``ranges`` ({key: (lo, hi)}; float bounds mean a real number)
     from table ``d``, each defaulting to the dataclass ``cls``'s default."""
@@ -106,6 +114,7 @@ class ModelSettings:
 
     @classmethod
     def parse(cls, d: dict) -> ModelSettings:
+        d = _table("model", d)
         words = {}
         for key, known in (("kind", KINDS), ("film", FILMS), ("distribution", DISTRIBUTIONS)):
             v = d.get(key, getattr(cls(), key))
@@ -157,6 +166,7 @@ class SamplerSettings:
 
     @classmethod
     def parse(cls, d: dict) -> SamplerSettings:
+        d = _table("sampler", d)
         kind = d.get("kind", "emcee")
         if kind not in SAMPLERS:
             raise ValueError(f"[sampler] kind must be one of {', '.join(SAMPLERS)}, got {kind!r}")
@@ -179,6 +189,7 @@ class AppearanceSettings:
 
     @classmethod
     def parse(cls, d: dict) -> AppearanceSettings:
+        d = _table("appearance", d)
         angles = d.get("angles_deg", list(cls().angles_deg))
         if not isinstance(angles, list) or not angles:
             raise ValueError(f"[appearance] angles_deg must be a non-empty list, got {angles!r}")

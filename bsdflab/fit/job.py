@@ -121,6 +121,8 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
         name = check_name(f"data[{i}].name", item["name"])
         if name in names:
             raise ValueError(f"data[{i}].name {name!r} is given twice (the names place the curves)")
+        if name == "config.toml" and is_structure(request):   # the study copies that file as its config
+            raise ValueError(f"data[{i}].name: 'config.toml' is the study's own config; rename the upload")
         names.add(name)
         files.append({"hash": item["hash"], "name": name})
     if is_structure(request):

@@ -36,6 +36,8 @@ emcee = require("emcee", "fit")
 TAU_CHANGE = 0.01
 FD_STEP = 1e-6   # finite-difference step of the MAP gradient, in prior sds
 HESS_STEP = 1e-4   # ... of the Laplace approximation's Hessian
+POOL_CHUNK = 64     # prior draws of the MAP pool evaluated between cancel checks
+MAP_ITERATIONS = 500   # L-BFGS-B iterations per MAP start
 
 
 @dataclass
@@ -90,7 +92,10 @@ def find_map(logpost: LogPosterior, starts: int, rng: np.random.Generator, progr
     whose 2 ndim + 1 points go to the forward model as one batch."""
     before = logpost.evaluations
     pool = logpost.sample_prior(max(256, 32 * starts), rng)
-    lp = logpost(pool)
+    lp = np.empty(len(pool))
+    for i in range(0, len(pool), POOL_CHUNK):   # a cancel is honoured between chunks
+        stop_if_cancelled("the MAP search")
+        lp[i:i + POOL_CHUNK] = logpost(pool[i:i + POOL_CHUNK])
     order = np.argsort(-np.where(np.isfinite(lp), lp, -np.inf))[:starts]
     scale = np.array([logpost.config.priors[n].dist.std() for n in logpost.free])
     bounds = []
@@ -120,7 +125,7 @@ def find_map(logpost: LogPosterior, starts: int, rng: np.random.Generator, progr
     for done, i in enumerate(order):
         report_progress("MAP", done / starts)
         res = optimize.minimize(value_and_gradient, pool[i] / scale, jac=True, method="L-BFGS-B",
-                                bounds=bounds, options={"maxiter": 500, "ftol": 1e-12, "gtol": 1e-8})
+                                bounds=bounds, options={"maxiter": MAP_ITERATIONS, "ftol": 1e-12, "gtol": 1e-8})
         optima.append((res.x * scale, float(-res.fun)))
         if best is None or res.fun < best.fun:
             best = res

@@ -17,7 +17,7 @@ import re
 from dataclasses import dataclass
 
 from bsdflab.fit import parameters as P
-from bsdflab.fit.config import AppearanceSettings, SamplerSettings, _settings, load_toml
+from bsdflab.fit.config import AppearanceSettings, SamplerSettings, _settings, _table, load_toml
 from bsdflab.fit.instrument import Instrument
 from bsdflab.fit.priors import Prior
 from bsdflab.fit.stack_forward import BANDWIDTH_NODES, CONE_AZIMUTHS, CONE_NODES
@@ -34,7 +34,7 @@ class StackModelSettings:
 
     @classmethod
     def parse(cls, d: dict) -> StackModelSettings:
-        d = {k: v for k, v in d.items() if k != "kind" or v != "stack"}
+        d = {k: v for k, v in _table("model", d).items() if k != "kind" or v != "stack"}
         s = cls(**_settings(cls, "model", d, {"bandwidth_nodes": (1, 63), "cone_nodes": (1, 64),
                                               "cone_azimuths": (1, 64)}))
         if s.bandwidth_nodes % 2 == 0:

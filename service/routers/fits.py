@@ -10,6 +10,8 @@ from fastapi.responses import FileResponse, JSONResponse
 from starlette.concurrency import run_in_threadpool
 
 from bsdflab.fit import job as fit_job
+from bsdflab.fit.sampling import MAP_ITERATIONS
+from bsdflab.fit.stack_forward import BANDWIDTH_NODES, CONE_AZIMUTHS, CONE_NODES
 from bsdflab.service import fit_uploads, uploads
 from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep
@@ -48,17 +50,58 @@ def _info(jobs: JobService, h: str, request: dict[str, Any], result: dict[str, A
                    files=names, links=_links(h, names))
 
 
+# Over HTTP one adding-doubling solve of the full model is bounded by these (the CLI takes
+# the config's full ranges, nodes 256 and orders 4096): the limit counts solves, not their cost.
+HTTP_MAX_NODES, HTTP_MAX_ORDERS = 64, 512
+# the instrument quadrature a structure fit's step costs, relative to the defaults
+QUADRATURE_DEFAULT = BANDWIDTH_NODES * CONE_NODES * CONE_AZIMUTHS
+
+
+def map_evaluations(s, n_free: int) -> int:
+    """Forward evaluations of the MAP stage (bsdflab.fit.sampling.find_map): its pool of
+    prior draws, then map_starts L-BFGS-B runs of up to MAP_ITERATIONS iterations of a
+    central-difference gradient (2 n + 1 evaluations each)."""
+    return max(256, 32 * s.map_starts) + s.map_starts * MAP_ITERATIONS * (2 * n_free + 1)
+
+
+def _structure_checks(config, raw: dict[str, Any]) -> float:
+    """A structure config's own refusals over HTTP; returns the weight of one walker step
+    (the instrument quadrature's size against the defaults)."""
+    if "appearance" in raw:
+        raise HTTPException(422, "[appearance]: a structure study makes no appearance draws or renders; "
+                                 "remove the table")
+    free = len(config.priors) + sum(len(spec.instrument.priors) for spec in config.datasets)
+    if config.sampler.kind == "emcee" and config.sampler.walkers < 2 * free:
+        raise HTTPException(422, f"[sampler] walkers must be at least twice the number of free parameters "
+                                 f"({2 * free}, more with scale_per_series), got {config.sampler.walkers}")
+    m = config.model
+    if getattr(m, "kind", None) == "full":
+        if m.nodes > HTTP_MAX_NODES or m.orders > HTTP_MAX_ORDERS:
+            raise HTTPException(422, f"[model] nodes at most {HTTP_MAX_NODES} and orders at most "
+                                     f"{HTTP_MAX_ORDERS} over HTTP (one solve's cost is not counted), "
+                                     f"got {m.nodes} and {m.orders}")
+        return 1.0
+    return max(1.0, m.bandwidth_nodes * m.cone_nodes * m.cone_azimuths / QUADRATURE_DEFAULT)
+
+
 def check_limits(settings, request: dict[str, Any]) -> None:
     """422 naming the limit when the fit's work passes one (as a render's pixels)."""
     config = fit_job.config_of(request)
     over_limit(settings, "limit_fit_files", len(request["data"]), "the number of data files")
+    structure = fit_job.is_structure(request)
+    weight = _structure_checks(config, request["config"]) if structure else 1.0
     s = config.sampler
+    n_free = len(config.priors) if structure else len(config.free)
     if s.kind == "emcee":
-        over_limit(settings, "limit_fit_walker_steps", s.walkers * s.max_steps, "[sampler] walkers x max_steps")
+        # the MAP stage's evaluations count as walker steps (before: uncounted, up to
+        # 1000 starts x 500 iterations), and a structure's instrument quadrature weighs each
+        over_limit(settings, "limit_fit_walker_steps", int(weight * (s.walkers * s.max_steps
+                                                                       + map_evaluations(s, n_free))),
+                   "[sampler] walkers x max_steps + the MAP stage's evaluations, x the instrument "
+                   "quadrature ([model] bandwidth_nodes x cone_nodes x cone_azimuths) over its default")
     else:
         over_limit(settings, "limit_fit_live_points", s.live_points, "[sampler] live_points")
     m = config.model
-    structure = fit_job.is_structure(request)
     if getattr(m, "kind", None) == "full":
         # emulator_nodes = 0 solves the model at every likelihood evaluation (before: uncounted,
         # 2^21 direct solves passed); the emulator's error checks are direct solves too.
@@ -68,7 +111,8 @@ def check_limits(settings, request: dict[str, Any]) -> None:
             solves, what = m.emulator_nodes ** len(free), "[model] emulator_nodes ^ free parameters"
         elif s.kind == "emcee":
             why = "no free structure parameter" if m.emulator_nodes else "emulator_nodes = 0"
-            solves, what = s.walkers * s.max_steps, f"[model] {why}: walkers x max_steps direct solves"
+            solves = s.walkers * s.max_steps + map_evaluations(s, n_free)
+            what = f"[model] {why}: walkers x max_steps + the MAP stage's direct solves"
         elif m.emulator_nodes:   # a structure with no free structure parameter: no emulator to bound
             raise HTTPException(422, "[model] no free structure parameter with the nested sampler: its direct solves "
                                      "have no bound; use [sampler] kind = 'emcee' (BSDFLAB_LIMIT_FIT_EMULATOR_SOLVES)")
