@@ -81,7 +81,8 @@ class Settings(LibrarySettings):
     limit_render_samples: int = Field(1 << 28, ge=1, description="width x height x spp of one render")
     limit_validation_level: Literal["quick", "standard", "full"] = Field(
         "standard", description="the highest validation level a request may ask for (full: hours)")
-    limit_fit_walker_steps: int = Field(1 << 21, ge=1, description="walkers x max_steps of one fit (emcee)")
+    limit_fit_walker_steps: int = Field(1 << 21, ge=1, description="walkers x max_steps of one fit (emcee), "
+                                                                   "plus its MAP stage's evaluations")
     limit_fit_live_points: int = Field(2000, ge=4, description="live points of one fit (nested sampling)")
     limit_fit_emulator_solves: int = Field(1 << 14, ge=1, description="emulator_nodes ^ free parameters of one "
                                                                       "fit of the full model")

@@ -103,7 +103,7 @@ def long_hash(client):
     [
         (
             {"model": {"kind": "full", "emulator_nodes": 0}, "sampler": {"walkers": 32, "max_steps": 20000}},
-            "emulator_nodes = 0: walkers x max_steps direct solves + emulator_checks",
+            "emulator_nodes = 0: walkers x max_steps + the MAP stage's direct solves + emulator_checks",
         ),
         (
             {"model": {"kind": "full", "emulator_nodes": 0}, "sampler": {"kind": "nested"}},
