@@ -98,7 +98,19 @@ class BelowTopSolutions:
         return sol
 
 
-class SolverForwardModel:
+class SolveCounts:
+    """``solves`` and ``top_solves`` of a forward model's ``_solutions`` (BelowTopSolutions)."""
+
+    @property
+    def solves(self) -> int:
+        return self._solutions.solves
+
+    @property
+    def top_solves(self) -> int:
+        return self._solutions.top_solves
+
+
+class SolverForwardModel(SolveCounts):
     """Observables (P, rows) of ``dataset`` for full parameter vectors (P, len(ALL_NAMES)).
 
     Parameters
@@ -118,14 +130,6 @@ class SolverForwardModel:
         self.wavelengths = self._rows.wavelengths
         self._names = model.names()
         self._solutions = BelowTopSolutions(self.wavelengths, model.nodes, model.orders)
-
-    @property
-    def solves(self) -> int:
-        return self._solutions.solves
-
-    @property
-    def top_solves(self) -> int:
-        return self._solutions.top_solves
 
     @property
     def rows(self) -> int:

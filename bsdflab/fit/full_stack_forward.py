@@ -13,11 +13,11 @@ import numpy as np
 from bsdflab.bsdfs import from_dict
 from bsdflab.fit.data import Dataset
 from bsdflab.fit.forward import parameter_sets
-from bsdflab.fit.full_forward import BelowTopSolutions, RowPairs
+from bsdflab.fit.full_forward import BelowTopSolutions, RowPairs, SolveCounts
 from bsdflab.fit.full_structure import FullStructure
 
 
-class StructureSolverForward:
+class StructureSolverForward(SolveCounts):
     """pi f (P, rows) of ``dataset``'s brdf/diffuse rows for parameter vectors (P, len(names)).
 
     Parameters
@@ -45,14 +45,6 @@ class StructureSolverForward:
         self._rows = RowPairs(dataset)
         self.wavelengths = self._rows.wavelengths
         self._solutions = BelowTopSolutions(self.wavelengths, nodes, orders)
-
-    @property
-    def solves(self) -> int:
-        return self._solutions.solves
-
-    @property
-    def top_solves(self) -> int:
-        return self._solutions.top_solves
 
     @property
     def rows(self) -> int:
