@@ -32,8 +32,8 @@ from bsdflab.presets import preset
 from bsdflab.scenes.snake import table_grid
 from bsdflab.solvers import solve
 from bsdflab.tables import TableGrid, tabulate
-from bsdflab.tables.adding_doubling import table_settings, tabulate_adding_doubling
 from bsdflab.tables.channels import LUMINANCE_RGB
+from bsdflab.tables.deterministic import table_settings, tabulate_adding_doubling
 from bsdflab.testing import random_unit_vectors
 
 REFERENCE = {"azimuth_samples": 256, "spectral_stride": 1, "fine_step": 0.25, "order_tolerance": 1e-7,

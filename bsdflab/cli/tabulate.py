@@ -6,7 +6,7 @@ import sys
 
 from bsdflab.cli.cluster_options import add_cluster_options, client_from_args
 from bsdflab.cli.materials import add_material_options, material_from_args
-from bsdflab.tables.adding_doubling import TABLE_NODES
+from bsdflab.tables.deterministic import TABLE_NODES
 from bsdflab.tables.request import CHOICES, DEFAULT_REL_ERROR
 from bsdflab.tables.stages import DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES
 

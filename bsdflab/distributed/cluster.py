@@ -10,6 +10,7 @@ import contextlib
 import logging
 import os
 import re
+import signal
 from collections.abc import Iterator
 
 from distributed import Client, LocalCluster
@@ -63,7 +64,11 @@ def connect(scheduler: str | None = None, cluster: str | None = None,
         raise ValueError("give exactly one of scheduler (an address) or cluster ('local:N')")
     if cluster is not None:
         with local_cluster(parse_cluster(cluster)) as lc, Client(lc) as client:
-            yield client
+            try:
+                yield client
+            except BaseException:
+                _kill_workers(lc)
+                raise
         return
     address = check_scheduler_address(scheduler)
     try:
@@ -74,3 +79,20 @@ def connect(scheduler: str | None = None, cluster: str | None = None,
         yield client
     finally:
         client.close()
+
+
+def _kill_workers(lc) -> None:
+    """Kill a local cluster's worker processes before it closes, after a failure or Ctrl-C.
+    A unit in the C++ core cannot be cancelled, and a graceful close waits for it (seconds
+    under load); the workers hold nothing worth keeping (units are pure, results already
+    came back), so the close is then immediate and Ctrl-C's latency bounded."""
+    for nanny in list(getattr(lc, "workers", {}).values()):
+        # First tell the nanny not to restart its worker (it would spawn a new one, which
+        # the close then waits for); close_gracefully only sets that status.
+        with contextlib.suppress(Exception):
+            nanny.close_gracefully(reason="bsdflab-interrupted")
+        process = getattr(getattr(nanny, "process", None), "process", None)
+        pid = getattr(process, "pid", None)
+        if pid:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.kill(pid, signal.SIGKILL)

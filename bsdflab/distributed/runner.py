@@ -13,6 +13,8 @@ last unit.
 from __future__ import annotations
 
 import contextlib
+import signal
+import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
@@ -67,11 +69,13 @@ class DaskRunner(Runner):
         done = 0
         stop = cancelled or (lambda: False)
         try:
-            with progress_bar(len(units), desc, progress) as bar:
+            with progress_bar(len(units), desc, progress) as bar, _sigint_as_flag() as interrupted:
                 pending = as_completed(futures)
                 while not pending.is_empty():
                     # Poll rather than block on the next unit, so a cancel is seen within
                     # POLL_S even while every outstanding unit is long.
+                    if interrupted.is_set():
+                        raise KeyboardInterrupt
                     if cancel_requested() or stop():
                         raise JobCancelled(f"{desc} cancelled")
                     batch = pending.next_batch(block=False)
@@ -89,3 +93,21 @@ class DaskRunner(Runner):
         finally:
             for f in shared_futures:
                 f.release()
+
+
+@contextlib.contextmanager
+def _sigint_as_flag() -> Iterator[threading.Event]:
+    """On the main thread, Ctrl-C sets the returned flag instead of raising wherever the
+    thread happens to be (inside Dask's client code, a lock or a tqdm refresh): the poll
+    loop then raises it at one known place, within POLL_S. Elsewhere (a job server's worker
+    thread, or a caller with its own SIGINT handler) nothing changes."""
+    flag = threading.Event()
+    if threading.current_thread() is not threading.main_thread() \
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield flag
+        return
+    previous = signal.signal(signal.SIGINT, lambda *_: flag.set())
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, previous)

@@ -7,7 +7,7 @@ films; ``AddingDoublingOracle``: scattering slabs (isotropic, Henyey-Greenstein)
 ``microsurface`` is the stochastic exception: Heitz et al. 2016's random walk on a Smith
 microsurface (numpy), the reference for rough interfaces' multiple scattering.
 """
-from bsdflab.oracles.adding_doubling import AddingDoublingOracle
 from bsdflab.oracles.coated_diffuse import CoatedDiffuseOracle
+from bsdflab.oracles.slab_adding_doubling import AddingDoublingOracle
 
 __all__ = ["AddingDoublingOracle", "CoatedDiffuseOracle"]

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from bsdflab.layered.slab import Slab
-from bsdflab.oracles.adding_doubling import NODES, THIN_DEPTH, AddingDoublingOracle
+from bsdflab.oracles.slab_adding_doubling import NODES, THIN_DEPTH, AddingDoublingOracle
 
 REFERENCE = {"nodes": 48, "orders": 64, "thin_depth": 2.0 ** -30}
 

@@ -45,7 +45,7 @@ class TableRequest:
     ``method`` is the method the table is made by ("pfmc" or "adding-doubling"), already
     resolved from "auto"; ``method_note`` says how it was chosen. ``min_samples``,
     ``max_samples`` and ``seed`` are PFMC's walk settings, ``nodes`` and ``orders`` the
-    solver's (None: the table defaults, bsdflab.tables.adding_doubling)."""
+    solver's (None: the table defaults, bsdflab.tables.deterministic)."""
 
     model: BSDF = field(compare=False)
     model_dict: dict[str, Any]
@@ -140,7 +140,7 @@ class TableRequest:
         common = {"channels": list(self.channels), "format_version": FORMAT_VERSION,
                   "grid": self.grid.to_dict(), "model": self.model_dict, "rel_error": self.rel_error}
         if self.method == "adding-doubling":
-            from bsdflab.tables.adding_doubling import solver_settings
+            from bsdflab.tables.deterministic import solver_settings
 
             return {**common, "method": self.method, "solver": solver_settings(self.nodes, self.orders)}
         return {**common, "min_samples": self.min_samples, "max_samples": self.max_samples, "seed": self.seed,
@@ -168,7 +168,7 @@ def estimator_version() -> int:
 def resolve_method(model: BSDF, method: str) -> tuple[str, str]:
     """(the method a table of ``model`` is made by, how it was chosen) for ``method`` in
     CHOICES; ValueError for an unknown method or adding-doubling of a model it does not cover."""
-    from bsdflab.tables.adding_doubling import adding_doubling_gap
+    from bsdflab.tables.deterministic import adding_doubling_gap
 
     if not isinstance(method, str) or method not in CHOICES:
         raise ValueError(f"method must be one of {', '.join(CHOICES)}, got {check.brief(method)}")

@@ -70,14 +70,14 @@ def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = DEFA
     method : 'pfmc' (default), 'adding-doubling' or 'auto'
         'adding-doubling' tabulates a ``Layered`` model deterministically (reflecting, or
         transmitting through a smooth top and smooth base: a two-sided table)
-        (bsdflab.tables.adding_doubling: one solve per thickness node, the solver's error
+        (bsdflab.tables.deterministic: one solve per thickness node, the solver's error
         bound stored as each cell's error, method and settings in ``meta``); the walk
         settings (samples, seed, film_lookup) do not apply to it. 'auto' (the default of a
         ``TableRequest``, hence of the CLI, jobs and renders) picks adding-doubling wherever
         it covers the model and PFMC otherwise (bsdflab.tables.request).
     nodes, orders : int, optional
         The adding-doubling solver's Gauss-Legendre nodes per panel and Fourier orders
-        (default: the table settings of bsdflab.tables.adding_doubling).
+        (default: the table settings of bsdflab.tables.deterministic).
 
     Validates everything through ``TableRequest.make`` and runs :func:`make_table`, which
     runs :func:`pilot_cells`, :func:`floor_scale`, :func:`finish_cells` and
@@ -94,7 +94,7 @@ def make_table(request: TableRequest, progress: bool = True, runner: Runner | No
     """The table ``request`` asks for, tabulated by its method (on ``runner`` when given)."""
     model, grid, rel_error, wavelengths = request.model, request.grid, request.rel_error, request.wavelengths
     if request.method == "adding-doubling":
-        from bsdflab.tables.adding_doubling import check_adding_doubling, tabulate_adding_doubling
+        from bsdflab.tables.deterministic import check_adding_doubling, tabulate_adding_doubling
 
         check_adding_doubling(model)
         check_table_memory(grid, len(request.channels), len(lobes_of(model)))

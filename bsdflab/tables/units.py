@@ -74,7 +74,7 @@ def finish_unit(model_dict, grid_dict, kw: dict[str, Any], pilot, scale, cells: 
 
 def adding_doubling_unit(model_dict, grid_dict, kw: dict[str, Any], nodes: np.ndarray):
     """The adding-doubling table of the thickness nodes ``nodes`` (indices into the grid's)."""
-    from bsdflab.tables.adding_doubling import tabulate_adding_doubling
+    from bsdflab.tables.deterministic import tabulate_adding_doubling
 
     grid = TableGrid.from_dict(grid_dict)
     sub = TableGrid(grid.n_theta_i, grid.n_theta_o, grid.n_phi, tuple(grid.thickness_nm[int(i)] for i in nodes))
@@ -89,8 +89,8 @@ def tabulate_adding_doubling_units(runner: Runner, model, grid, *, rel_error: fl
     redoes the top per node, so a unit holds a run of nodes, not one); the same values and
     bounds as in this process, assembled along the thickness axis. Without thickness nodes
     the table is one unit."""
-    from bsdflab.tables.adding_doubling import bound_statistics
     from bsdflab.tables.channels import table_channels
+    from bsdflab.tables.deterministic import bound_statistics
 
     n_nodes = len(grid.thickness_nm)
     units = max(1, min(n_nodes, runner.workers()))

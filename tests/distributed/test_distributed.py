@@ -245,28 +245,61 @@ def test_cancelling_a_cluster_job_cancels_its_units(client, tmp_path):
 
 
 def test_ctrl_c_on_the_driver_cancels_and_leaves_no_file(tmp_path):
+    # 65536 spp: the render cannot finish before the signal, even on an idle machine, so a
+    # zero exit can only mean a lost interrupt (seen once under load with 1024 spp).
     out = tmp_path / "r.exr"
     p = subprocess.Popen([*BSDFLAB, "render", "basic-materials", "--width", "160", "--height", "120",
-                          "--spp", "1024", "--cluster", "local:1", "--out", str(out)],
+                          "--spp", "65536", "--cluster", "local:1", "--out", str(out)],
                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                          # a default SIGINT disposition even under a runner that ignores it
                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     seen = threading.Event()
+    err = bytearray()
 
     def watch():
-        buf = b""
         while chunk := p.stderr.read1(4096):
-            buf += chunk
-            if b"rendering" in buf:  # the units' progress bar: work is on the cluster
+            err.extend(chunk)
+            if b"rendering" in err:  # the units' progress bar: work is on the cluster
                 seen.set()
 
-    threading.Thread(target=watch, daemon=True).start()
+    watcher = threading.Thread(target=watch, daemon=True)
+    watcher.start()
     try:
         assert seen.wait(180), "the render never started"
+        sent = time.monotonic()
         p.send_signal(signal.SIGINT)
+        # A hang guard, not a timing assertion: the latency is printed (docs/distributed.md
+        # gives measured figures); killing the workers makes it well under 2 s.
         rc = p.wait(timeout=120)
+        print(f"exit {time.monotonic() - sent:.2f} s after SIGINT")
     finally:
         if p.poll() is None:
             p.kill()
-    assert rc != 0
+    watcher.join(10)
+    assert rc == 130, err.decode(errors="replace")[-2000:]
+    assert b"bsdflab render: interrupted" in err
     assert not out.exists() and not list(tmp_path.iterdir())
+
+
+def _busy_unit(seconds: float) -> int:
+    t = time.monotonic()
+    while time.monotonic() - t < seconds:
+        time.sleep(0.01)
+    return 1
+
+
+def test_an_interrupted_local_cluster_kills_its_workers_without_restarting_them():
+    # A failure inside connect(cluster=) kills the workers (a running unit is not waited
+    # for) and the nanny does not start new ones: afterwards the worker process is gone.
+    import psutil
+
+    pids = []
+    with pytest.raises(KeyboardInterrupt), connect(cluster="local:1") as c:
+        c.wait_for_workers(1, timeout=60)
+        future = c.submit(_busy_unit, 600.0, pure=False)
+        while not any(c.processing().values()):  # the unit is on the worker
+            time.sleep(0.05)
+        pids = list(c.run(os.getpid).values())
+        raise KeyboardInterrupt
+    assert len(pids) == 1 and future.status != "finished"
+    assert not psutil.pid_exists(pids[0]) or psutil.Process(pids[0]).status() == psutil.STATUS_ZOMBIE

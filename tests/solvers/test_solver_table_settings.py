@@ -1,4 +1,4 @@
-"""The adding-doubling solver at the truncations tables use (bsdflab.tables.adding_doubling.
+"""The adding-doubling solver at the truncations tables use (bsdflab.tables.deterministic.
 table_settings: looser orders, a thicker start, what lies below a rough top solved at every
 4th wavelength and interpolated, coarser fine sub-panels), and what it does not solve.
 
@@ -14,7 +14,7 @@ import pytest
 import bsdflab as bl
 from bsdflab.presets import preset
 from bsdflab.solvers import solve
-from bsdflab.tables.adding_doubling import table_settings
+from bsdflab.tables.deterministic import table_settings
 from bsdflab.testing import random_unit_vectors, spherical_directions
 
 WL33 = np.linspace(380.0, 780.0, 33)  # >= 32 wavelengths: the spectral stride applies

@@ -75,7 +75,7 @@ def test_03_shared_solve_across_thicknesses_is_exact():
     """Solution.with_model (what lies below a rough top solved once) gives the values of
     a fresh solve of the other thickness, to round-off."""
     from bsdflab.solvers import solve
-    from bsdflab.tables.adding_doubling import with_film_thickness
+    from bsdflab.tables.deterministic import with_film_thickness
     from bsdflab.testing import random_unit_vectors
 
     wi = random_unit_vectors(6, seed=1, hemisphere="upper")

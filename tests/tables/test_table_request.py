@@ -13,7 +13,7 @@ import bsdflab as bl
 from bsdflab import _core
 from bsdflab.presets import preset
 from bsdflab.tables import TableGrid, TableRequest, get, stages, tabulate
-from bsdflab.tables.adding_doubling import TABLE_RULES
+from bsdflab.tables.deterministic import TABLE_RULES
 from bsdflab.tables.file_format import canonical_json
 from support.cli import BSDFLAB
 
