@@ -185,21 +185,27 @@ def _prepare(body: FitRequest, jobs: JobService, settings, client):
     its limits and the key's queue share checked (before its data takes a check worker)."""
     request, key = jobs.prepare(KIND, body.model_dump())
     check_limits(settings, request)
+    for i, item in enumerate(request["data"]):
+        # only the client's own uploads (an admin: any): another tenant's file is as absent
+        # (before: any stored hash, and the study's data.csv handed its rows back). Checked
+        # before the cache: the same request by another tenant got the finished study.
+        if not fit_uploads.stored(jobs, item["hash"]) or not _may_read(jobs, [item], client):
+            raise HTTPException(422, f"data[{i}].hash: no uploaded fit data file {item['hash']} "
+                                     f"(upload it with POST {DATASETS})")
     found = jobs.cached(KIND, key) or jobs.adopt(KIND, key, request)
     if found is not None:
         return _info(jobs, key, request, found, client)
-    for i, item in enumerate(request["data"]):
-        # only the client's own uploads (an admin: any): another tenant's file is as absent
-        # (before: any stored hash, and the study's data.csv handed its rows back)
-        if not fit_uploads.stored(jobs, item["hash"]) or not (
-                client.admin or jobs.store.uploaded(item["hash"], client.name)):
-            raise HTTPException(422, f"data[{i}].hash: no uploaded fit data file {item['hash']} "
-                                     f"(upload it with POST {DATASETS})")
     # read here, before the queue's admission: one upload named 64 times was 64 copies and reads
     total = sum(fit_uploads.size(jobs, item["hash"]) for item in request["data"])
     over_limit(settings, "limit_measured_bytes", total, "the bytes of the fit's data files together")
     jobs.room(KIND, key, client)
     return request, key
+
+
+def _may_read(jobs: JobService, data: list[dict[str, Any]], client) -> bool:
+    """A study hands its data back (data.csv, the residuals, the posterior it implies): only a
+    client that uploaded every one of its files, or an admin, may see it or its files."""
+    return client.admin or all(jobs.store.uploaded(item["hash"], client.name) for item in data)
 
 
 def _submit(jobs: JobService, request: dict[str, Any], key: str, client) -> JSONResponse:
@@ -211,7 +217,7 @@ def _submit(jobs: JobService, request: dict[str, Any], key: str, client) -> JSON
 @router.get("/{key}", response_model=FitInfo, responses=NOT_FOUND, summary="A fit's state, summary and files")
 def get_fit(key: Hash, jobs: JobsDep, client: ClientDep) -> FitInfo:
     row = jobs.store.artefact(key, KIND)
-    if row is not None:
+    if row is not None and _may_read(jobs, row["request"]["data"], client):
         return _info(jobs, key, row["request"], jobs.cached(KIND, key), client)
     job = jobs.visible(jobs.store.latest_for(KIND, key), client)
     if job is None:
@@ -223,7 +229,8 @@ def get_fit(key: Hash, jobs: JobsDep, client: ClientDep) -> FitInfo:
             summary="A file of the study folder (summary.json, material.json, corner.png, ...)")
 def get_file(key: Hash, name: FileName, jobs: JobsDep, client: ClientDep) -> FileResponse:
     """Only the names the study wrote (``files`` of ``GET /v1/fits/{hash}``) are served."""
-    result = jobs.cached(KIND, key)
+    row = jobs.store.artefact(key, KIND)
+    result = jobs.cached(KIND, key) if row is not None and _may_read(jobs, row["request"]["data"], client) else None
     if result is None:
         raise HTTPException(404, f"no finished fit {key}{jobs.job_hint(KIND, key, client)}")
     relative = result["files"].get(name)

@@ -255,3 +255,39 @@ def test_a_fit_never_shows_another_tenants_job(tmp_path):
         finally:
             assert c.delete(f"/v1/jobs/{job['id']}", headers=alice).status_code == 200
         assert wait_job(c, job["id"], timeout=300, headers=alice)["state"] == "cancelled"
+
+
+def test_a_finished_fit_is_only_shown_to_a_client_holding_its_data(tmp_path):
+    """Bob, sending alice's exact request (he knows her data's hash), got her finished study
+    from the cache, data.csv included, and read it by hash: now the request is a 422 naming
+    the upload, the study and its files 404s. Once bob uploads the same file himself he holds
+    the data, and the cached study is his too (200, not a second run)."""
+    from fastapi.testclient import TestClient
+
+    from bsdflab.service import Settings, create_app
+
+    alice, bob = {"X-API-Key": "a" * 32}, {"X-API-Key": "b" * 32}
+    keys = {"alice": {"key": "a" * 32}, "bob": {"key": "b" * 32}}
+    settings = Settings(data_dir=tmp_path, executor="threads", workers=1, api_keys=keys, progress_interval_s=0.05)
+    octet = {"Content-Type": "application/octet-stream"}
+    with TestClient(create_app(settings)) as c:
+        up = c.post("/v1/fits/datasets", params={"name": "data.csv"}, content=LONG, headers={**alice, **octet}).json()
+        body = {"config": {**CONFIG, "appearance": {"draws": 2, "renders": 0, "angles_deg": [0]}},
+                "data": [{"hash": up["hash"], "name": "data.csv"}]}
+        job = c.post("/v1/fits", json=body, headers=alice).json()
+        assert wait_job(c, job["id"], timeout=600, headers=alice)["state"] == "done"
+        study = job["hash"]
+        assert c.get(f"/v1/fits/{study}/files/data.csv", headers=alice).status_code == 200
+
+        again = c.post("/v1/fits", json=body, headers=bob)
+        assert again.status_code == 422 and "data[0].hash" in again.text, again.text
+        assert c.get(f"/v1/fits/{study}", headers=bob).status_code == 404
+        for name in ("data.csv", "summary.json", "material.json"):
+            r = c.get(f"/v1/fits/{study}/files/{name}", headers=bob)
+            assert r.status_code == 404 and "data_row" not in r.text, (name, r.text)
+
+        assert c.post("/v1/fits/datasets", params={"name": "mine.csv"}, content=LONG,
+                      headers={**bob, **octet}).status_code == 200
+        mine = c.post("/v1/fits", json=body, headers=bob)
+        assert mine.status_code == 200 and mine.json()["hash"] == study, mine.text
+        assert c.get(f"/v1/fits/{study}/files/data.csv", headers=bob).status_code == 200
