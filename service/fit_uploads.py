@@ -13,21 +13,14 @@ per-key quotas as measured files (bsdflab.service.uploads).
 """
 from __future__ import annotations
 
-import hashlib
 import os
-import shutil
-import tempfile
 import zipfile
 from pathlib import Path
 from typing import Any
 
-from fastapi import HTTPException
-
 from bsdflab.fit.job import SUFFIX, check_name
 from bsdflab.fit.readers.oceanoptics_procspec import check_sizes
 from bsdflab.service import uploads
-from bsdflab.service.upload_gate import quota_message
-from bsdflab.util.files import write_atomically
 
 KIND = "fitdata"
 TEXT_ONLY = ("wide",)        # formats whose reading needs the fit request's sidecar
@@ -74,11 +67,6 @@ def read_summary(path: str, name: str, folder: str) -> dict[str, Any]:
         raise ValueError(str(e).replace(folder + os.sep, "").replace(folder, "")) from None
 
 
-def check_file(jobs, path: str, name: str, folder: str, client: str | None = None) -> dict[str, Any]:
-    """``read_summary`` in a check worker process (bsdflab.service.offload)."""
-    return jobs.checker.run("fitdata", {"path": path, "name": name, "folder": folder}, name, client)
-
-
 def read_dataset(request: dict[str, Any], out_dir: str) -> dict[str, Any]:
     """A fit request's data files read together with its sidecar, as its job reads them
     (bsdflab.fit.job.load_dataset), in a check worker: ValueError naming the file, line and
@@ -92,38 +80,17 @@ def read_dataset(request: dict[str, Any], out_dir: str) -> dict[str, Any]:
     return {"files": len(request["data"])}
 
 
-def upload(jobs, data: bytes, name: str, client: str, quota: int | None = None) -> dict[str, Any]:
+async def upload(jobs, data: bytes, name: str, client: str, quota: int | None = None) -> dict[str, Any]:
     """Check and store one fit data file; its record ``{"hash", "format", "summary"}``.
-    ValueError naming the file, line and column when it does not read; 413 past the quota."""
-    with uploads.client_lock(client):
-        return _upload(jobs, data, check_name("name", name), client, quota)
-
-
-def _upload(jobs, data: bytes, name: str, client: str, quota: int | None) -> dict[str, Any]:
-    h = hashlib.sha256(data).hexdigest()
-    if quota is not None and not jobs.store.uploaded(h, client):
-        stored = jobs.store.upload_bytes(client)
-        if stored + len(data) > quota:
-            raise HTTPException(413, quota_message(client, stored, len(data), quota))
-    found = jobs.store.artefact(h, KIND)
-    target = jobs.artefact_dir / f"{h}{SUFFIX}"
-    if found is not None and target.is_file():
-        jobs.store.put_upload(h, KIND, client, {"name": name}, found["result"])
-        return found["result"]
-    if jobs.store.artefact(h) is not None:   # the same bytes stored as another kind (a measured file)
-        raise ValueError(f"{name}: these bytes are stored as another kind of upload; they are not fit data")
-    folder = tempfile.mkdtemp(dir=jobs.artefact_dir, prefix=".fitupload-")
-    try:
-        path = os.path.join(folder, name)
-        Path(path).write_bytes(data)
-        summary = check_file(jobs, path, name, folder, client)
-        write_atomically(target, lambda tmp: shutil.copyfile(path, tmp), suffix=SUFFIX)
-    finally:
-        shutil.rmtree(folder, ignore_errors=True)
-    result = {"hash": h, "format": summary["format"], "summary": {"bytes": len(data), **summary},
-              "files": {"file": target.name}}
-    jobs.store.put_upload(h, KIND, client, {"name": name}, result)
-    return jobs.store.artefact(h, KIND)["result"]
+    ValueError naming the file, line and column when it does not read; 413 past the quota.
+    Awaited on the event loop (bsdflab.service.uploads.stored_after_check)."""
+    name = check_name("name", name)
+    async with uploads.client_turn(client):
+        return await uploads.stored_after_check(jobs, data, client, quota, uploads.UploadKind(
+            KIND, SUFFIX, {"name": name}, name,
+            check=lambda path, folder: ("fitdata", {"path": path, "name": name, "folder": folder}, name),
+            record=lambda summary: {"format": summary["format"], "summary": {"bytes": len(data), **summary}},
+            reusable=lambda row: True))
 
 
 def stored(jobs, content_hash: str) -> bool:

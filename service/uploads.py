@@ -12,13 +12,21 @@ The same bytes give the same hash and one file; each client that uploaded them o
 """
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import hashlib
+import os
+import shutil
+import tempfile
 import threading
 from collections import defaultdict
+from collections.abc import AsyncIterator, Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from fastapi import HTTPException
+from starlette.concurrency import run_in_threadpool
 
 from bsdflab.measured import Measured, Merl
 from bsdflab.service.upload_gate import quota_message
@@ -50,12 +58,90 @@ def _preview(text: str) -> str:
     return text if len(text) <= DESCRIPTION_PREVIEW else text[:DESCRIPTION_PREVIEW] + "\u2026"
 
 
-def upload(jobs, data: bytes, fmt: str, client: str, quota: int | None = None) -> dict[str, Any]:
+async def upload(jobs, data: bytes, fmt: str, client: str, quota: int | None = None) -> dict[str, Any]:
     """Check and store ``data`` as a ``fmt`` file; its record ``{"hash", "format", "summary"}``.
     ValueError with the reader's message (the file called "the upload") when it does not read;
-    413 when a file new to ``client`` would take its stored bytes past ``quota``."""
-    with client_lock(client):
-        return _upload(jobs, data, fmt, client, quota)
+    413 when a file new to ``client`` would take its stored bytes past ``quota``. Awaited on
+    the event loop: the file I/O runs on a route thread, the check in a check worker, and
+    the wait for the client's lock and for the check holds no thread."""
+    async with client_turn(client):
+        return await stored_after_check(jobs, data, client, quota, UploadKind(
+            KIND, FORMATS[fmt][2], {"format": fmt}, f"upload{FORMATS[fmt][2]}",
+            check=lambda path, folder: ("measured", {"path": path, "fmt": fmt}, "the upload"),
+            record=lambda summary: {"format": fmt, "summary": {"bytes": len(data), **summary}},
+            reusable=lambda row: row["result"]["format"] == fmt))
+
+
+@contextlib.asynccontextmanager
+async def client_turn(client: str) -> AsyncIterator[None]:
+    """``client_lock(client)`` held, waited for on the event loop (polled every 20 ms: a
+    thread blocked on the lock was one of the 40 every sync route shares)."""
+    lock = client_lock(client)
+    while not lock.acquire(blocking=False):
+        await asyncio.sleep(0.02)
+    try:
+        yield
+    finally:
+        lock.release()
+
+
+@dataclass(frozen=True)
+class UploadKind:
+    """How one kind of upload is stored: the store's ``kind``, the stored file's ``suffix``,
+    the upload's ``meta``, the ``name`` of its temporary file, ``check(path, folder)`` ->
+    (check, args, what) for the check worker, ``record(summary)`` -> its "format" and
+    "summary", and ``reusable(row)``: whether a stored file of the same bytes answers."""
+    kind: str
+    suffix: str
+    meta: dict[str, Any]
+    name: str
+    check: Callable[[str, str], tuple[str, dict[str, Any], str]]
+    record: Callable[[dict[str, Any]], dict[str, Any]]
+    reusable: Callable[[dict[str, Any]], bool]
+
+
+async def stored_after_check(jobs, data: bytes, client: str, quota: int | None, up: UploadKind) -> dict[str, Any]:
+    """The upload path of every kind, with ``client_turn`` held: the quota (413), a stored
+    file of the same bytes reused when ``up.reusable(row)``, else ``data`` written in a
+    private temporary folder of the artefact folder, checked in a check worker (a summary,
+    or the reader's ValueError), and only then copied into the store as
+    ``<sha256><suffix>``: a file that does not read never enters it."""
+    h = hashlib.sha256(data).hexdigest()
+    kind, meta, name = up.kind, up.meta, up.name
+    target = jobs.artefact_dir / f"{h}{up.suffix}"
+
+    def before() -> dict[str, Any] | None:
+        if quota is not None and not jobs.store.uploaded(h, client):
+            stored = jobs.store.upload_bytes(client)
+            if stored + len(data) > quota:
+                raise HTTPException(413, quota_message(client, stored, len(data), quota))
+        found = jobs.store.artefact(h, kind)
+        if found is not None and up.reusable(found) and target.is_file():
+            jobs.store.put_upload(h, kind, client, meta, found["result"])
+            return found["result"]
+        if found is None and jobs.store.artefact(h) is not None:   # e.g. a measured file's bytes as fit data
+            raise ValueError(f"{name}: these bytes are stored as another kind of upload")
+        return None
+
+    found = await run_in_threadpool(before)
+    if found is not None:
+        return found
+    folder = await run_in_threadpool(tempfile.mkdtemp, dir=jobs.artefact_dir, prefix=f".{kind}-")
+    try:
+        path = os.path.join(folder, name)
+        await run_in_threadpool(Path(path).write_bytes, data)
+        check_name, args, what = up.check(path, folder)
+        summary = await jobs.checker.run_async(check_name, args, what, client)
+
+        def store() -> dict[str, Any]:
+            write_atomically(target, lambda tmp: shutil.copyfile(path, tmp), suffix=target.suffix)
+            result = {"hash": h, **up.record(summary), "files": {"file": target.name}}
+            jobs.store.put_upload(h, kind, client, meta, result)
+            return jobs.store.artefact(h, kind)["result"]
+
+        return await run_in_threadpool(store)
+    finally:   # not awaited: it must run even when the request is cancelled
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def client_lock(client: str) -> threading.Lock:
@@ -72,36 +158,6 @@ def read_summary(path: str, fmt: str) -> dict[str, Any]:
         return summary(FORMATS[fmt][1](path))
     except (ValueError, TypeError, OverflowError) as e:
         raise ValueError(f"format={fmt}: " + str(e).replace(path, "the upload")) from None
-
-
-def check_file(jobs, path: str, fmt: str, client: str | None = None) -> dict[str, Any]:
-    """``read_summary`` in a check worker process (bsdflab.service.offload)."""
-    return jobs.checker.run("measured", {"path": path, "fmt": fmt}, "the upload", client)
-
-
-def _upload(jobs, data: bytes, fmt: str, client: str, quota: int | None) -> dict[str, Any]:
-    suffix = FORMATS[fmt][2]
-    h = hashlib.sha256(data).hexdigest()
-    if quota is not None and not jobs.store.uploaded(h, client):
-        stored = jobs.store.upload_bytes(client)
-        if stored + len(data) > quota:
-            raise HTTPException(413, quota_message(client, stored, len(data), quota))
-    found = jobs.store.artefact(h, KIND)
-    target = jobs.artefact_dir / f"{h}{suffix}"
-    if found is not None and found["result"]["format"] == fmt and target.is_file():
-        jobs.store.put_upload(h, KIND, client, {"format": fmt}, found["result"])
-        return found["result"]
-    read = {}
-
-    def write(tmp: str) -> None:
-        Path(tmp).write_bytes(data)
-        read.update(check_file(jobs, tmp, fmt, client))
-
-    write_atomically(target, write, suffix=suffix)
-    result = {"hash": h, "format": fmt, "summary": {"bytes": len(data), **read},
-              "files": {"file": target.name}}
-    jobs.store.put_upload(h, KIND, client, {"format": fmt}, result)
-    return jobs.store.artefact(h, KIND)["result"]
 
 
 def stored_file(jobs, model_type: str, content_hash: str) -> Path | None:

@@ -143,8 +143,7 @@ async def upload_dataset(request: Request, jobs: JobsDep, client: ClientDep, set
     line and column) and stored under its SHA-256. The per-key upload limits and storage
     quota of measured files apply to both together."""
     data = await request.body()
-    result = await run_in_threadpool(fit_uploads.upload, jobs, data, name, client.name,
-                                     settings.limit_upload_storage_per_key)
+    result = await fit_uploads.upload(jobs, data, name, client.name, settings.limit_upload_storage_per_key)
     return FitDataInfo(hash=result["hash"], format=result["format"], summary=result["summary"])
 
 

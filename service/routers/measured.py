@@ -7,7 +7,6 @@ from __future__ import annotations
 from typing import Annotated, Literal
 
 from fastapi import APIRouter, Query, Request
-from starlette.concurrency import run_in_threadpool
 
 from bsdflab.service import uploads
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep
@@ -34,8 +33,7 @@ async def upload_measured(request: Request, jobs: JobsDep, client: ClientDep, se
     Per key: ``BSDFLAB_LIMIT_UPLOADS_PER_KEY`` at once and ``BSDFLAB_LIMIT_UPLOAD_STORAGE_PER_KEY``
     bytes stored (413 beyond); 429 while ``BSDFLAB_LIMIT_UPLOAD_BYTES_IN_FLIGHT`` is taken."""
     data = await request.body()
-    result = await run_in_threadpool(uploads.upload, jobs, data, format, client.name,
-                                     settings.limit_upload_storage_per_key)
+    result = await uploads.upload(jobs, data, format, client.name, settings.limit_upload_storage_per_key)
     return info(result)
 
 

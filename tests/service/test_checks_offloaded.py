@@ -30,8 +30,8 @@ def rgl(tmp_path_factory) -> bytes:
 def test_uploads_are_read_outside_the_web_process(tmp_path, rgl, monkeypatch):
     """The readers' entry points are made to fail in this (the web) process: the check
     workers, spawned, import the real ones. Both uploads answer their summaries, read by
-    a process that is not this one. Mutation caught (run once): ``check_file`` calling
-    ``read_summary`` inline, as before (the upload raises "read in the web process")."""
+    a process that is not this one. Mutation caught (run once): the upload calling
+    ``read_summary`` inline instead of the check worker (it raises "read in the web process")."""
     def tripwire(*args, **kwargs):
         raise AssertionError("read in the web process")
 
@@ -92,3 +92,26 @@ def test_a_keys_check_beyond_its_share_is_429_before_it_is_queued(tmp_path, rgl)
             r = client.post("/v1/measured", params={"format": "rgl"}, content=rgl,
                             headers={**OCTETS, "X-API-Key": keys["b"]["key"]})
             assert r.status_code == 200, r.text
+
+
+def test_an_upload_holds_no_route_thread_while_its_check_runs(tmp_path, rgl):
+    """Measured and fit-data uploads await their check on the event loop: while the check
+    runs, no thread of the route pool (anyio's default limiter, shared by every sync route)
+    is borrowed. Before, the whole upload ran on a route thread and waited there (the
+    check's wrapper was never awaited: no reading, the test fails)."""
+    import anyio.to_thread
+
+    with make_client(tmp_path, limit_measured_bytes=1 << 20) as client:
+        checker = client.app.state.jobs.checker
+        run_async, borrowed = checker.run_async, []
+
+        async def counting(*args, **kwargs):
+            borrowed.append(anyio.to_thread.current_default_thread_limiter().borrowed_tokens)
+            return await run_async(*args, **kwargs)
+
+        checker.run_async = counting
+        r = client.post("/v1/measured", params={"format": "rgl"}, content=rgl, headers=OCTETS)
+        assert r.status_code == 200, r.text
+        r = client.post("/v1/fits/datasets", params={"name": "data.csv"}, content=LONG, headers=OCTETS)
+        assert r.status_code == 200, r.text
+    assert borrowed == [0, 0]

@@ -127,28 +127,29 @@ def test_an_upload_declared_over_the_cap_is_413_not_retry_later(tmp_path):
         assert r.status_code == 413 and "BSDFLAB_LIMIT_MEASURED_BYTES" in r.text, r.text
 
 
-def test_concurrent_uploads_of_one_key_do_not_overshoot_its_quota(tmp_path, rgl_files, monkeypatch):
+def test_concurrent_uploads_of_one_key_do_not_overshoot_its_quota(tmp_path, rgl_files):
     """Two uploads of one key at once (its default concurrency) each passed the quota
     check before either was stored: both 200, the quota passed by a file. The file's check
-    (sent to a check worker from the upload's thread) is made to wait (up to 3 s) for the
-    other upload's, so without the per-client lock the two always overlap. Mutation
-    caught: no lock around check and store (two 200s)."""
+    (awaited on the event loop) is made to wait (up to 3 s) for the other upload's, so
+    without the per-client turn the two always overlap. Mutation caught: no turn around
+    check and store (two 200s)."""
+    import asyncio
     import threading
 
-    from bsdflab.service import uploads
-    check_file = uploads.check_file
-    both = threading.Barrier(2, timeout=3)
-
-    def waiting_check(*args):
-        try:
-            both.wait()
-        except threading.BrokenBarrierError:   # the other upload waits for this one: no overlap
-            pass
-        return check_file(*args)
-
-    monkeypatch.setattr(uploads, "check_file", waiting_check)
     size = max(p.stat().st_size for p in rgl_files)
     with make_client(tmp_path, limit_measured_bytes=1 << 20, limit_upload_storage_per_key=size + 10) as client:
+        checker = client.app.state.jobs.checker
+        run_async, arrived = checker.run_async, []
+
+        async def waiting_check(*args, **kwargs):
+            arrived.append(1)
+            for _ in range(150):   # the other upload's check, or 3 s
+                if len(arrived) >= 2:
+                    break
+                await asyncio.sleep(0.02)
+            return await run_async(*args, **kwargs)
+
+        checker.run_async = waiting_check
         codes = []
         threads = [threading.Thread(target=lambda p=p: codes.append(_upload(client, p.read_bytes()).status_code))
                    for p in rgl_files[:2]]
