@@ -110,13 +110,15 @@ def _upload(jobs, data: bytes, name: str, client: str, quota: int | None) -> dic
     if found is not None and target.is_file():
         jobs.store.put_upload(h, KIND, client, {"name": name}, found["result"])
         return found["result"]
-    if jobs.store.artefact(h) is not None:   # the same bytes stored as another kind (a measured file)
-        raise ValueError(f"{name}: these bytes are stored as another kind of upload; they are not fit data")
     folder = tempfile.mkdtemp(dir=jobs.artefact_dir, prefix=".fitupload-")
     try:
         path = os.path.join(folder, name)
         Path(path).write_bytes(data)
         summary = check_file(jobs, path, name, folder, client)
+        # after the reader: its complaint, the same as for bytes never uploaded, comes first
+        # (before: another tenant's measured file answered this message, an existence oracle)
+        if jobs.store.artefact(h) is not None:   # the same bytes stored as another kind (a measured file)
+            raise ValueError(f"{name}: these bytes are stored as another kind of upload; they are not fit data")
         write_atomically(target, lambda tmp: shutil.copyfile(path, tmp), suffix=SUFFIX)
     finally:
         shutil.rmtree(folder, ignore_errors=True)

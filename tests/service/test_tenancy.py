@@ -139,3 +139,39 @@ def test_an_upload_of_the_same_bytes_makes_its_artefacts_the_uploaders(lab):
     assert c.get(f"/v1/renders/{made['render']}/image.png", headers=BOB).status_code == 200
     again = c.post("/v1/tables", json={"model": ref, "grid": GRID}, headers=BOB)
     assert again.status_code == 200 and again.json()["hash"] == made["table"], again.text
+
+
+@pytest.mark.parametrize("name", ["x.csv", "x.ProcSpec", "x.txt"])
+def test_fit_data_does_not_tell_whether_another_tenant_uploaded_the_bytes(tmp_path, name):
+    """Before: bob, holding a file, uploaded it as fit data before and after alice uploaded it
+    as a measured file: the reader's complaint, then "these bytes are stored as another kind
+    of upload", so he learnt that some tenant holds that file. After: the reader's complaint
+    both times (its check comes first)."""
+    data = rgl_bytes(tmp_path)
+    with make_client(tmp_path, api_keys=KEYS, limit_measured_bytes=8 << 20) as c:
+
+        def as_fit_data():
+            r = c.post("/v1/fits/datasets", params={"name": name}, content=data, headers={**BOB, **OCTETS})
+            assert r.status_code == 422, r.text
+            return r.json()["detail"]
+
+        before = as_fit_data()
+        r = c.post("/v1/measured", params={"format": "rgl"}, content=data, headers={**ALICE, **OCTETS})
+        assert r.status_code == 200, r.text
+        assert as_fit_data() == before
+
+
+@pytest.mark.parametrize(
+    "keys, words",
+    [
+        ({"admin": {"key": "t" * 32}}, ["'admin'", "BSDFLAB_API_KEY"]),
+        ({"alice": {"key": "a" * 32}, "bob": {"key": "a" * 32}}, ["'bob'", "same key as 'alice'"]),
+    ],
+)
+def test_two_keys_never_share_a_tenant(tmp_path, keys, words):
+    """Before: a tenant key named "admin" beside BSDFLAB_API_KEY was the admin's client by
+    name (its uploads, its jobs: the uploads and jobs are recorded by name), and one key given
+    to two names was silently the last one. After: the settings are refused, naming the key."""
+    with pytest.raises(ValueError) as e:
+        make_client(tmp_path, api_key="r" * 32, api_keys=keys)
+    assert all(w in str(e.value) for w in words), str(e.value)
