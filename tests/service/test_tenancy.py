@@ -45,7 +45,8 @@ def rgl_bytes(folder: Path) -> bytes:
 
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory):
-    """One server; alice's upload, a table of it and a render of it, each done."""
+    """One server; alice's upload, a table of it, renders of the upload, of a tabulated material
+    and of the table, each done."""
     folder = tmp_path_factory.mktemp("tenancy")
     data = rgl_bytes(folder)
     with make_client(folder, api_keys=KEYS, limit_measured_bytes=8 << 20, limit_queue=8) as c:
@@ -66,6 +67,14 @@ def lab(tmp_path_factory):
             assert r.status_code == 202, r.text
             assert wait_job(c, r.json()["id"], timeout=300, headers=ALICE)["state"] == "done"
             made[name] = r.json()["hash"]
+        # a render of the table by hash: its request holds the table's store path, not the upload
+        r = c.post(
+            "/v1/renders",
+            json={**TINY, "options": {"material": {"type": "table", "hash": made["table"]}}},
+            headers=ALICE,
+        )
+        assert r.status_code == 202 and wait_job(c, r.json()["id"], timeout=300, headers=ALICE)["state"] == "done"
+        made["of_table"] = r.json()["hash"]
         # the table the tabulated render made in the table store (no record: read from its header)
         (made["render_table"],) = {p.stem for p in (folder / "tables").glob("*.exr")} - {made["table"]}
         yield c, data, ref, made
@@ -90,7 +99,7 @@ def test_a_table_or_render_of_another_tenants_upload_is_as_absent(lab):
     ]
     paths += [
         f"/v1/renders/{made[name]}{tail}"
-        for name in ("render", "tabulated")
+        for name in ("render", "tabulated", "of_table")
         for tail in ("", "/image.png", "/image.exr")
     ]
     for path in paths:
