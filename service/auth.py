@@ -62,6 +62,13 @@ def load_clients(settings) -> dict[bytes, Client]:
             raise ValueError(f"API key {name!r}: unknown fields {sorted(unknown)}")
         rate = entry.get("rate_per_s", settings.key_rate_per_s)
         admin = bool(entry.get("admin", False))
+        # a client is its name (its jobs and uploads are recorded by it): two keys under one
+        # name, one of them BSDFLAB_API_KEY's admin, shared everything (and one key named twice
+        # was whichever came last)
+        other = clients.get(key.encode())
+        if other is not None or (name == "admin" and settings.api_key is not None and not admin):
+            raise ValueError(f"API key {name!r}: " + (f"the same key as {other.name!r}" if other is not None else
+                                                       "the name 'admin' is BSDFLAB_API_KEY's; name it otherwise"))
         clients[key.encode()] = Client(name, admin,
                                        entry.get("max_jobs", None if admin else settings.limit_queue_per_key),
                                        None if admin and "rate_per_s" not in entry else rate)

@@ -7,7 +7,7 @@ from typing import Annotated, Any
 from fastapi import Depends, Request, Security
 from fastapi.security import APIKeyHeader, HTTPAuthorizationCredentials, HTTPBearer
 
-from bsdflab.service import artefact_refs
+from bsdflab.service import artefact_refs, tenancy
 from bsdflab.service.auth import ANONYMOUS, Client
 from bsdflab.service.heavy import HeavyPool
 from bsdflab.service.job_service import JobService
@@ -52,11 +52,15 @@ def model_spec(spec: dict[str, Any], jobs: JobService, slots=artefact_refs.MODEL
     store; any server path refused (bsdflab.service.artefact_refs). ``slots``: where the
     request holds a model (a render: its ``options.material``). A measured file is found
     only among ``client``'s own uploads (an admin's: any): another tenant's is as absent
-    (before: any stored hash, so its values could be evaluated by whoever computed it)."""
+    (before: any stored hash, so its values could be evaluated by whoever computed it); so
+    is a table made from another tenant's upload (bsdflab.service.tenancy; before: named by
+    its hash, it evaluated and rendered the upload's values)."""
     stored_file = jobs.stored_file
     if client is not None and not client.admin:
         def stored_file(model_type: str, content_hash: str):
             if model_type != "table" and not jobs.store.uploaded(content_hash, client.name):
+                return None
+            if model_type == "table" and not tenancy.may_read(jobs, {"type": "table", "hash": content_hash}, client):
                 return None
             return jobs.stored_file(model_type, content_hash)
     return artefact_refs.resolve(spec, stored_file, jobs.settings.limit_store_refs, slots)

@@ -119,8 +119,6 @@ async def stored_after_check(jobs, data: bytes, client: str, quota: int | None, 
         if found is not None and up.reusable(found) and target.is_file():
             jobs.store.put_upload(h, kind, client, meta, found["result"])
             return found["result"]
-        if found is None and jobs.store.artefact(h) is not None:   # e.g. a measured file's bytes as fit data
-            raise ValueError(f"{name}: these bytes are stored as another kind of upload")
         return None
 
     found = await run_in_threadpool(before)
@@ -134,6 +132,11 @@ async def stored_after_check(jobs, data: bytes, client: str, quota: int | None, 
         summary = await jobs.checker.run_async(check_name, args, what, client)
 
         def store() -> dict[str, Any]:
+            # after the reader: its complaint, the same as for bytes never uploaded, comes
+            # first (before: another tenant's measured file answered this message, an
+            # existence oracle for bytes uploaded as fit data)
+            if jobs.store.artefact(h, kind) is None and jobs.store.artefact(h) is not None:
+                raise ValueError(f"{name}: these bytes are stored as another kind of upload")
             write_atomically(target, lambda tmp: shutil.copyfile(path, tmp), suffix=target.suffix)
             result = {"hash": h, **up.record(summary), "files": {"file": target.name}}
             jobs.store.put_upload(h, kind, client, meta, result)

@@ -7,7 +7,7 @@ from fastapi import APIRouter, HTTPException, Path
 from fastapi.responses import FileResponse, JSONResponse
 from starlette.concurrency import run_in_threadpool
 
-from bsdflab.service import artefact_refs, render_checks
+from bsdflab.service import artefact_refs, render_checks, tenancy
 from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
@@ -76,7 +76,7 @@ def _submit(jobs: JobService, request: dict[str, Any], key: str, client) -> JSON
 @router.get("/{key}", response_model=RenderInfo, responses=NOT_FOUND, summary="A render's state and summary")
 def get_render(key: Hash, jobs: JobsDep, client: ClientDep) -> RenderInfo:
     row = jobs.store.artefact(key, KIND)
-    if row is not None:
+    if row is not None and tenancy.may_read(jobs, row["request"], client):   # another tenant's upload: as absent
         return render_info(jobs, key, row["request"], jobs.cached(KIND, key), client)
     job = jobs.visible(jobs.store.latest_for(KIND, key), client)
     if job is None:
@@ -85,7 +85,8 @@ def get_render(key: Hash, jobs: JobsDep, client: ClientDep) -> RenderInfo:
 
 
 def _file(jobs: JobService, key: str, which: str, client) -> FileResponse:
-    result = jobs.cached(KIND, key)
+    row = jobs.store.artefact(key, KIND)
+    result = jobs.cached(KIND, key) if row is not None and tenancy.may_read(jobs, row["request"], client) else None
     if result is None:
         raise HTTPException(404, f"no finished render {key}{jobs.job_hint(KIND, key, client)}")
     media = "image/png" if which == "png" else "image/x-exr"

@@ -8,7 +8,7 @@ from fastapi.responses import FileResponse, JSONResponse
 from starlette.concurrency import run_in_threadpool
 
 from bsdflab.jobs import tabulate as tabulate_kind
-from bsdflab.service import artefact_refs, render_checks
+from bsdflab.service import artefact_refs, render_checks, tenancy
 from bsdflab.service.bodies import ThreadedBody
 from bsdflab.service.deps import ClientDep, JobsDep, SettingsDep, model_spec
 from bsdflab.service.errors import ERRORS, NOT_FOUND, over_limit
@@ -80,14 +80,16 @@ def _create(spec: dict[str, Any], checked: dict[str, Any] | None, jobs: JobServi
 @router.get("", response_model=TableList, summary="The tables this server has made")
 def list_tables(jobs: JobsDep, client: ClientDep, limit: Annotated[int, Query(ge=1, le=1000)] = 100) -> TableList:
     """Tables made by the client's jobs (an admin: every table), newest first. A table's
-    hash is its name: any client that knows it may read the table."""
+    hash is its name: any client that knows it may read the table, unless it was made from
+    uploads the client does not hold (bsdflab.service.tenancy)."""
     rows = jobs.store.artefacts(KIND, limit) if client.admin else jobs.store.artefacts_of(KIND, client.name, limit)
     return TableList(tables=[table_info(r["result"]) for r in rows])
 
 
 def _found(jobs: JobService, key: str, client) -> dict[str, Any]:
     result = jobs.table(key)
-    if result is None:
+    # a table of another tenant's upload is as absent (before: its values by its hash)
+    if result is None or not tenancy.may_read(jobs, result.get("model"), client):
         raise HTTPException(404, f"no table {key}{jobs.job_hint(KIND, key, client)}")
     return result
 
