@@ -269,3 +269,34 @@ def test_recovers_a_slit():
     assert iv["bandwidth_nm"][0] < 20.0 < iv["bandwidth_nm"][1], iv
     assert iv["scale"][0] < 0.9 < iv["scale"][1], iv
     assert 10.0 < iv["bandwidth_nm"][0] and iv["bandwidth_nm"][1] < 30.0, iv
+
+
+def test_each_dataset_sees_its_own_terms():
+    """Co-refinement: dataset "a" with no term and "b" with a 3 deg cone and a 1 deg tilt, in
+    one forward model: a's rows = the plain rows, b's = b alone through its terms (rtol 1e-12:
+    the same solve and pairs)."""
+    a, b = rows(IN_PLANE[:2]), rows(IN_PLANE[2:] + OUT_OF_PLANE)
+    d = tomllib.loads(CONFIG)
+    scale = {"prior": "uniform", "low": 0.5, "high": 1.5}
+    d["dataset"] = [
+        {"name": "a", "data": "a.csv", "instrument": {"scale": scale}},
+        {"name": "b", "data": "b.csv", "instrument": {"acceptance_deg": 3.0, "angle_offset_deg": 1.0}},
+    ]
+    post = FullStackPosterior([a, b], FullStackConfig.parse(d))
+    v = np.array([post.config.fixed.get(n, post.config.domains[n].default) for n in post.config.names])
+    got = post.solver.evaluate(v)
+    assert np.allclose(got[:2], forward(a, {}), rtol=1e-12, atol=0)
+    assert np.allclose(got[2:], forward(b, {"acceptance_deg": 3.0, "angle_offset_deg": 1.0}), rtol=1e-12, atol=0)
+
+
+def test_rows_outside_the_domain_are_nan():
+    """A cone or a tilt that reaches the horizon leaves that row undefined (NaN: posterior
+    zero), as the smooth model's theta + offset + acceptance >= 90 deg; the other rows keep
+    their values."""
+    ds = rows([[30, 30, 0], [85, 60, 0]])
+    plain = forward(ds, {})
+    coned = forward(ds, {"acceptance_deg": 6.0})
+    assert np.isfinite(coned[0]) and np.isnan(coned[1]), coned
+    tilted = forward(rows([[30, 30, 0], [30, 88, 0]]), {"angle_offset_deg": -3.0})
+    assert np.isfinite(tilted[0]) and np.isnan(tilted[1]), tilted
+    assert np.isfinite(plain).all()
