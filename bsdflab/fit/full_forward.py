@@ -71,30 +71,40 @@ class RowPairs:
 
 
 class BelowTopSolutions:
-    """Adding-doubling solutions keyed by what lies below the top: a model that differs from a
-    cached one in its top only reuses that solve (``Solution.with_model``); at most CACHE kept."""
+    """Adding-doubling solutions keyed by what lies below the top and the wavelengths: a model
+    that differs from a cached one in its top only reuses that solve (``Solution.with_model``);
+    at most CACHE kept. The same model at the same wavelengths as the last call (an
+    instrument term changed, not the structure) returns the last solution itself."""
 
     def __init__(self, wavelengths, nodes: int, orders: int):
         self.wavelengths, self.nodes, self.orders = wavelengths, nodes, orders
         self._cache: dict[str, object] = {}
+        self._last: tuple[str, object] | None = None
         self.solves = 0        # full solves (what lies below the top solved anew)
         self.top_solves = 0    # solves that reused the layers below the top
 
-    def __call__(self, model):
+    def __call__(self, model, wavelengths=None):
+        wavelengths = self.wavelengths if wavelengths is None else wavelengths
         d = model.to_dict()
-        key = json.dumps({**d, "interfaces": d["interfaces"][1:]}, sort_keys=True)
+        waves = np.asarray(wavelengths, float).tolist()
+        whole = json.dumps([d, waves], sort_keys=True)
+        if self._last is not None and self._last[0] == whole:
+            return self._last[1]
+        key = json.dumps([{**d, "interfaces": d["interfaces"][1:]}, waves], sort_keys=True)
         if key in self._cache:
             self.top_solves += 1
-            return self._cache[key].with_model(model)
-        with warnings.catch_warnings():
-            # the solver raises the nodes to resolve the slab's phase function and says so;
-            # in a fit that is expected for every parameter set (docs/fit.md)
-            warnings.filterwarnings("ignore", message="adding-doubling: nodes raised", category=UserWarning)
-            sol = solve(model, wavelengths=self.wavelengths, nodes=self.nodes, orders=self.orders or None)
-        self.solves += 1
-        if len(self._cache) >= CACHE:
-            self._cache.pop(next(iter(self._cache)))
-        self._cache[key] = sol
+            sol = self._cache[key].with_model(model)
+        else:
+            with warnings.catch_warnings():
+                # the solver raises the nodes to resolve the slab's phase function and says so;
+                # in a fit that is expected for every parameter set (docs/fit.md)
+                warnings.filterwarnings("ignore", message="adding-doubling: nodes raised", category=UserWarning)
+                sol = solve(model, wavelengths=wavelengths, nodes=self.nodes, orders=self.orders or None)
+            self.solves += 1
+            if len(self._cache) >= CACHE:
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[key] = sol
+        self._last = (whole, sol)
         return sol
 
 

@@ -3,13 +3,14 @@ base, bsdflab.fit.full_structure) and ``[model] kind = "full"`` (docs/fit.md, "S
 for the full model"). The other tables are a structure fit's (bsdflab.fit.stack_config):
 ``[instrument]`` or ``[[dataset]]`` with ``[dataset.instrument]``, ``[parameters]``,
 ``[sampler]``, ``[appearance]``. ``[model]``: kind, nodes, orders (the solver's),
-emulator_nodes, emulator_checks (as the snake's full model).
+emulator_nodes, emulator_checks (as the snake's full model), bandwidth_nodes, cone_nodes,
+cone_azimuths (the instrument's quadrature).
 
-The instrument on gonio rows: ``scale`` (per dataset or per series) and ``background``.
-``angle_offset_deg``, ``bandwidth_nm`` and ``acceptance_deg`` are refused (a ValueError
-naming the key) unless 0: a tilt of a BRDF sample moves source and detector together, the
-slit and the cone would need the solver at more wavelengths and directions per row, and
-none is modelled yet.
+The instrument on gonio rows: ``scale`` (per dataset or per series), ``background``, and
+the quadrature's terms (bsdflab.fit.gonio_instrument): ``angle_offset_deg`` (a sample tilt
+about the axis normal to the plane of incidence), ``acceptance_deg`` (the illumination
+cone) and ``bandwidth_nm`` (the Gaussian slit), each off unless given; ``[model]``
+bandwidth_nodes, cone_nodes and cone_azimuths size their quadrature as the smooth model's.
 """
 
 from __future__ import annotations
@@ -23,8 +24,7 @@ from bsdflab.fit.config import AppearanceSettings, SamplerSettings, _settings, l
 from bsdflab.fit.full_structure import FullStructure
 from bsdflab.fit.priors import Prior
 from bsdflab.fit.stack_config import DatasetSpec, StackConfig, _dataset_specs, in_domain
-
-NOT_MODELLED = ("angle_offset_deg", "bandwidth_nm", "acceptance_deg")
+from bsdflab.fit.stack_forward import BANDWIDTH_NODES, CONE_AZIMUTHS, CONE_NODES
 
 
 @dataclass(frozen=True)
@@ -34,19 +34,36 @@ class FullStackModelSettings:
     orders: int = 0
     emulator_nodes: int = 5
     emulator_checks: int = 2
+    bandwidth_nodes: int = BANDWIDTH_NODES  # the instrument's quadrature, as the smooth model's
+    cone_nodes: int = CONE_NODES
+    cone_azimuths: int = CONE_AZIMUTHS  # over [0, pi]; gonio rows take twice as many over [0, 2 pi)
 
     @classmethod
     def parse(cls, d: dict) -> FullStackModelSettings:
         if not isinstance(d, dict):
             raise ValueError("[model] must be a table")
-        return cls(
+        s = cls(
             **_settings(
                 cls,
                 "model",
                 {k: v for k, v in d.items() if k != "kind"},
-                {"nodes": (4, 256), "orders": (0, 4096), "emulator_nodes": (0, 64), "emulator_checks": (0, 1000)},
+                {
+                    "nodes": (4, 256),
+                    "orders": (0, 4096),
+                    "emulator_nodes": (0, 64),
+                    "emulator_checks": (0, 1000),
+                    "bandwidth_nodes": (1, 63),
+                    "cone_nodes": (1, 64),
+                    "cone_azimuths": (1, 64),
+                },
             )
         )
+        if s.bandwidth_nodes % 2 == 0:
+            raise ValueError(
+                f"[model] bandwidth_nodes must be odd (the middle node is the nominal wavelength), "
+                f"got {s.bandwidth_nodes}"
+            )
+        return s
 
 
 @dataclass(frozen=True)
@@ -71,14 +88,6 @@ class FullStackConfig:
         structure = FullStructure.parse(d.get("structure"))
         base = os.path.dirname(os.path.abspath(source)) if source else os.getcwd()
         specs = _dataset_specs(d, base)
-        for spec in specs:
-            where = f"[dataset.{spec.name}.instrument]" if spec.name else "[instrument]"
-            for key in NOT_MODELLED:
-                if key in spec.instrument.priors or spec.instrument.fixed.get(key, 0.0) != 0.0:
-                    raise ValueError(
-                        f"{where} {key}: not modelled by the full model of a [structure] (gonio rows "
-                        "take scale and background; docs/fit.md)"
-                    )
         params = d.get("parameters", {})
         if not isinstance(params, dict):
             raise ValueError("[parameters] must be a table")

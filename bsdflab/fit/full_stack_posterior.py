@@ -1,11 +1,15 @@
 """The log posterior of a full-model structure fit (bsdflab.fit.full_stack_config): one
 structure, one or more datasets of gonio rows, each through its own instrument
-(``<dataset>.scale`` or per-series scales, ``<dataset>.background``):
+(``<dataset>.scale`` or per-series scales, ``<dataset>.background``,
+``<dataset>.angle_offset_deg``, ``.acceptance_deg``, ``.bandwidth_nm``):
 
-    reported = scale * pi f(structure) + background
+    reported = scale * <pi f(structure)> + background
 
-All datasets' rows go through one forward model (one emulator grid when solver parameters
-are free: the structure is shared), then each dataset's instrument applies to its rows.
+where <...> is the mean over the instrument's quadrature (the sample tilted by the angle
+offset, the illumination cone, the slit: bsdflab.fit.gonio_instrument). All datasets' rows
+go through one forward model (one emulator grid when solver parameters or the
+quadrature's terms are free: the structure is shared; the terms are emulator axes as the
+structure's are), then each dataset's scale and background apply to its rows.
 Same interface as bsdflab.fit.stack_posterior.StackPosterior (a study and the sampler run it).
 """
 
@@ -16,10 +20,11 @@ import numpy as np
 from bsdflab.fit.emulator import EmulatedForward, prior_box
 from bsdflab.fit.full_stack_config import FullStackConfig
 from bsdflab.fit.full_stack_forward import StructureSolverForward
+from bsdflab.fit.gonio_instrument import TERMS
 from bsdflab.fit.posterior import GaussianPosterior
 from bsdflab.fit.stack_posterior import bind, concatenate
 
-MODELLED = ("scale", "background")
+MODELLED = ("scale", "background", *TERMS)
 
 
 class FullStackPosterior(GaussianPosterior):
@@ -33,8 +38,24 @@ class FullStackPosterior(GaussianPosterior):
         self.dataset = concatenate(datasets, [spec.name for spec in config.datasets])
         self._slices = np.cumsum([0, *(len(d) for d in datasets)])
         m = config.model
-        solver = StructureSolverForward(self.dataset, config.structure, names, domains, m.nodes, m.orders)
+        instruments, on = [], set()
+        for spec, a, b in zip(config.datasets, self._slices[:-1], self._slices[1:]):
+            instruments.append((int(a), int(b), {t: spec.prefix(t) for t in TERMS}))
+            on |= {t for t in TERMS if t in spec.instrument.priors or spec.instrument.fixed.get(t, 0.0) != 0.0}
+        solver = StructureSolverForward(
+            self.dataset,
+            config.structure,
+            names,
+            domains,
+            m.nodes,
+            m.orders,
+            instruments,
+            on,
+            (m.bandwidth_nodes, m.cone_nodes, m.cone_azimuths),
+        )
+        # the emulator's axes: the free structure parameters and the free quadrature terms
         own = {p.name for p in config.structure.parameters()}
+        own |= {spec.prefix(t) for spec in config.datasets for t in TERMS}
         solver_free = [n for n in self.free if n in own]
         if m.emulator_nodes and solver_free:
             boxes = {n: prior_box(n, priors[n], domains[n]) for n in solver_free}

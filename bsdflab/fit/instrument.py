@@ -11,12 +11,16 @@ scale, bkg, dq)``, Nelson & Prescott 2019, J. Appl. Cryst. 52:193):
 |                    |      |     | (``Dataset.series``), else one per angle                         |
 | ``background``     | —    | 0   | additive offset (stray light, dark-current residue) |
 | ``angle_offset_deg`` | deg | 0  | goniometer zero / sample tilt, added to every nominal angle |
+|                    |      |     | (gonio rows of the full model: the sample tilted, both        |
+|                    |      |     | directions rotated; bsdflab.fit.gonio_instrument)              |
 | ``bandwidth_nm``   | nm   | 0   | FWHM of the spectrometer's Gaussian slit function |
 | ``acceptance_deg`` | deg  | 0   | half-angle of the illumination cone, averaged uniformly in solid angle |
 
 TOML: ``[instrument]`` (one dataset) or ``[dataset.instrument]`` per ``[[dataset]]``; each
 key a prior table (bsdflab.fit.priors) or a number (fixed); missing ones are off. The
-smearing is done in the C++ core (core/include/bsdflab/fit_instrument.h).
+smearing is done in the C++ core (core/include/bsdflab/fit_instrument.h) for specular rows;
+on the full model's gonio rows by one solve and one eval of every quadrature node
+(bsdflab.fit.gonio_instrument, the same nodes).
 """
 from __future__ import annotations
 

@@ -30,6 +30,21 @@ CONE_AZIMUTHS = 6        # midpoint nodes over the cone's azimuth in [0, pi]
 FWHM_TO_SIGMA = 1.0 / (2.0 * np.sqrt(2.0 * np.log(2.0)))
 
 
+def slit_nodes(n: int = BANDWIDTH_NODES) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Hermite nodes x and weights of the Gaussian slit (n odd: the middle node is set
+    to exactly 0, the nominal wavelength): R(lambda) ~ sum_k w_k R(lambda + sqrt(2) sigma x_k) / sum w."""
+    x, w = np.polynomial.hermite.hermgauss(n)
+    x[n // 2] = 0.0
+    return x, w
+
+
+def cone_polar_nodes(n: int = CONE_NODES) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre nodes u and weights on [0, 1] of the cone angle b / a (times sin b for
+    solid angle where used)."""
+    u, w = np.polynomial.legendre.leggauss(n)
+    return 0.5 * (u + 1.0), 0.5 * w
+
+
 class StackForward:
     def __init__(self, dataset: Dataset, structure: Structure, bandwidth_nodes: int = BANDWIDTH_NODES,
                  cone_nodes: int = CONE_NODES, cone_azimuths: int = CONE_AZIMUTHS):
@@ -45,10 +60,8 @@ class StackForward:
         self.dataset, self.structure = dataset, structure
         self.angles, self._ai = np.unique(dataset.angle_deg, return_inverse=True)
         self.wavelengths, self._wi = np.unique(dataset.wavelength_nm, return_inverse=True)
-        self._x, w = np.polynomial.hermite.hermgauss(bandwidth_nodes)
-        self._x[bandwidth_nodes // 2] = 0.0
-        u, cw = np.polynomial.legendre.leggauss(cone_nodes)
-        self._cone = (0.5 * (u + 1.0), 0.5 * cw, cone_azimuths)
+        self._x, w = slit_nodes(bandwidth_nodes)
+        self._cone = (*cone_polar_nodes(cone_nodes), cone_azimuths)
         self._core = _core.InstrumentStack(self.angles, len(self.wavelengths), len(structure.order), w,
                                            *self._cone)
         steps = np.diff(self.wavelengths)

@@ -10,6 +10,7 @@ from fastapi.responses import FileResponse, JSONResponse
 from starlette.concurrency import run_in_threadpool
 
 from bsdflab.fit import job as fit_job
+from bsdflab.fit.gonio_instrument import TERMS as GONIO_TERMS
 from bsdflab.fit.sampling import MAP_ITERATIONS
 from bsdflab.fit.stack_forward import BANDWIDTH_NODES, CONE_AZIMUTHS, CONE_NODES
 from bsdflab.service import fit_uploads, uploads
@@ -66,7 +67,8 @@ def map_evaluations(s, n_free: int) -> int:
 
 def _structure_checks(config, raw: dict[str, Any]) -> float:
     """A structure config's own refusals over HTTP; returns the weight of one walker step
-    (the instrument quadrature's size against the defaults)."""
+    (the instrument quadrature's size against the defaults), for the smooth and the full
+    model alike (the full model's gonio rows take the same slit and cone settings)."""
     if "appearance" in raw:
         raise HTTPException(422, "[appearance]: a structure study makes no appearance draws or renders; "
                                  "remove the table")
@@ -80,7 +82,6 @@ def _structure_checks(config, raw: dict[str, Any]) -> float:
             raise HTTPException(422, f"[model] nodes at most {HTTP_MAX_NODES} and orders at most "
                                      f"{HTTP_MAX_ORDERS} over HTTP (one solve's cost is not counted), "
                                      f"got {m.nodes} and {m.orders}")
-        return 1.0
     return max(1.0, m.bandwidth_nodes * m.cone_nodes * m.cone_azimuths / QUADRATURE_DEFAULT)
 
 
@@ -105,8 +106,12 @@ def check_limits(settings, request: dict[str, Any]) -> None:
     if getattr(m, "kind", None) == "full":
         # emulator_nodes = 0 solves the model at every likelihood evaluation (before: uncounted,
         # 2^21 direct solves passed); the emulator's error checks are direct solves too.
-        # A structure's emulator spans its free structure parameters (bsdflab.fit.full_stack_posterior)
-        free = [n for n in config.priors if n != "noise_scale"] if structure else config.free
+        # A structure's emulator spans its free structure parameters and each dataset's free
+        # offset, cone and slit (bsdflab.fit.full_stack_posterior); every solve is weighed by
+        # the instrument quadrature, as a walker step is
+        free = ([n for n in config.priors if n != "noise_scale"]
+                + [t for spec in config.datasets for t in spec.instrument.priors if t in GONIO_TERMS]
+                if structure else config.free)
         if m.emulator_nodes and (free or not structure):
             solves, what = m.emulator_nodes ** len(free), "[model] emulator_nodes ^ free parameters"
         elif s.kind == "emcee":
@@ -119,8 +124,8 @@ def check_limits(settings, request: dict[str, Any]) -> None:
         else:
             raise HTTPException(422, "[model] emulator_nodes = 0 with the nested sampler: its direct solves have "
                                      "no bound; give emulator_nodes (BSDFLAB_LIMIT_FIT_EMULATOR_SOLVES)")
-        over_limit(settings, "limit_fit_emulator_solves", solves + m.emulator_checks,
-                   f"{what} + emulator_checks")
+        over_limit(settings, "limit_fit_emulator_solves", int(weight * (solves + m.emulator_checks)),
+                   f"{what} + emulator_checks, x the instrument quadrature over its default")
     if structure:   # a structure's study has no appearance draws or renders (bsdflab.fit.stack_study)
         return
     ap = config.appearance

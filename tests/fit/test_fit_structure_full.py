@@ -227,7 +227,7 @@ def test_recovery_example(tmp_path):
         (lambda d: d["structure"]["base"].update(material="chitin"), "base"),
         (lambda d: d["structure"]["interface"].update(distribution="phong"), "distribution"),
         (lambda d: d["structure"].update(substrate="eumelanin"), "substrate"),
-        (lambda d: d["instrument"].update(bandwidth_nm={"prior": "uniform", "low": 0, "high": 5}), "bandwidth_nm"),
+        (lambda d: d["model"].update(bandwidth_nodes=4), "bandwidth_nodes"),
         (lambda d: d["parameters"].update(film_ior={"prior": "uniform", "low": 1.7, "high": 1.9}), "film_ior"),
         (lambda d: d["model"].pop("kind"), "slab"),
     ],

@@ -225,3 +225,33 @@ def test_too_few_walkers_for_the_free_parameters_is_422(client):
     if r.status_code == 202:
         wait_job(client, r.json()["id"], timeout=600)
     assert r.status_code == 422, r.text
+
+
+def test_full_model_quadrature_is_counted(client):
+    """The full model's gonio rows take the smooth model's slit and cone settings
+    (bsdflab.fit.gonio_instrument): at their maximum (63 x 64 x 64 nodes) a run within the
+    walker-step and emulator limits unweighted (16 x 1024 steps, 5^3 + 4 solves) is refused,
+    each weighed by the quadrature over its default, as the smooth model's."""
+    config = copy.deepcopy(FULL)
+    config["model"].update(bandwidth_nodes=63, cone_nodes=64, cone_azimuths=64)
+    config["instrument"].update(acceptance_deg=2.0, bandwidth_nm=5.0)
+    config["sampler"].update(walkers=16, max_steps=1 << 10, map_starts=1)
+    r = post(client, full_body(client, config))
+    assert r.status_code == 422 and "quadrature" in r.text, r.text
+
+
+def test_full_model_free_instrument_terms_are_emulator_axes(client):
+    """A free offset, cone and slit are axes of the full model's emulator: 8 nodes over 3
+    structure parameters (512 solves) pass, over those and the 3 terms (8^6) are refused;
+    one free cone at the example's 5 nodes (5^4 + 4 solves) is accepted."""
+    config = copy.deepcopy(FULL)
+    config["model"].update(emulator_nodes=8)
+    assert post(client, full_body(client, config)).status_code == 202
+    wide = {"prior": "uniform", "low": 0.0, "high": 2.0}
+    config["instrument"].update(angle_offset_deg=wide, acceptance_deg=wide, bandwidth_nm=wide)
+    r = post(client, full_body(client, config))
+    assert r.status_code == 422 and "emulator_nodes" in r.text, r.text
+    config = copy.deepcopy(FULL)
+    config["instrument"].update(acceptance_deg=wide)
+    r = post(client, full_body(client, config))
+    assert r.status_code == 202, r.text
