@@ -41,6 +41,9 @@ DESCRIPTION_PREVIEW = 200   # characters of an RGL header's description kept (a 
 # both passed the check before either was stored (the quota overshot by an upload).
 _CLIENT_LOCKS: defaultdict[str, threading.Lock] = defaultdict(threading.Lock)
 _LOCKS_LOCK = threading.Lock()
+FOLDER_PREFIX = ".upload-"   # an upload's private folder in the artefact folder, while it is checked
+# the same folders as named by earlier versions (fit data; both kinds as ".<kind>-")
+LEFT_PREFIXES = (FOLDER_PREFIX, ".fitupload-", ".measured-", ".fitdata-")
 
 
 def summary(model) -> dict[str, Any]:
@@ -126,7 +129,7 @@ async def stored_after_check(jobs, data: bytes, client: str, quota: int | None, 
     found = await run_in_threadpool(before)
     if found is not None:
         return found
-    folder = await run_in_threadpool(tempfile.mkdtemp, dir=jobs.artefact_dir, prefix=f".{kind}-")
+    folder = await run_in_threadpool(tempfile.mkdtemp, dir=jobs.artefact_dir, prefix=f"{FOLDER_PREFIX}{kind}-")
     try:
         path = os.path.join(folder, name)
         await run_in_threadpool(Path(path).write_bytes, data)
@@ -142,6 +145,18 @@ async def stored_after_check(jobs, data: bytes, client: str, quota: int | None, 
         return await run_in_threadpool(store)
     finally:   # not awaited: it must run even when the request is cancelled
         shutil.rmtree(folder, ignore_errors=True)
+
+
+def remove_left_folders(artefact_dir: Path) -> int:
+    """Remove the private folders that an earlier server's uploads left (it was killed during
+    their check: the file is inside, up to BSDFLAB_LIMIT_MEASURED_BYTES, and counted by no
+    quota); how many. At start, before any upload: one server uses a data folder."""
+    removed = 0
+    for entry in os.scandir(artefact_dir):
+        if entry.name.startswith(LEFT_PREFIXES) and entry.is_dir(follow_symlinks=False):
+            shutil.rmtree(entry.path, ignore_errors=True)
+            removed += 1
+    return removed
 
 
 def client_lock(client: str) -> threading.Lock:
