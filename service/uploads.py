@@ -108,7 +108,9 @@ async def stored_after_check(jobs, data: bytes, client: str, quota: int | None, 
     file of the same bytes reused when ``up.reusable(row)``, else ``data`` written in a
     private temporary folder of the artefact folder, checked in a check worker (a summary,
     or the reader's ValueError), and only then copied into the store as
-    ``<sha256><suffix>``: a file that does not read never enters it."""
+    ``<sha256><suffix>``: a file that does not read never enters it. Bytes stored as
+    another kind are a ValueError only once they read as this one (another key's upload of
+    them is not told before)."""
     h = hashlib.sha256(data).hexdigest()
     kind, meta, name = up.kind, up.meta, up.name
     target = jobs.artefact_dir / f"{h}{up.suffix}"
@@ -122,8 +124,6 @@ async def stored_after_check(jobs, data: bytes, client: str, quota: int | None, 
         if found is not None and up.reusable(found) and target.is_file():
             jobs.store.put_upload(h, kind, client, meta, found["result"])
             return found["result"]
-        if found is None and jobs.store.artefact(h) is not None:   # e.g. a measured file's bytes as fit data
-            raise ValueError(f"{name}: these bytes are stored as another kind of upload")
         return None
 
     found = await run_in_threadpool(before)
@@ -137,10 +137,16 @@ async def stored_after_check(jobs, data: bytes, client: str, quota: int | None, 
         summary = await jobs.checker.run_async(check_name, args, what, client)
 
         def store() -> dict[str, Any]:
-            write_atomically(target, lambda tmp: shutil.copyfile(path, tmp), suffix=target.suffix)
-            result = {"hash": h, **up.record(summary), "files": {"file": target.name}}
-            jobs.store.put_upload(h, kind, client, meta, result)
-            return jobs.store.artefact(h, kind)["result"]
+            # Bytes stored as another kind that read as this one too: compared only now, so
+            # that another tenant's upload of them is not told before its reading
+            if jobs.store.artefact(h) is None or jobs.store.artefact(h, kind) is not None:
+                write_atomically(target, lambda tmp: shutil.copyfile(path, tmp), suffix=target.suffix)
+                result = {"hash": h, **up.record(summary), "files": {"file": target.name}}
+                jobs.store.put_upload(h, kind, client, meta, result)
+            row = jobs.store.artefact(h, kind)   # None: stored as another kind (just now, by another key)
+            if row is None:
+                raise ValueError(f"{what}: these bytes are stored as another kind of upload")
+            return row["result"]
 
         return await run_in_threadpool(store)
     finally:   # not awaited: it must run even when the request is cancelled
