@@ -48,3 +48,25 @@ def test_another_tenants_bytes_of_another_kind_get_the_readers_answer(tmp_path, 
         after = [as_measured(B), as_fit_data(B)]
     assert [r.status_code for r in after] == [422, 422], [r.text for r in after]
     assert [r.json()["detail"] for r in after] == [r.json()["detail"] for r in before]
+
+
+def test_another_tenants_fit_data_under_a_name_it_does_not_read_as_gets_the_readers_answer(tmp_path):
+    """A fit data file's name tells its reader (its suffix). Before: stored bytes were
+    reused whatever the name, so tenant b's upload of a's CSV as "scan.ProcSpec" answered
+    200 (a's record) once a had uploaded it and 422 ("not a readable zip") before: whether
+    anyone had uploaded a file, told to any key. Now a stored file answers only a name of
+    its first upload's suffix (the same reader); another name is read. Mutation caught:
+    reuse whatever the name (200 after)."""
+    with make_client(tmp_path, api_keys=KEYS, limit_measured_bytes=1 << 20, limit_body_bytes=256 << 10) as c:
+
+        def upload(name, headers):
+            return c.post("/v1/fits/datasets", params={"name": name}, content=LONG, headers=headers)
+
+        before = upload("scan.ProcSpec", B)
+        assert before.status_code == 422, before.text
+        stored = upload("d.csv", A)
+        assert stored.status_code == 200, stored.text
+        after = upload("scan.ProcSpec", B)
+        same_reader = upload("e.CSV", B)
+    assert after.status_code == 422 and after.json()["detail"] == before.json()["detail"], after.text
+    assert same_reader.status_code == 200 and same_reader.json() == stored.json()
