@@ -108,7 +108,7 @@ async def stored_after_check(jobs, data: bytes, client: str, quota: int | None, 
     """The upload path of every kind, with ``client_turn`` held: the quota (413), a stored
     file of the same bytes reused when ``up.reusable(row)``, else ``data`` written in a
     private temporary folder of the artefact folder, checked in a check worker (a summary,
-    or the reader's ValueError), and only then copied into the store as
+    or the reader's ValueError), and only then moved into the store as
     ``<sha256><suffix>``: a file that does not read never enters it. Bytes stored as
     another kind are a ValueError only once they read as this one (another key's upload of
     them is not told before)."""
@@ -143,7 +143,8 @@ async def stored_after_check(jobs, data: bytes, client: str, quota: int | None, 
             # Bytes stored as another kind that read as this one too: compared only now, so
             # that another tenant's upload of them is not told before its reading
             if jobs.store.artefact(h) is None or jobs.store.artefact(h, kind) is not None:
-                write_atomically(target, lambda tmp: shutil.copyfile(path, tmp), suffix=target.suffix)
+                # moved, not copied (the same file system): a 64 MiB upload wrote 64 MiB more
+                write_atomically(target, lambda tmp: os.replace(path, tmp), suffix=target.suffix)
                 result = {"hash": h, **up.record(summary), "files": {"file": target.name}}
                 jobs.store.put_upload(h, kind, client, meta, result)
             row = jobs.store.artefact(h, kind)   # None: stored as another kind (just now, by another key)
