@@ -90,7 +90,14 @@ async def upload(jobs, data: bytes, name: str, client: str, quota: int | None = 
             KIND, SUFFIX, {"name": name}, name,
             check=lambda path, folder: ("fitdata", {"path": path, "name": name, "folder": folder}, name),
             record=lambda summary: {"format": summary["format"], "summary": {"bytes": len(data), **summary}},
-            reusable=lambda row: True))
+            reusable=lambda row: _suffix(row["request"].get("name", "")) == _suffix(name)))
+
+
+def _suffix(name: str) -> str:
+    """What picks a file's reader with its contents (bsdflab.fit.readers.reader_for): the
+    same bytes under a name of another suffix are read again (a stored file answering any
+    name told whether anyone had uploaded those bytes)."""
+    return os.path.splitext(name)[1].lower()
 
 
 def stored(jobs, content_hash: str) -> bool:

@@ -38,6 +38,8 @@ class JobService:
         self.settings = settings
         self.artefact_dir: Path = settings.artefact_dir
         self.artefact_dir.mkdir(parents=True, exist_ok=True)
+        if left := uploads.remove_left_folders(self.artefact_dir):
+            log.warning("removed %d upload folders the last server left (stopped during their check)", left)
         self.store = JobStore(settings.db_path)
         measured_store.add_folder(self.artefact_dir)   # uploads by hash, here and in the workers started next
         # One table cache for the CLI, table jobs and render jobs (BSDFLAB_CACHE_DIR, default

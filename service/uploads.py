@@ -16,14 +16,14 @@ import asyncio
 import contextlib
 import hashlib
 import os
+import secrets
 import shutil
-import tempfile
 import threading
 from collections import defaultdict
 from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from fastapi import HTTPException
 from starlette.concurrency import run_in_threadpool
@@ -33,6 +33,7 @@ from bsdflab.service.upload_gate import quota_message
 from bsdflab.util.files import write_atomically
 
 KIND = "measured"
+T = TypeVar("T")
 # format -> (model type, reader, file suffix)
 FORMATS = {"rgl": ("measured", Measured, ".bsdf"), "merl": ("merl", Merl, ".binary")}
 MODEL_FORMAT = {model_type: fmt for fmt, (model_type, _, _) in FORMATS.items()}
@@ -41,6 +42,9 @@ DESCRIPTION_PREVIEW = 200   # characters of an RGL header's description kept (a 
 # both passed the check before either was stored (the quota overshot by an upload).
 _CLIENT_LOCKS: defaultdict[str, threading.Lock] = defaultdict(threading.Lock)
 _LOCKS_LOCK = threading.Lock()
+FOLDER_PREFIX = ".upload-"   # an upload's private folder in the artefact folder, while it is checked
+# the same folders as named by earlier versions (fit data; both kinds as ".<kind>-")
+LEFT_PREFIXES = (FOLDER_PREFIX, ".fitupload-", ".measured-", ".fitdata-")
 
 
 def summary(model) -> dict[str, Any]:
@@ -104,47 +108,82 @@ async def stored_after_check(jobs, data: bytes, client: str, quota: int | None, 
     """The upload path of every kind, with ``client_turn`` held: the quota (413), a stored
     file of the same bytes reused when ``up.reusable(row)``, else ``data`` written in a
     private temporary folder of the artefact folder, checked in a check worker (a summary,
-    or the reader's ValueError), and only then copied into the store as
-    ``<sha256><suffix>``: a file that does not read never enters it."""
-    h = hashlib.sha256(data).hexdigest()
+    or the reader's ValueError), and only then moved into the store as
+    ``<sha256><suffix>``: a file that does not read never enters it. Bytes stored as
+    another kind are a ValueError only once they read as this one (another key's upload of
+    them is not told before)."""
     kind, meta, name = up.kind, up.meta, up.name
-    target = jobs.artefact_dir / f"{h}{up.suffix}"
+    # named here and made on the thread: a cancelled request knows what to remove
+    folder = jobs.artefact_dir / f"{FOLDER_PREFIX}{kind}-{secrets.token_hex(8)}"
+    path = folder / name
 
-    def before() -> dict[str, Any] | None:
+    def before() -> tuple[str, dict[str, Any] | None]:
+        h = hashlib.sha256(data).hexdigest()   # not on the event loop: 50 ms for 64 MiB
         if quota is not None and not jobs.store.uploaded(h, client):
             stored = jobs.store.upload_bytes(client)
             if stored + len(data) > quota:
                 raise HTTPException(413, quota_message(client, stored, len(data), quota))
         found = jobs.store.artefact(h, kind)
-        if found is not None and up.reusable(found) and target.is_file():
+        if found is not None and up.reusable(found) and (jobs.artefact_dir / f"{h}{up.suffix}").is_file():
             jobs.store.put_upload(h, kind, client, meta, found["result"])
-            return found["result"]
-        return None
+            return h, found["result"]
+        folder.mkdir(mode=0o700)
+        path.write_bytes(data)
+        return h, None
 
-    found = await run_in_threadpool(before)
-    if found is not None:
-        return found
-    folder = await run_in_threadpool(tempfile.mkdtemp, dir=jobs.artefact_dir, prefix=f".{kind}-")
     try:
-        path = os.path.join(folder, name)
-        await run_in_threadpool(Path(path).write_bytes, data)
-        check_name, args, what = up.check(path, folder)
+        h, found = await _to_the_end(before)
+        if found is not None:
+            return found
+        check_name, args, what = up.check(str(path), str(folder))
         summary = await jobs.checker.run_async(check_name, args, what, client)
+        target = jobs.artefact_dir / f"{h}{up.suffix}"
 
         def store() -> dict[str, Any]:
-            # after the reader: its complaint, the same as for bytes never uploaded, comes
-            # first (before: another tenant's measured file answered this message, an
-            # existence oracle for bytes uploaded as fit data)
-            if jobs.store.artefact(h, kind) is None and jobs.store.artefact(h) is not None:
-                raise ValueError(f"{name}: these bytes are stored as another kind of upload")
-            write_atomically(target, lambda tmp: shutil.copyfile(path, tmp), suffix=target.suffix)
-            result = {"hash": h, **up.record(summary), "files": {"file": target.name}}
-            jobs.store.put_upload(h, kind, client, meta, result)
-            return jobs.store.artefact(h, kind)["result"]
+            # Bytes stored as another kind that read as this one too: compared only now, so
+            # that another tenant's upload of them is not told before its reading
+            if jobs.store.artefact(h) is None or jobs.store.artefact(h, kind) is not None:
+                # moved, not copied (the same file system): a 64 MiB upload wrote 64 MiB more
+                write_atomically(target, lambda tmp: os.replace(path, tmp), suffix=target.suffix)
+                result = {"hash": h, **up.record(summary), "files": {"file": target.name}}
+                jobs.store.put_upload(h, kind, client, meta, result)
+            row = jobs.store.artefact(h, kind)   # None: stored as another kind (just now, by another key)
+            if row is None:
+                raise ValueError(f"{what}: these bytes are stored as another kind of upload")
+            return row["result"]
 
-        return await run_in_threadpool(store)
-    finally:   # not awaited: it must run even when the request is cancelled
+        return await _to_the_end(store)
+    finally:   # after the threads (_to_the_end), before the key's turn passes on
         shutil.rmtree(folder, ignore_errors=True)
+
+
+async def _to_the_end(fn: Callable[[], T]) -> T:
+    """``fn()`` on a route thread, awaited until it returns even when the request is
+    cancelled meanwhile (the cancel is raised then). A cancelled ``run_in_threadpool``
+    returned at once while its thread went on: the folder was removed under the write, and
+    the key's turn handed on before the file was counted against its quota."""
+    future = asyncio.ensure_future(run_in_threadpool(fn))
+    try:
+        return await asyncio.shield(future)
+    except asyncio.CancelledError:
+        while not future.done():
+            with contextlib.suppress(asyncio.CancelledError):
+                await asyncio.wait({future})
+        if not future.cancelled():
+            future.exception()   # its outcome is no one's now: not "never retrieved"
+        raise
+
+
+def remove_left_folders(artefact_dir: Path) -> int:
+    """Remove the private folders that an earlier server's uploads left (it was killed during
+    their check: the file is inside, up to BSDFLAB_LIMIT_MEASURED_BYTES, and counted by no
+    quota); how many. At start, before any upload: one server uses a data folder."""
+    removed = 0
+    for entry in os.scandir(artefact_dir):
+        if entry.name.startswith(LEFT_PREFIXES) and entry.is_dir(follow_symlinks=False):
+            shutil.rmtree(entry.path, ignore_errors=True)
+            removed += 1
+    return removed
 
 
 def client_lock(client: str) -> threading.Lock:

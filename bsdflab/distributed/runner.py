@@ -99,15 +99,25 @@ class DaskRunner(Runner):
 def _sigint_as_flag() -> Iterator[threading.Event]:
     """On the main thread, Ctrl-C sets the returned flag instead of raising wherever the
     thread happens to be (inside Dask's client code, a lock or a tqdm refresh): the poll
-    loop then raises it at one known place, within POLL_S. Elsewhere (a job server's worker
-    thread, or a caller with its own SIGINT handler) nothing changes."""
+    loop then raises it at one known place, within POLL_S. A second Ctrl-C raises at once
+    (the loop may be held by a slow result or callback), and one the loop never looked at
+    is raised on leaving. Elsewhere (a job server's worker thread, or a caller with its own
+    SIGINT handler) nothing changes."""
     flag = threading.Event()
     if threading.current_thread() is not threading.main_thread() \
             or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
         yield flag
         return
-    previous = signal.signal(signal.SIGINT, lambda *_: flag.set())
+
+    def interrupted(signum, frame) -> None:
+        if flag.is_set():
+            raise KeyboardInterrupt
+        flag.set()
+
+    previous = signal.signal(signal.SIGINT, interrupted)
     try:
         yield flag
     finally:
         signal.signal(signal.SIGINT, previous)
+    if flag.is_set():   # came after the loop's last look (during the last result): not lost
+        raise KeyboardInterrupt

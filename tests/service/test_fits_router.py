@@ -161,7 +161,7 @@ def test_bad_uploads_are_422_naming_file_line_and_column(client):
     r = upload(client, bad, "scan.csv")
     text = r.json()["detail"]
     assert r.status_code == 422 and "scan.csv" in text and "line 5" in text and "reflectance" in text, text
-    assert ".fitdata-" not in text and str(Path.cwd()) not in text and "/tmp" not in text, text
+    assert ".upload-" not in text and str(Path.cwd()) not in text and "/tmp" not in text, text
     xml = b"<a><channelWavelengths><double>400</double></channelWavelengths><processedPixels>" \
           b"<double>1</double></processed></a>"
     r = upload(client, _procspec({"ps_0.xml": xml}), "s_20deg.ProcSpec")
