@@ -14,7 +14,7 @@ import pytest
 
 from bsdflab.render.image_io import read_exr
 from bsdflab.tables import write_table
-from support.cli import BSDFLAB, cli, one_line_error, wait_for_cpu
+from support.cli import BSDFLAB, cli, interruptible, one_line_error, wait_for_cpu
 from support.tables import valid_table
 
 
@@ -86,27 +86,27 @@ def test_sigint_is_one_line_and_exit_130(tmp_path):
     check (the flag read per tile, as before) runs the whole tile and the wait times out
     (before the fix, a 256 x 256 render under load did not stop within 120 s)."""
     # old: a 30-line KeyboardInterrupt traceback, exit status 1
-    proc = subprocess.Popen([*BSDFLAB, "render", "furnace", "--width", "16", "--height", "16", "--spp",
-                             str(2**28), "--out", str(tmp_path / "r.exr")],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            env={**os.environ, "BSDFLAB_MAX_SPP": str(2**28)})
-    seen = threading.Event()
-    chunks = []
+    with interruptible([*BSDFLAB, "render", "furnace", "--width", "16", "--height", "16", "--spp",
+                        str(2**28), "--out", str(tmp_path / "r.exr")],
+                       stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                       env={**os.environ, "BSDFLAB_MAX_SPP": str(2**28)}) as proc:
+        seen = threading.Event()
+        chunks = []
 
-    def read():
-        for chunk in iter(lambda: proc.stderr.read(1), b""):
-            chunks.append(chunk)
-            if b"rendering" in b"".join(chunks[-64:]):
-                seen.set()
+        def read():
+            for chunk in iter(lambda: proc.stderr.read(1), b""):
+                chunks.append(chunk)
+                if b"rendering" in b"".join(chunks[-64:]):
+                    seen.set()
 
-    reader = threading.Thread(target=read, daemon=True)
-    reader.start()
-    while not seen.wait(0.05):
-        assert proc.poll() is None, b"".join(chunks)
-    wait_for_cpu(proc, 1.0, b"".join(chunks))
-    proc.send_signal(signal.SIGINT)
-    rc = proc.wait(300)
-    reader.join(10)
+        reader = threading.Thread(target=read, daemon=True)
+        reader.start()
+        while not seen.wait(0.05):
+            assert proc.poll() is None, b"".join(chunks)
+        wait_for_cpu(proc, 1.0, b"".join(chunks))
+        proc.send_signal(signal.SIGINT)
+        rc = proc.wait(300)
+        reader.join(10)
     err = b"".join(chunks).decode(errors="replace")
     tail = [line for line in err.replace("\r", "\n").splitlines() if line.strip() and "rendering" not in line]
     assert rc == 130 and tail == ["bsdflab render: interrupted"], (rc, err[-2000:])

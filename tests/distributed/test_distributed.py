@@ -23,6 +23,7 @@ from bsdflab.render import render
 from bsdflab.render.units import plan_units, render_units
 from bsdflab.scenes import scene
 from bsdflab.tables.units import tabulate_units
+from support.cli import interruptible
 
 BSDFLAB = [sys.executable, "-m", "bsdflab.cli.main"]
 
@@ -248,23 +249,20 @@ def test_ctrl_c_on_the_driver_cancels_and_leaves_no_file(tmp_path):
     # 65536 spp: the render cannot finish before the signal, even on an idle machine, so a
     # zero exit can only mean a lost interrupt (seen once under load with 1024 spp).
     out = tmp_path / "r.exr"
-    p = subprocess.Popen([*BSDFLAB, "render", "basic-materials", "--width", "160", "--height", "120",
-                          "--spp", "65536", "--cluster", "local:1", "--out", str(out)],
-                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                         # a default SIGINT disposition even under a runner that ignores it
-                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    seen = threading.Event()
-    err = bytearray()
+    with interruptible([*BSDFLAB, "render", "basic-materials", "--width", "160", "--height", "120",
+                        "--spp", "65536", "--cluster", "local:1", "--out", str(out)],
+                       stdout=subprocess.DEVNULL, stderr=subprocess.PIPE) as p:
+        seen = threading.Event()
+        err = bytearray()
 
-    def watch():
-        while chunk := p.stderr.read1(4096):
-            err.extend(chunk)
-            if b"rendering" in err:  # the units' progress bar: work is on the cluster
-                seen.set()
+        def watch():
+            while chunk := p.stderr.read1(4096):
+                err.extend(chunk)
+                if b"rendering" in err:  # the units' progress bar: work is on the cluster
+                    seen.set()
 
-    watcher = threading.Thread(target=watch, daemon=True)
-    watcher.start()
-    try:
+        watcher = threading.Thread(target=watch, daemon=True)
+        watcher.start()
         assert seen.wait(180), "the render never started"
         sent = time.monotonic()
         p.send_signal(signal.SIGINT)
@@ -272,9 +270,6 @@ def test_ctrl_c_on_the_driver_cancels_and_leaves_no_file(tmp_path):
         # gives measured figures); killing the workers makes it well under 2 s.
         rc = p.wait(timeout=120)
         print(f"exit {time.monotonic() - sent:.2f} s after SIGINT")
-    finally:
-        if p.poll() is None:
-            p.kill()
     watcher.join(10)
     assert rc == 130, err.decode(errors="replace")[-2000:]
     assert b"bsdflab render: interrupted" in err

@@ -14,6 +14,7 @@ import pytest
 import tomllib
 
 from bsdflab.fit import FitConfig, LogPosterior, SimulationConfig, run_sampler, run_study, simulate
+from support.cli import interruptible
 from support.sbc import NARROW, calibration_failures, narrowed, z_sum_power
 
 TRUTH_TOML = """
@@ -190,17 +191,17 @@ def test_ctrl_c_leaves_no_half_written_study(tmp_path):
     that skips the cleanup leaves `.study.tmp-*` behind."""
     data_path, cfg_path = write_inputs(tmp_path, steps=1_000_000, sampler_extra="tau_multiple = 1e9\n")
     out = tmp_path / "study"
-    p = subprocess.Popen([sys.executable, "-m", "bsdflab.cli.main", "fit", str(data_path), "--config", str(cfg_path),
-                          "--out", str(out)], stderr=subprocess.PIPE, text=True)
-    # wait until sampling has started (emcee's progress bar) and the temporary folder exists
-    seen = ""
-    while "it/s" not in seen:
-        chunk = p.stderr.read(64)
-        assert chunk, f"the fit ended before sampling: {seen[-2000:]}"
-        seen += chunk
-    assert [q for q in os.listdir(tmp_path) if q.startswith(".study.tmp-")], "no temporary folder while running"
-    p.send_signal(signal.SIGINT)
-    _, err = p.communicate(timeout=60)
+    with interruptible([sys.executable, "-m", "bsdflab.cli.main", "fit", str(data_path), "--config",
+                        str(cfg_path), "--out", str(out)], stderr=subprocess.PIPE, text=True) as p:
+        # wait until sampling has started (emcee's progress bar) and the temporary folder exists
+        seen = ""
+        while "it/s" not in seen:
+            chunk = p.stderr.read(64)
+            assert chunk, f"the fit ended before sampling: {seen[-2000:]}"
+            seen += chunk
+        assert [q for q in os.listdir(tmp_path) if q.startswith(".study.tmp-")], "no temporary folder while running"
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=300)
     assert p.returncode == 130 and "nothing was written" in err
     assert not out.exists()
     assert not [q for q in os.listdir(tmp_path) if q.startswith(".study")]

@@ -1,9 +1,12 @@
 """Run the `bsdflab` command line in a subprocess and check how it fails."""
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
 import subprocess
 import sys
+from collections.abc import Iterator
 
 BSDFLAB = [sys.executable, "-m", "bsdflab.cli.main"]
 
@@ -40,3 +43,24 @@ def wait_for_cpu(proc: subprocess.Popen, seconds: float, what: str = "") -> None
     while cpu_seconds(proc.pid) < target:
         assert proc.poll() is None, f"the process ended first {what}"
         pause.wait(0.05)  # polling the condition, not a synchronisation
+
+
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+@contextlib.contextmanager
+def interruptible(args, **kwargs) -> Iterator[subprocess.Popen]:
+    """``Popen(args, **kwargs)`` for a test that sends SIGINT, killed at exit if still running.
+
+    The child starts with SIGINT at its default disposition: a runner started with SIGINT
+    ignored (a shell's background job, nohup) passes SIG_IGN on, Python then installs no
+    handler, and the test's SIGINT was lost while the child ran on for hours after the
+    test failed (a 2^28 spp render, seen under a background stress run)."""
+    proc = subprocess.Popen(args, preexec_fn=_default_sigint, **kwargs)
+    try:
+        yield proc
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
