@@ -1,20 +1,10 @@
 // The Fit card: data files -> POST /v1/fits/datasets (by hash), the config as JSON ->
-// POST /v1/fits (a job), progress over server-sent events, the study's files as links.
-// Self-contained (its own requests), so the page's other cards are untouched.
+// POST /v1/fits (a job), progress over server-sent events, then the study: its parameters,
+// predictive checks, warnings, figures and files. Self-contained (its own requests), so the
+// page's other cards are untouched. The examples are fit_examples.json (examples/fit/).
 
 const $ = (id) => document.getElementById(id);
-const fit = { job: null, source: null };
-
-// a small smooth-model study: minutes at most on the example data (docs/fit.md)
-const EXAMPLE_CONFIG = {
-  parameters: {
-    film_thickness_nm: { prior: "normal", mean: 430.0, sd: 10.0 },
-    film_ior: { prior: "normal", mean: 1.83, sd: 0.02 },
-  },
-  model: { thickness_nodes: 1 },
-  sampler: { walkers: 8, max_steps: 200, check_every: 50, map_starts: 1 },
-  appearance: { draws: 4, renders: 0, angles_deg: [0, 30] },
-};
+const fit = { job: null, source: null, examples: [] };
 
 function key() {
   const input = $("api-key");
@@ -33,6 +23,8 @@ async function call(path, init) {
 
 function say(text) { $("fit-status").textContent = text; }
 
+const fmt = (x) => (typeof x === "number" && Number.isFinite(x) ? x.toPrecision(5) : "–");
+
 function done() {
   $("fit-button").disabled = false;
   $("fit-cancel").hidden = true;
@@ -40,11 +32,65 @@ function done() {
   fit.source = null;
 }
 
+function clearStudy() {
+  for (const id of ["fit-corner", "fit-predictive", "fit-parameters", "fit-checks", "fit-warnings"]) $(id).hidden = true;
+  $("fit-parameters").tBodies[0].replaceChildren();
+  $("fit-warnings").replaceChildren();
+  $("fit-files").replaceChildren();
+  $("fit-summary").textContent = "";
+  $("fit-checks").textContent = "";
+  $("fit-progress").style.width = "0";
+  delete $("fit-out").dataset.hash;
+}
+
+function cells(tag, values) {
+  const tr = document.createElement("tr");
+  tr.append(...values.map((v) => { const c = document.createElement(tag); c.textContent = v; return c; }));
+  return tr;
+}
+
+// a structure study's table (summary.parameters: median, 90 % interval, MAP); the snake
+// study's brief carries its posterior means instead
+function showParameters(s) {
+  if (!Array.isArray(s.parameters)) {
+    const mean = s.posterior_mean || {};
+    return s.free.map((n) => `${n} = ${fmt(mean[n])}`).join(" · ");
+  }
+  $("fit-parameters").tBodies[0].replaceChildren(...s.parameters.map((r) => cells("td", [
+    r.parameter, r.unit || "", fmt(r.median), `[${fmt(r.ci90_low)}, ${fmt(r.ci90_high)}]`, fmt(r.map)])));
+  $("fit-parameters").hidden = false;
+  const facts = [`${s.rows} rows`];
+  if (s.datasets) facts.push(`datasets ${s.datasets.join(", ")}`);
+  if (s.steps) facts.push(`${s.steps} steps`);
+  if (s.emulator) facts.push(`emulator of ${s.emulator.solves} solves, error up to ${fmt(s.emulator.max_error_sigma)} σ`);
+  return `${s.model} study · ${facts.join(" · ")}`;
+}
+
+function showChecks(checks) {
+  if (!checks || !Array.isArray(checks.series)) return;
+  const failed = checks.series.filter((c) => c.flagged);
+  const list = failed.map((c) => `${c.series} (p = ${c.p_value.toPrecision(2)})`).join("; ");
+  $("fit-checks").textContent = `predictive checks (all rows, then each curve): ${failed.length} of `
+    + `${checks.series.length} fail (α = ${checks.alpha}, ${checks.level_per_check.toPrecision(2)} per check)`
+    + (list ? `: ${list}` : "");
+  $("fit-checks").classList.toggle("error", failed.length > 0);
+  $("fit-checks").hidden = false;
+}
+
+function showWarnings(warnings) {
+  const list = $("fit-warnings");
+  list.replaceChildren(...(warnings || []).map((w) => {
+    const li = document.createElement("li");
+    li.textContent = `[${w.code}] ${w.message}`;
+    return li;
+  }));
+  list.hidden = !list.children.length;
+}
+
 async function showStudy(hash) {
   const { data } = await call(`/v1/fits/${hash}`);
   $("fit-progress").style.width = "100%";
-  const list = $("fit-files");
-  list.replaceChildren(...data.files.map((name) => {
+  $("fit-files").replaceChildren(...data.files.map((name) => {
     const a = document.createElement("a");
     a.href = data.links[name];
     a.textContent = name;
@@ -53,13 +99,15 @@ async function showStudy(hash) {
     li.append(a);
     return li;
   }));
-  const mean = data.summary.posterior_mean || {};
-  $("fit-summary").textContent = data.summary.free
-    .map((n) => `${n} = ${Number(mean[n]).toPrecision(5)}`).join(" · ")
-    + ` (${data.summary.converged ? "converged" : "not converged"})`;
-  const corner = $("fit-corner");
-  corner.src = data.links["corner.png"];
-  corner.hidden = false;
+  const s = data.summary;
+  $("fit-summary").textContent = `${showParameters(s)} (${s.converged ? "converged" : "not converged"})`;
+  showChecks(s.predictive_checks);
+  showWarnings(s.warnings);
+  for (const [id, name] of [["fit-corner", "corner.png"], ["fit-predictive", "predictive.png"]]) {
+    if (!data.links[name]) continue;
+    $(id).src = data.links[name];
+    $(id).hidden = false;
+  }
   $("fit-out").dataset.hash = hash;
 }
 
@@ -89,32 +137,69 @@ function follow(job) {
   source.onerror = () => { if (source.readyState === EventSource.CLOSED) done(); };
 }
 
+// A [[dataset]] names a chosen file as bsdflab fit names a path (data = "session_a.csv");
+// over HTTP it names the upload by hash, so the page swaps the name for the hash. The
+// checks run before any upload and name the file, which the server's (by hash) cannot.
+function datasetProblem(config, names) {
+  if (!Array.isArray(config.dataset)) return null;
+  const named = new Set();
+  for (const [i, e] of config.dataset.entries()) {
+    if (!e || typeof e !== "object" || typeof e.data !== "string") continue;
+    if (!names.includes(e.data)) {
+      return `config.dataset[${i}].data "${e.data}" is not one of the chosen files (${names.join(", ")})`;
+    }
+    named.add(e.data);
+  }
+  if (config.dataset.some((e) => e && typeof e === "object" && "hash" in e)) return null;
+  const unnamed = names.filter((n) => !named.has(n));
+  return unnamed.length ? `no [[dataset]] names ${unnamed.join(", ")} (data = "<file name>")` : null;
+}
+
+function byHash(config, hashes) {
+  if (!Array.isArray(config.dataset)) return config;
+  const dataset = config.dataset.map((e) => {
+    if (!e || typeof e !== "object" || typeof e.data !== "string") return e;
+    const { data, ...rest } = e;
+    return { ...rest, hash: hashes.get(data) };
+  });
+  return { ...config, dataset };
+}
+
+function parseJSON(text, what) {
+  try {
+    return JSON.parse(text);
+  } catch (e) {
+    const toml = /^\s*\[|^\s*[A-Za-z_][\w.]*\s*=/m.test(text) ? " (this looks like TOML: write its tables as JSON objects, or start from an example)" : "";
+    throw new Error(`${what} is not JSON: ${e.message}${toml}`);
+  }
+}
+
 async function startFit(event) {
   event.preventDefault();
   const files = [...$("fit-data").files];
   if (!files.length) { say("choose the data files first"); return; }
   let config, sidecar = null;
   try {
-    config = JSON.parse($("fit-config").value);
-    if ($("fit-sidecar").value.trim()) sidecar = JSON.parse($("fit-sidecar").value);
-  } catch (e) { say(`not JSON: ${e.message}`); return; }
+    config = parseJSON($("fit-config").value, "the config");
+    if ($("fit-sidecar").value.trim()) sidecar = parseJSON($("fit-sidecar").value, "the sidecar");
+  } catch (e) { say(e.message); return; }
+  const problem = datasetProblem(config, files.map((f) => f.name));
+  if (problem) { say(problem); return; }
   $("fit-button").disabled = true;
-  $("fit-corner").hidden = true;
-  $("fit-files").replaceChildren();
-  $("fit-summary").textContent = "";
-  $("fit-progress").style.width = "0";
+  clearStudy();
   try {
-    const data = [];
+    const data = [], hashes = new Map();
     for (const file of files) {
       say(`uploading ${file.name}…`);
       const { data: up } = await call(`/v1/fits/datasets?name=${encodeURIComponent(file.name)}`,
         { method: "POST", headers: { "Content-Type": "application/octet-stream" }, body: file });
       data.push({ hash: up.hash, name: file.name });
+      hashes.set(file.name, up.hash);
     }
     say("submitting…");
     const { status: code, data: answer } = await call("/v1/fits", {
       method: "POST", headers: { "Content-Type": "application/json" },
-      body: JSON.stringify({ config, data, sidecar }),
+      body: JSON.stringify({ config: byHash(config, hashes), data, sidecar }),
     });
     if (code === 200) {
       done();
@@ -134,6 +219,28 @@ async function cancelFit() {
   await fetch(`/v1/jobs/${fit.job.id}`, { method: "DELETE", headers: key() });
 }
 
-$("fit-config").value = JSON.stringify(EXAMPLE_CONFIG, null, 1);
+function useExample() {
+  const ex = fit.examples.find((e) => e.id === $("fit-example").value);
+  if (!ex) return;
+  $("fit-config").value = JSON.stringify(ex.config, null, 1);
+  $("fit-sidecar").value = ex.sidecar ? JSON.stringify(ex.sidecar, null, 1) : "";
+  $("fit-example-note").textContent = `For ${ex.files.join(" and ")}: ${ex.note}.`;
+}
+
+async function loadExamples() {
+  const response = await fetch("/static/fit_examples.json");
+  if (!response.ok) { say(`the examples did not load (${response.status})`); return; }
+  fit.examples = await response.json();
+  $("fit-example").replaceChildren(...fit.examples.map((e) => {
+    const option = document.createElement("option");
+    option.value = e.id;
+    option.textContent = e.label;
+    return option;
+  }));
+  if (!$("fit-config").value) useExample();   // never over what was typed while they loaded
+}
+
 $("fit-form").addEventListener("submit", startFit);
 $("fit-cancel").addEventListener("click", cancelFit);
+$("fit-example").addEventListener("change", useExample);
+loadExamples();
