@@ -24,6 +24,7 @@ from playwright import sync_api as playwright
 from support.service_process import ServiceProcess
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+KEY = "fit-card-secret"
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = {e["id"]: e for e in json.loads((ROOT / "service" / "static" / "fit_examples.json").read_text())}
 # the card prints 5 significant digits (toPrecision(5)): within half a unit of the 5th digit
@@ -39,6 +40,11 @@ STUDY_OR_STOP = """() => { const status = document.getElementById('fit-status').
   return Boolean(document.getElementById('fit-out').dataset.hash) || (!document.getElementById('fit-button').disabled
     && !status.startsWith('done in') && !status.startsWith('from the artefact store')); }"""
 
+# the SHA-256 of what an <img> shows, fetched by the page (a blob URL when the page has a key)
+SHA256 = """async (id) => { const bytes = await (await fetch(document.getElementById(id).src)).arrayBuffer();
+  return [...new Uint8Array(await crypto.subtle.digest('SHA-256', bytes))]
+    .map(x => x.toString(16).padStart(2, '0')).join(''); }"""
+
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
@@ -49,6 +55,11 @@ def server(tmp_path_factory):
 
 @pytest.fixture
 def page(server):
+    yield from browse(server)
+
+
+def browse(server, key: str | None = None):
+    """The page in Chromium (with ``key`` typed into its API key box); no page error allowed."""
     if not os.path.exists(CHROMIUM):
         pytest.fail("Debian's chromium is required (apt-get install chromium; dev.sh installs it)")
     with playwright.sync_playwright() as p:
@@ -57,16 +68,22 @@ def page(server):
         errors = []
         page.on("pageerror", lambda e: errors.append(str(e)))
         page.goto(server.url + "/")
+        if key:  # the page keeps a changed key (localStorage) and reloads with it (app.js)
+            page.fill("#api-key", key)
+            with page.expect_navigation():
+                page.press("#api-key", "Enter")
+            assert page.input_value("#api-key") == key
         page.evaluate(WATCH)
         yield page
         browser.close()
     assert not errors, errors
 
 
-def run_example(page, example: str, files: list[Path]) -> str:
+def run_example(page, example: str | None, files: list[Path]) -> str:
     """Pick the example, choose the files, press Fit, wait for the study; its hash."""
-    page.select_option("#fit-example", example)
-    assert json.loads(page.input_value("#fit-config")) == EXAMPLES[example]["config"]
+    if example is not None:  # None: the config pasted into the card
+        page.select_option("#fit-example", example)
+        assert json.loads(page.input_value("#fit-config")) == EXAMPLES[example]["config"]
     page.set_input_files("#fit-data", [str(f) for f in files])
     page.click("#fit-button")
     # the study, or the card at rest with its message (a refusal, a failed job): no wait for a study never coming
@@ -78,8 +95,8 @@ def run_example(page, example: str, files: list[Path]) -> str:
     return page.evaluate("document.getElementById('fit-out').dataset.hash")
 
 
-def get(server, path: str):
-    r = httpx.get(server.url + path, timeout=30)
+def get(server, path: str, key: str | None = None):
+    r = httpx.get(server.url + path, headers={"X-API-Key": key} if key else {}, timeout=30)
     assert r.status_code == 200, (path, r.status_code, r.text)
     return r
 
@@ -94,12 +111,12 @@ def numbers(text: str) -> list[float]:
     return [float(x) for x in re.findall(r"-?\d+(?:\.\d+)?(?:e[-+]?\d+)?", text)]
 
 
-def check_study(page, server, h: str) -> dict:
+def check_study(page, server, h: str, key: str | None = None) -> dict:
     """What the card shows is the study's summary.json: each parameter's median, 90 %
     interval and MAP (to the 5 digits shown), the predictive checks' count, every warning
     word for word, the two figures byte for byte and every file the API lists."""
-    info = get(server, f"/v1/fits/{h}").json()
-    summary = get(server, f"/v1/fits/{h}/files/summary.json").json()
+    info = get(server, f"/v1/fits/{h}", key).json()
+    summary = get(server, f"/v1/fits/{h}/files/summary.json", key).json()
     rows = shown_table(page)
     assert [r[0] for r in rows] == summary["free"] == [p["parameter"] for p in summary["parameters"]]
     for shown, p in zip(rows, summary["parameters"], strict=True):
@@ -117,8 +134,8 @@ def check_study(page, server, h: str) -> dict:
     links = page.eval_on_selector_all("#fit-files a", "as => as.map(a => a.getAttribute('href'))")
     assert sorted(links) == sorted(f"/v1/fits/{h}/files/{name}" for name in info["files"])
     for img, name in (("fit-corner", "corner.png"), ("fit-predictive", "predictive.png")):
-        src = page.evaluate(f"document.getElementById('{img}').src")
-        assert httpx.get(src, timeout=30).content == get(server, f"/v1/fits/{h}/files/{name}").content
+        want = hashlib.sha256(get(server, f"/v1/fits/{h}/files/{name}", key).content).hexdigest()
+        assert page.evaluate(SHA256, img) == want, name
     statuses = page.evaluate("window.fitStatuses")
     percents = [int(m.group(1)) for m in map(RUNNING.match, statuses) if m]
     assert percents == sorted(percents) and statuses[-1].startswith("done in "), statuses
@@ -194,3 +211,26 @@ def test_cancel_a_structure_fit_from_the_page(page, server):
     mine = get(server, "/v1/jobs?state=cancelled").json()["jobs"]
     assert len(mine) == 1 and mine[0]["kind"] == "fit", mine
     assert httpx.get(f"{server.url}/v1/fits/{mine[0]['hash']}/files/summary.json", timeout=30).status_code == 404
+
+
+def test_a_structure_fit_with_an_api_key(tmp_path_factory):
+    """On a server that requires a key (BSDFLAB_API_KEY), the key typed into the page: the
+    job is followed by polling (an EventSource cannot send the key; before: the card stopped
+    silently), the figures are fetched with the key (before: broken images, 401) and a
+    file opens with it. The run is the structure example cut to 40 steps."""
+    server = ServiceProcess(tmp_path_factory.mktemp("fit-card-key"), env={"BSDFLAB_API_KEY": KEY})
+    try:
+        for page in browse(server, KEY):
+            config = json.loads(json.dumps(EXAMPLES["structure"]["config"]))
+            config["sampler"].update(max_steps=40, check_every=20)
+            page.select_option("#fit-example", "structure")
+            page.fill("#fit-config", json.dumps(config))
+            h = run_example(page, None, [ROOT / "examples" / "fit" / "stack_data.csv"])
+            summary = check_study(page, server, h, KEY)
+            assert summary["steps"] == 40
+            with page.expect_popup() as popup:
+                page.click("#fit-files a:text-is('summary.json')")
+            opened = popup.value.evaluate("fetch(location.href).then(r => r.json())")
+            assert opened == summary
+    finally:
+        server.stop()
