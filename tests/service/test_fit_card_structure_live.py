@@ -234,3 +234,23 @@ def test_a_structure_fit_with_an_api_key(tmp_path_factory):
             assert opened == summary
     finally:
         server.stop()
+
+
+def test_the_card_refuses_before_uploading(page, server):
+    """What the card says, before any upload, to a user who pastes the example's TOML or
+    chooses a file no [[dataset]] names; nothing reaches the server (no upload)."""
+    stack = ROOT / "examples" / "fit" / "stack_data.csv"
+    uploads = get(server, "/v1/fits/datasets").json()["datasets"]
+    page.fill("#fit-config", (ROOT / "examples" / "fit" / "stack.toml").read_text())
+    page.set_input_files("#fit-data", str(stack))
+    page.click("#fit-button")
+    assert page.inner_text("#fit-status").startswith("the config is not JSON: ")
+    assert page.inner_text("#fit-status").endswith(
+        "(this looks like TOML: write its tables as JSON objects, or start from an example)"
+    )
+    page.select_option("#fit-example", "corefine")
+    a, b = (ROOT / "examples" / "fit" / "corefine" / n for n in ("session_a.csv", "session_b.csv"))
+    page.set_input_files("#fit-data", [str(a), str(b), str(stack)])
+    page.click("#fit-button")
+    assert page.inner_text("#fit-status") == 'no [[dataset]] names stack_data.csv (data = "<file name>")'
+    assert get(server, "/v1/fits/datasets").json()["datasets"] == uploads
