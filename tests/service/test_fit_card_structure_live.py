@@ -163,6 +163,12 @@ def test_a_structure_fit_from_the_page(page, server):
     assert "NOT_CONVERGED" in [w["code"] for w in summary["warnings"]]  # 200 steps: the card says so
     assert page.inner_text("#fit-summary") == "structure study · 124 rows · datasets data · 200 steps (not converged)"
     assert "NaN" not in page.inner_text("#fit-out")
+    # the same request again answers from the artefact store at once: the same study shown
+    table = shown_table(page)
+    page.click("#fit-button")
+    page.wait_for_function(STUDY_OR_STOP, timeout=60_000)
+    assert page.inner_text("#fit-status") == "from the artefact store (fitted before)"
+    assert page.get_attribute("#fit-out", "data-hash") == h and shown_table(page) == table
 
 
 def test_a_co_refinement_from_the_page(page, server):
