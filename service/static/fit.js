@@ -1,7 +1,8 @@
 // The Fit card: data files -> POST /v1/fits/datasets (by hash), the config as JSON ->
-// POST /v1/fits (a job), progress over server-sent events, then the study: its parameters,
-// predictive checks, warnings, figures and files. Self-contained (its own requests), so the
-// page's other cards are untouched. The examples are fit_examples.json (examples/fit/).
+// POST /v1/fits (a job), progress over server-sent events (polled with an API key), then the
+// study: its parameters, predictive checks, warnings, figures and files. Self-contained (its
+// own requests), so the page's other cards are untouched. The examples are fit_examples.json
+// (examples/fit/).
 
 const $ = (id) => document.getElementById(id);
 const fit = { job: null, source: null, examples: [] };
@@ -36,6 +37,9 @@ function done() {
 
 function clearStudy() {
   for (const id of ["fit-corner", "fit-predictive", "fit-parameters", "fit-checks", "fit-warnings"]) $(id).hidden = true;
+  for (const id of ["fit-corner", "fit-predictive"]) {
+    if ($(id).src.startsWith("blob:")) URL.revokeObjectURL($(id).src);   // the last study's, fetched with a key
+  }
   $("fit-parameters").tBodies[0].replaceChildren();
   $("fit-warnings").replaceChildren();
   $("fit-files").replaceChildren();
