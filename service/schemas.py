@@ -367,7 +367,8 @@ class FitInfo(BaseModel):
     request: dict[str, Any]
     job: JobInfo | None
     summary: dict[str, Any] | None = Field(description="rows, free parameters, sampler, convergence, posterior "
-                                                       "mean, MAP and warnings (summary.json has everything)")
+                                                       "mean, MAP, predictive checks and warnings; a structure "
+                                                       "fit's parameter table (summary.json has everything)")
     files: list[str] | None = Field(description="the study's files: GET /v1/fits/{hash}/files/{name}")
     links: dict[str, str]
 

@@ -258,9 +258,10 @@ def _result(k: str, out_dir: Path, from_cache: bool) -> dict[str, Any]:
 
     summary = json.loads((out_dir / folder(k) / "summary.json").read_text(encoding="utf-8"))
     brief = {name: summary.get(name) for name in ("rows", "free", "sampler", "converged", "stop_reason",
-                                                   "posterior_mean", "map", "seconds", "warnings")}
-    if summary.get("model") == "structure":   # a structure fit's: its datasets and parameter table
-        brief.update({name: summary.get(name) for name in ("model", "datasets", "steps", "parameters")})
+                                                   "posterior_mean", "map", "seconds", "warnings",
+                                                   "predictive_checks")}
+    if summary.get("model") == "structure":   # a structure fit's: its datasets, parameter table, emulator
+        brief.update({name: summary.get(name) for name in ("model", "datasets", "steps", "parameters", "emulator")})
     return {"hash": k, "files": study_files(k, out_dir), "from_cache": from_cache, "summary": brief}
 
 

@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from bsdflab.fit.alerts import fit_alerts
+from bsdflab.fit.alerts import emulator_alert, fit_alerts
 from bsdflab.fit.checks import ALPHA, normalised_residuals, predictive_checks, sidak_level
 from bsdflab.fit.data import Dataset, read_csv
 from bsdflab.fit.figures import corner_plot, predictive_plot, residual_plot, trace_plot
@@ -117,7 +117,10 @@ def _write(datasets, config: StackConfig, folder: str, progress: bool) -> dict:
     checks = predictive_checks(post.dataset, model, scales)
     residual_plot(post.dataset, normalised_residuals(post.dataset, model, scales), checks,
                   os.path.join(folder, "residuals.png"))
+    extra = post.summary_extra() if hasattr(post, "summary_extra") else {}
+    emulator = extra.get("emulator") or {}   # the full model's, as the snake study warns of it
     alerts = fit_alerts(run, draws, post.config.priors, checks, post.config.domains)
+    alerts += emulator_alert({"emulator_max_error_sigma": emulator.get("max_error_sigma")})
     trace_plot(run, os.path.join(folder, "trace.png"), config.sampler.tau_multiple)
     np.savez_compressed(os.path.join(folder, "draws.npz"), draws=draws, names=np.array(run.names))
     for spec, d in zip(config.datasets, datasets, strict=True):
@@ -137,7 +140,7 @@ def _write(datasets, config: StackConfig, folder: str, progress: bool) -> dict:
         "seconds": time.perf_counter() - t0,
     }
     if hasattr(post, "material_dict"):     # the full model: the posterior median as a renderable material
-        summary.update(post.summary_extra())
+        summary.update(extra)
         median = np.median(draws, axis=0)
         _text(os.path.join(folder, "material.json"), json.dumps(post.material_dict(median), indent=1) + "\n")
     _text(os.path.join(folder, "summary.json"), json.dumps(summary, indent=1, default=float) + "\n")

@@ -1,10 +1,13 @@
 // The Fit card: data files -> POST /v1/fits/datasets (by hash), the config as JSON ->
-// POST /v1/fits (a job), progress over server-sent events, then the study: its parameters,
-// predictive checks, warnings, figures and files. Self-contained (its own requests), so the
-// page's other cards are untouched. The examples are fit_examples.json (examples/fit/).
+// POST /v1/fits (a job), progress over server-sent events (polled with an API key), then the
+// study: its parameters, predictive checks, warnings, figures and files. Self-contained (its
+// own requests), so the page's other cards are untouched. The examples are fit_examples.json
+// (examples/fit/).
 
 const $ = (id) => document.getElementById(id);
 const fit = { job: null, source: null, examples: [] };
+const FINISHED = ["done", "failed", "cancelled"];
+const POLL_MS = 500;
 
 function key() {
   const input = $("api-key");
@@ -34,6 +37,9 @@ function done() {
 
 function clearStudy() {
   for (const id of ["fit-corner", "fit-predictive", "fit-parameters", "fit-checks", "fit-warnings"]) $(id).hidden = true;
+  for (const id of ["fit-corner", "fit-predictive"]) {
+    if ($(id).src.startsWith("blob:")) URL.revokeObjectURL($(id).src);   // the last study's, fetched with a key
+  }
   $("fit-parameters").tBodies[0].replaceChildren();
   $("fit-warnings").replaceChildren();
   $("fit-files").replaceChildren();
@@ -87,53 +93,80 @@ function showWarnings(warnings) {
   list.hidden = !list.children.length;
 }
 
+// An <img> or a link cannot send the API key: with a key the figures are fetched with it and
+// shown from blob URLs, and a file opens from one when clicked (as the Validate card's report).
+async function blobURL(path) {
+  const response = await fetch(path, { headers: key() });
+  if (!response.ok) throw new Error(`${response.status}: ${path}`);
+  return URL.createObjectURL(await response.blob());
+}
+
+function fileLink(name, href) {
+  const a = document.createElement("a");
+  a.href = href;
+  a.textContent = name;
+  a.target = "_blank";
+  a.addEventListener("click", (e) => {
+    if (!Object.keys(key()).length) return;
+    e.preventDefault();
+    blobURL(href).then((url) => window.open(url, "_blank")).catch((err) => say(err.message));
+  });
+  const li = document.createElement("li");
+  li.append(a);
+  return li;
+}
+
 async function showStudy(hash) {
   const { data } = await call(`/v1/fits/${hash}`);
   $("fit-progress").style.width = "100%";
-  $("fit-files").replaceChildren(...data.files.map((name) => {
-    const a = document.createElement("a");
-    a.href = data.links[name];
-    a.textContent = name;
-    a.target = "_blank";
-    const li = document.createElement("li");
-    li.append(a);
-    return li;
-  }));
+  $("fit-files").replaceChildren(...data.files.map((name) => fileLink(name, data.links[name])));
   const s = data.summary;
   $("fit-summary").textContent = `${showParameters(s)} (${s.converged ? "converged" : "not converged"})`;
   showChecks(s.predictive_checks);
   showWarnings(s.warnings);
   for (const [id, name] of [["fit-corner", "corner.png"], ["fit-predictive", "predictive.png"]]) {
     if (!data.links[name]) continue;
-    $(id).src = data.links[name];
+    $(id).src = Object.keys(key()).length ? await blobURL(data.links[name]) : data.links[name];
     $(id).hidden = false;
   }
   $("fit-out").dataset.hash = hash;
 }
 
+function progressed(j) {
+  $("fit-progress").style.width = `${Math.round(100 * j.progress)}%`;
+  say(`${j.state} · ${Math.round(100 * j.progress)}% · ${j.elapsed_s.toFixed(1)} s`);
+}
+
+async function finished(j) {
+  done();
+  if (j.state !== "done") { say(`${j.state}${j.error ? ": " + j.error : ""}`); return; }
+  say(`done in ${j.elapsed_s.toFixed(1)} s`);
+  await showStudy(j.hash).catch((err) => say(err.message));
+}
+
+// an EventSource cannot send the API key: with a key the job is polled (its rate is the key's)
+async function poll(job) {
+  try {
+    for (;;) {
+      const { data: j } = await call(`/v1/jobs/${job.id}`);
+      if (FINISHED.includes(j.state)) { await finished(j); return; }
+      progressed(j);
+      await new Promise((ok) => setTimeout(ok, POLL_MS));
+    }
+  } catch (e) {
+    say(e.message);
+    done();
+  }
+}
+
 function follow(job) {
   fit.job = job;
   $("fit-cancel").hidden = false;
+  if (Object.keys(key()).length) { poll(job); return; }
   const source = new EventSource(job.links.events);
   fit.source = source;
-  source.addEventListener("progress", (e) => {
-    const j = JSON.parse(e.data);
-    $("fit-progress").style.width = `${Math.round(100 * j.progress)}%`;
-    say(`${j.state} · ${Math.round(100 * j.progress)}% · ${j.elapsed_s.toFixed(1)} s`);
-  });
-  source.addEventListener("done", async (e) => {
-    const j = JSON.parse(e.data);
-    done();
-    say(`done in ${j.elapsed_s.toFixed(1)} s`);
-    await showStudy(j.hash).catch((err) => say(err.message));
-  });
-  for (const name of ["failed", "cancelled"]) {
-    source.addEventListener(name, (e) => {
-      const j = JSON.parse(e.data);
-      say(`${name}${j.error ? ": " + j.error : ""}`);
-      done();
-    });
-  }
+  source.addEventListener("progress", (e) => progressed(JSON.parse(e.data)));
+  for (const name of FINISHED) source.addEventListener(name, (e) => finished(JSON.parse(e.data)));
   source.onerror = () => { if (source.readyState === EventSource.CLOSED) done(); };
 }
 
