@@ -17,11 +17,14 @@ What it computes: f |cos theta_o| exactly as ``Layered.eval`` (without delta lob
 reflection from above for every stack, a rough top's own reflection evaluated directly
 and the light that entered the stack solved; for a transmissive stack with a smooth top
 and a smooth dielectric base (``Solution.two_sided``) also transmission both ways and
-reflection from below (the stack's four operators by the adding equations). A rough top
-or rough base of a transmissive stack: pairs with wi.z < 0 or wo.z < 0 raise ValueError
-naming it (an opaque stack's are zero, its value). Every other stack ``Layered`` accepts
-is solved or refused with a ValueError naming its code in ``GAPS`` (docs/solvers.md,
-"Solved and refused").
+reflection from below (the stack's four operators by the adding equations); the same
+for a smooth top over a rough dielectric base (``Solution.every_pair``), the base's
+transmission lobes product-integrated at the exit and the entry and its own reflection
+from below evaluated directly. A rough top of a transmissive stack (or a rough base under
+a smooth interior interface between unequal indices): pairs with wi.z < 0 or wo.z < 0
+raise ValueError naming it (an opaque stack's are zero, its value). Every other stack
+``Layered`` accepts is solved or refused with a ValueError naming its code in ``GAPS``
+(docs/solvers.md, "Solved and refused").
 
 Validated range (tests/solvers, docs/solvers.md): alpha in [1e-3, 1] for rough
 interfaces and bases (ValueError outside); Henyey-Greenstein |g| <= 0.95 (ValueError
@@ -73,9 +76,10 @@ GAPS = {
                 "files; PFMC remains the path)",
     "base-kind": "the solver takes its operators from Diffuse, Conductor, RoughConductor, Dielectric, "
                  "RoughDielectric and spectral Measured bases only",
-    "rough-exit": "transmission and reflection from below through a rough top or onto a rough base would need "
-                  "that boundary's product integration at the exit (not implemented): for pairs with wi.z < 0 "
-                  "or wo.z < 0 use the model's own eval (PFMC)",
+    "rough-exit": "transmission and reflection from below through a rough top would need the top's product "
+                  "integration at the exit, and a rough base's under a smooth interior interface between unequal "
+                  "indices would need it on that solve's nodes in n sin(theta) (neither implemented): for pairs "
+                  "with wi.z < 0 or wo.z < 0 use the model's own eval (PFMC)",
 }
 
 
@@ -183,22 +187,29 @@ class Solution:
         (a transmissive stack with a smooth top and a smooth dielectric base)."""
         return bool(self._core.two_sided)
 
+    @property
+    def every_pair(self) -> bool:
+        """Whether every pair is solved: ``two_sided``, or a transmissive stack with a
+        smooth top and a rough dielectric base (its exits by product integration)."""
+        return bool(self._core.every_pair)
+
     def _pairs(self, wi, wo) -> tuple[np.ndarray, np.ndarray]:
         a, b = check.direction_pair(wi, wo)
-        if self._transmits and not self.two_sided and np.any((a[:, 2] < 0) | (b[:, 2] < 0)):
-            raise refusal("rough-exit", f"this stack transmits through {one_sided_reason(self.model)}, and "
+        if self._transmits and not self.every_pair and np.any((a[:, 2] < 0) | (b[:, 2] < 0)):
+            raise refusal("rough-exit", f"this stack transmits through {exit_gap_reason(self.model)}, and "
                                         f"adding-doubling solves transmission and reflection from below only "
-                                        f"for a smooth top and a smooth dielectric base")
+                                        f"for a smooth top over a smooth or rough dielectric base")
         return a, b
 
     def eval(self, wi, wo, scattered_only: bool = False) -> np.ndarray:
         """f(wi, wo) |cos theta_o|, (N, C), light arriving from wo and leaving toward wi:
-        reflection from above; for a ``two_sided`` stack every pair (transmission both
+        reflection from above; for an ``every_pair`` stack every pair (transmission both
         ways, reflection from below); 0 for the other pairs of an opaque stack (its
-        value). A transmissive stack with a rough top or base raises ValueError for pairs
-        with wi.z < 0 or wo.z < 0.
-        ``scattered_only`` leaves out a rough top's own reflection (what a table stores;
-        ``Layered.exact_part`` re-adds it)."""
+        value). Another transmissive stack (a rough top) raises ValueError for pairs with
+        wi.z < 0 or wo.z < 0.
+        ``scattered_only`` leaves out the entry boundary's own reflection: a rough top's
+        from above (what a table stores; ``Layered.exact_part`` re-adds it), a rough
+        base's from below (as ``Layered.estimate(scattered_only=True)``)."""
         a, b = self._pairs(wi, wo)
         out = self._core.eval(a, b, bool(scattered_only))
         return out @ self._to_rgb.T if self._to_rgb is not None else out
@@ -325,11 +336,20 @@ def model_gap(model) -> tuple[str, str] | None:
 
 
 def one_sided_reason(model: Layered) -> str:
-    """Why a transmissive stack is solved for reflection from above only (its rough top or
-    base would need product integration at the exit, which is not implemented)."""
+    """The rough boundaries of a transmissive stack (its top, its base): what keeps its
+    adding-doubling table one-sided (bsdflab/tables/deterministic.py; the solver's own
+    exit refusal is ``exit_gap_reason``)."""
     parts = [name for name, part in (("a rough top", model.interfaces[0]), ("a rough base", model.base))
              if getattr(part, "alpha", None) is not None]
     return " and ".join(parts) or "its boundaries"
+
+
+def exit_gap_reason(model: Layered) -> str:
+    """Why a transmissive stack's pairs below are refused (``[rough-exit]``): its rough top,
+    or its rough base under a smooth interior interface between unequal indices."""
+    if getattr(model.interfaces[0], "alpha", None) is not None:
+        return "a rough top"
+    return "a rough base under a smooth interior interface between unequal indices"
 
 
 def media_indices(model: Layered) -> list[float]:
