@@ -35,8 +35,20 @@ enum Kind { kDown = 0, kUp = 1, kBelow = 2 };  // transmission down, up, reflect
 
 void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::size_t count, double *out,
                                      bool scattered_only) const {
-    const int C = channels(), M = orders_, n = static_cast<int>(mu_.size());
-    const std::size_t K = slabs_.size(), CM = static_cast<std::size_t>(C) * M;
+    const std::size_t K = slabs_.size();
+    // A transmission lobe is narrower than alpha by the index contrast c = |n1 - n2| / max:
+    // refraction through a tilted facet turns the ray by ~c times the tilt (GGX 0.3 from
+    // glass into water: ~0.07 rad). The sub-panels and azimuth samples of the base's
+    // kernels follow its width (1 / c more, in powers of 2, at most 16), and so do the
+    // orders, at most 4 x (light entering and leaving through the base returns in a lobe
+    // as narrow, around the mirror direction).
+    const double nb = media_[K], nu = media_[K + 1];
+    const double contrast = std::max(std::abs(nb - nu) / std::max(nb, nu), 1.0 / 16.0);
+    int Hx = half_samples_, widen = 1;
+    while (Hx * contrast < half_samples_) Hx *= 2;
+    while (widen < 4 && widen * contrast < 1.0) widen *= 2;
+    const int C = channels(), M = orders_ * widen, n = static_cast<int>(mu_.size());
+    const std::size_t CM = static_cast<std::size_t>(C) * M;
     const BSDF &top = *boundaries_[0], &base = *boundaries_[K];
     // Per active pair: its kind, the cosines it reads (a top extra's refracted cosine, the
     // base's outside cosines), its scale per channel and the base's own reflection.
@@ -83,7 +95,7 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
     const std::vector<double> extras = ad::distinct(tops, top_index);
     std::vector<double> grid(mu_);
     grid.insert(grid.end(), extras.begin(), extras.end());
-    const ad::Sizes s{C, M, half_samples_, n, grid.size()};
+    const ad::Sizes s{C, M, Hx, n, grid.size()};
     const std::size_t N = s.N;
 
     // The base's outside cosines at the exit (viewer below) and the entry (light below).
@@ -104,11 +116,11 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
 
     // Fine nodes of the base's lobes and its kernels there; their projection onto the nodes.
     std::vector<double> mu_f, w_f, B;
-    const double h = std::clamp(ad::rough_alpha(base) * settings_.fine_step, 0.004, 0.05);
+    const double h = std::clamp(ad::rough_alpha(base) * contrast * settings_.fine_step, 0.002, 0.05);
     ad::product_nodes(settings_.nodes, breaks_, h, mu_f, w_f, B);
     const std::size_t nf = mu_f.size();
-    const std::vector<double> X = ad::fourier_kernel(base, qx, mu_f, M, half_samples_); // Qx x nf
-    const std::vector<double> E = ad::fourier_kernel(base, mu_f, qe, M, half_samples_); // nf x Qe
+    const std::vector<double> X = ad::fourier_kernel(base, qx, mu_f, M, Hx); // Qx x nf
+    const std::vector<double> E = ad::fourier_kernel(base, mu_f, qe, M, Hx); // nf x Qe
     std::vector<double> Px(Qx * n * CM, 0.0), Pe(static_cast<std::size_t>(n) * Qe * CM, 0.0);
     for (std::size_t f = 0; f < nf; ++f)
         for (int k = 0; k < n; ++k) {
