@@ -105,10 +105,16 @@ AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
     for (std::size_t j = 0; j < boundaries_.size(); ++j) {
         double a = ad::rough_alpha(*boundaries_[j]);
         if (a > 0) alpha_min = std::min(alpha_min, a);
+        if (j > 0 && ad::is_delta(*boundaries_[j])) delta_below_ = true;
         if (j == 0 || ad::is_delta(*boundaries_[j])) continue;
         if (a > 0) M = std::max(M, static_cast<int>(std::ceil(6.0 / a)) + 2);
         else if (boundaries_[j]->lobes() & (kGlossyReflection | kGlossyTransmission)) M = std::max(M, 64);
     }
+    // A rough top over a delta reflection path: the returning beam crosses the top twice,
+    // in lobes of its own width (ad::rough_top_values' fine-node product).
+    const double top_alpha = ad::rough_alpha(*boundaries_[0]);
+    if (!smooth_top_ && delta_below_ && top_alpha > 0)
+        M = std::max(M, static_cast<int>(std::ceil(6.0 / top_alpha)) + 2);
     orders_ = settings_.orders > 0 ? settings_.orders : M;
     int H = 32;
     double need = std::max(4.0 * orders_, orders_ + 10.0 / alpha_min);

@@ -133,6 +133,7 @@ class AddingDoubling {
     bool smooth_top_ = false;
     bool two_sided_ = false;
     bool rough_base_exit_ = false;  // every_pair() through a rough dielectric base
+    bool delta_below_ = false;      // a delta boundary below the top (a delta reflection path)
     bool snell_ = false;  // a smooth interior interface between unequal indices (solve_snell)
     double n_max_ = 0.0;  // snell_: the densest slab's index, in which mu_ are the node cosines
     double film_lookup_error_ = -1.0;
