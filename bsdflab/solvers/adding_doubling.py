@@ -17,11 +17,14 @@ What it computes: f |cos theta_o| exactly as ``Layered.eval`` (without delta lob
 reflection from above for every stack, a rough top's own reflection evaluated directly
 and the light that entered the stack solved; for a transmissive stack with a smooth top
 and a smooth dielectric base (``Solution.two_sided``) also transmission both ways and
-reflection from below (the stack's four operators by the adding equations). A rough top
-or rough base of a transmissive stack: pairs with wi.z < 0 or wo.z < 0 raise ValueError
-naming it (an opaque stack's are zero, its value). Every other stack ``Layered`` accepts
-is solved or refused with a ValueError naming its code in ``GAPS`` (docs/solvers.md,
-"Solved and refused").
+reflection from below (the stack's four operators by the adding equations); the same
+for a smooth top over a rough dielectric base (``Solution.every_pair``), the base's
+transmission lobes product-integrated at the exit and the entry and its own reflection
+from below evaluated directly. A rough top of a transmissive stack (or a rough base under
+a smooth interior interface between unequal indices): pairs with wi.z < 0 or wo.z < 0
+raise ValueError naming it (an opaque stack's are zero, its value). Every other stack
+``Layered`` accepts is solved or refused with a ValueError naming its code in ``GAPS``
+(docs/solvers.md, "Solved and refused").
 
 Validated range (tests/solvers, docs/solvers.md): alpha in [1e-3, 1] for rough
 interfaces and bases (ValueError outside); Henyey-Greenstein |g| <= 0.95 (ValueError
@@ -73,9 +76,10 @@ GAPS = {
                 "files; PFMC remains the path)",
     "base-kind": "the solver takes its operators from Diffuse, Conductor, RoughConductor, Dielectric, "
                  "RoughDielectric and spectral Measured bases only",
-    "rough-exit": "transmission and reflection from below through a rough top or onto a rough base would need "
-                  "that boundary's product integration at the exit (not implemented): for pairs with wi.z < 0 "
-                  "or wo.z < 0 use the model's own eval (PFMC)",
+    "rough-exit": "transmission and reflection from below through a rough top would need the top's product "
+                  "integration at the exit, and a rough base's under a smooth interior interface between unequal "
+                  "indices would need it on that solve's nodes in n sin(theta) (neither implemented): for pairs "
+                  "with wi.z < 0 or wo.z < 0 use the model's own eval (PFMC)",
 }
 
 
@@ -137,6 +141,7 @@ class Solution:
         self._wl, self._to_rgb = BSDF._channels(model, wavelengths)
         self._core = _build(model, self._wl, settings)
         self._coarse = None
+        self._coarse_fine_step = None
         self._transmits = bool(model.lobes & Lobe.TRANSMISSION)
 
     def _coarse_core(self):
@@ -144,6 +149,17 @@ class Solution:
             self._coarse = _build(self.model, self._wl,
                                   self.settings.coarser(self.orders, self.azimuth_samples))
         return self._coarse
+
+    def _fine_step_core(self):
+        """A rough base's exits: the same solve with only the fine step doubled. Its
+        transmission lobe is cut by the half-vector's horizon (a jump in the BSDF), so
+        the product integration converges like the sub-panel width, with changing sign:
+        the all-coarser solve's change can cancel it (measured: 6.6e-5 against an error of
+        2e-4 at a grazing pair), this one's alone does not."""
+        if self._coarse_fine_step is None:
+            self._coarse_fine_step = _build(self.model, self._wl,
+                                            replace(self.settings, fine_step=2.0 * self.settings.fine_step))
+        return self._coarse_fine_step
 
     def with_model(self, model: Layered) -> Solution:
         """The solution of ``model``, which may differ from this one's only in its rough
@@ -159,6 +175,7 @@ class Solution:
         top = model.interfaces[0]._core(self._wl)
         new._core = self._core.with_top(top)
         new._coarse = self._coarse_core().with_top(top)
+        new._coarse_fine_step = None
         return new
 
     @property
@@ -183,22 +200,29 @@ class Solution:
         (a transmissive stack with a smooth top and a smooth dielectric base)."""
         return bool(self._core.two_sided)
 
+    @property
+    def every_pair(self) -> bool:
+        """Whether every pair is solved: ``two_sided``, or a transmissive stack with a
+        smooth top and a rough dielectric base (its exits by product integration)."""
+        return bool(self._core.every_pair)
+
     def _pairs(self, wi, wo) -> tuple[np.ndarray, np.ndarray]:
         a, b = check.direction_pair(wi, wo)
-        if self._transmits and not self.two_sided and np.any((a[:, 2] < 0) | (b[:, 2] < 0)):
-            raise refusal("rough-exit", f"this stack transmits through {one_sided_reason(self.model)}, and "
+        if self._transmits and not self.every_pair and np.any((a[:, 2] < 0) | (b[:, 2] < 0)):
+            raise refusal("rough-exit", f"this stack transmits through {exit_gap_reason(self.model)}, and "
                                         f"adding-doubling solves transmission and reflection from below only "
-                                        f"for a smooth top and a smooth dielectric base")
+                                        f"for a smooth top over a smooth or rough dielectric base")
         return a, b
 
     def eval(self, wi, wo, scattered_only: bool = False) -> np.ndarray:
         """f(wi, wo) |cos theta_o|, (N, C), light arriving from wo and leaving toward wi:
-        reflection from above; for a ``two_sided`` stack every pair (transmission both
+        reflection from above; for an ``every_pair`` stack every pair (transmission both
         ways, reflection from below); 0 for the other pairs of an opaque stack (its
-        value). A transmissive stack with a rough top or base raises ValueError for pairs
-        with wi.z < 0 or wo.z < 0.
-        ``scattered_only`` leaves out a rough top's own reflection (what a table stores;
-        ``Layered.exact_part`` re-adds it)."""
+        value). Another transmissive stack (a rough top) raises ValueError for pairs with
+        wi.z < 0 or wo.z < 0.
+        ``scattered_only`` leaves out the entry boundary's own reflection: a rough top's
+        from above (what a table stores; ``Layered.exact_part`` re-adds it), a rough
+        base's from below (as ``Layered.estimate(scattered_only=True)``)."""
         a, b = self._pairs(wi, wo)
         out = self._core.eval(a, b, bool(scattered_only))
         return out @ self._to_rgb.T if self._to_rgb is not None else out
@@ -209,12 +233,16 @@ class Solution:
         azimuth samples, 2/3 of the orders, a 16 x thicker doubling start, twice the
         spectral stride and fine step); the truncations converge geometrically, the start
         quadratically, so the error of the finer solve is below that change (tests/solvers
-        checks it). Per pair, the largest relative change over the channels applies to
-        every channel (the change alone crosses zero where the error does not)."""
+        checks it). Through a rough base (``every_pair``, not ``two_sided``) the change to
+        a solve with only the fine step doubled is added (``_fine_step_core``). Per pair,
+        the largest relative change over the channels applies to every channel (the
+        change alone crosses zero where the error does not)."""
         a, b = self._pairs(wi, wo)
         fine = self._core.eval(a, b, bool(scattered_only))
         coarse = self._coarse_core().eval(a, b, bool(scattered_only))
         err = np.abs(fine - coarse)
+        if self.every_pair and not self.two_sided:  # a rough base's exits (_fine_step_core)
+            err += np.abs(fine - self._fine_step_core().eval(a, b, bool(scattered_only)))
         # The change crosses zero where fine and coarse swap order at some wavelength while
         # the error does not: each pair's largest relative change over its channels
         # applies to all of them (never below the change itself).
@@ -325,11 +353,20 @@ def model_gap(model) -> tuple[str, str] | None:
 
 
 def one_sided_reason(model: Layered) -> str:
-    """Why a transmissive stack is solved for reflection from above only (its rough top or
-    base would need product integration at the exit, which is not implemented)."""
+    """The rough boundaries of a transmissive stack (its top, its base): what keeps its
+    adding-doubling table one-sided (bsdflab/tables/deterministic.py; the solver's own
+    exit refusal is ``exit_gap_reason``)."""
     parts = [name for name, part in (("a rough top", model.interfaces[0]), ("a rough base", model.base))
              if getattr(part, "alpha", None) is not None]
     return " and ".join(parts) or "its boundaries"
+
+
+def exit_gap_reason(model: Layered) -> str:
+    """Why a transmissive stack's pairs below are refused (``[rough-exit]``): its rough top,
+    or its rough base under a smooth interior interface between unequal indices."""
+    if getattr(model.interfaces[0], "alpha", None) is not None:
+        return "a rough top"
+    return "a rough base under a smooth interior interface between unequal indices"
 
 
 def media_indices(model: Layered) -> list[float]:

@@ -77,7 +77,7 @@ def adding_doubling_gap(model) -> str | None:
     if not isinstance(model, Layered):
         return f"it tabulates Layered models, not {type(model).__name__}"
     if _transmits(model) and not _two_sided(model):
-        return (f"the stack transmits through {one_sided_reason(model)} and the solver solves light "
+        return (f"the stack transmits through {one_sided_reason(model)} and tables by adding-doubling hold light "
                 "from below and transmission only for a smooth top over a smooth dielectric base")
     try:
         check_model(model)

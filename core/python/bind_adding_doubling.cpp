@@ -39,6 +39,7 @@ void bind_adding_doubling(py::module_ &m) {
         .def_property_readonly("nodes", &AddingDoubling::nodes)
         .def_property_readonly("weights", &AddingDoubling::weights)
         .def_property_readonly("two_sided", &AddingDoubling::two_sided)
+        .def_property_readonly("every_pair", &AddingDoubling::every_pair)
         .def_property_readonly("film_lookup_error", &AddingDoubling::film_lookup_error)
         .def(
             "eval",

@@ -92,6 +92,8 @@ AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
         }
     }
     ad::panel_nodes(settings_.nodes, breaks_, mu_, w_);
+    rough_base_exit_ =
+        smooth_top_ && !snell_ && K >= 1 && media_[K + 1] > 0 && ad::rough_alpha(*boundaries_[K]) > 0;
     // Fourier orders: what the slabs' phase functions and the boundaries below the top
     // carry (the top's own reflection is evaluated directly; below it, only orders the
     // stack under it scatters into survive the adding).
@@ -103,10 +105,16 @@ AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
     for (std::size_t j = 0; j < boundaries_.size(); ++j) {
         double a = ad::rough_alpha(*boundaries_[j]);
         if (a > 0) alpha_min = std::min(alpha_min, a);
+        if (j > 0 && ad::is_delta(*boundaries_[j])) delta_below_ = true;
         if (j == 0 || ad::is_delta(*boundaries_[j])) continue;
         if (a > 0) M = std::max(M, static_cast<int>(std::ceil(6.0 / a)) + 2);
         else if (boundaries_[j]->lobes() & (kGlossyReflection | kGlossyTransmission)) M = std::max(M, 64);
     }
+    // A rough top over a delta reflection path: the returning beam crosses the top twice,
+    // in lobes of its own width (ad::rough_top_values' fine-node product).
+    const double top_alpha = ad::rough_alpha(*boundaries_[0]);
+    if (!smooth_top_ && delta_below_ && top_alpha > 0)
+        M = std::max(M, static_cast<int>(std::ceil(6.0 / top_alpha)) + 2);
     orders_ = settings_.orders > 0 ? settings_.orders : M;
     int H = 32;
     double need = std::max(4.0 * orders_, orders_ + 10.0 / alpha_min);
@@ -188,6 +196,7 @@ void AddingDoubling::eval(const double *wi_, const double *wo_, std::size_t coun
     const int C = channels(), M = orders_;
     std::fill(out, out + count * C, 0.0);
     if (two_sided_) return eval_two_sided(wi_, wo_, count, out);
+    if (rough_base_exit_) eval_rough_base(wi_, wo_, count, out, scattered_only);
     std::vector<std::size_t> active;
     std::vector<double> cos_out, cos_in, scale;  // scale: per active pair and channel
     const BSDF &top = *boundaries_[0];

@@ -1,8 +1,10 @@
 // AddingDoubling::solve: the grid, then the named parts of adding_doubling_parts.h in
 // order (boundary operators, the top's, slabs, adding, spectral interpolation, query
 // values), one task per (channel, order).
+#include <algorithm>
 #include <mutex>
 #include "adding_doubling_parts.h"
+#include "bsdflab/constants.h"
 #include "bsdflab/parallel.h"
 
 namespace bsdflab {
@@ -49,6 +51,19 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
     }
     const ad::TopOperators top = ad::top_operators(*boundaries_[0], smooth_top_, grid, mu_, w_, breaks_,
                                                    in_cos, out_cos, settings_, s);
+    // A rough top over a stack that reflects by a delta path: that part D of the inner
+    // reflection lies between the top's two narrow lobes, so it is integrated on the fine
+    // nodes against both unprojected kernels (a product of two lobes has no quadrature on
+    // the nodes), D interpolated there (it is smooth in mu: Fresnel x transmittance).
+    std::vector<double> mu_f, w_f, B, TdF, TuF;
+    if (!smooth_top_ && delta_below_ && !two_sided) {
+        const double h = std::clamp(ad::rough_alpha(*boundaries_[0]) * settings_.fine_step, 0.004, 0.05);
+        ad::product_nodes(settings_.nodes, breaks_, h, mu_f, w_f, B);
+        const std::vector<double> fine_down = ad::signed_cos(mu_f, -1.0);
+        TdF = ad::fourier_kernel(*boundaries_[0], fine_down, in_cos, M, half_samples_);  // nf x Qi
+        TuF = ad::fourier_kernel(*boundaries_[0], out_cos, fine_down, M, half_samples_); // Qo x nf
+    }
+    const std::size_t nf = mu_f.size();
     if (!smooth_top_ && !cached) {
         const std::vector<int> solved = ad::solved_channels(C, settings_.spectral_stride);
         inner_->R.assign(static_cast<std::size_t>(C) * M, Op());
@@ -81,6 +96,22 @@ void AddingDoubling::solve(const std::vector<double> &out_cos, const std::vector
         Op Y = ad::mul(ad::inverse_one_minus(ad::mul(R, top.rb(s, c, m), g), g), R, g);
         double *V = &values[task * Qo * Qi];
         if (smooth_top_) return ad::smooth_top_values(Y, xo, xi, N, V);
+        if (nf > 0 && !Y.D.empty()) {
+            std::vector<double> Df(nf, 0.0);
+            for (std::size_t f = 0; f < nf; ++f) {
+                for (int k = 0; k < n; ++k) Df[f] += B[f * n + k] * Y.D[k];
+                Df[f] *= kPi * (m == 0 ? 2.0 : 1.0) * mu_f[f] * w_f[f];
+            }
+            const std::size_t CM = static_cast<std::size_t>(C) * M;
+            for (std::size_t a = 0; a < Qo; ++a)
+                for (std::size_t b = 0; b < Qi; ++b) {
+                    double v = 0.0;
+                    for (std::size_t f = 0; f < nf; ++f)
+                        v += TuF[(a * nf + f) * CM + task] * Df[f] * TdF[(f * Qi + b) * CM + task];
+                    V[a * Qi + b] += v;
+                }
+            Y.D.clear();
+        }
         ad::rough_top_values(Y, ad::kernel_at(top.Td, N, Qi, C, M, c, m),
                              ad::kernel_at(top.Tu, Qo, N, C, M, c, m), g, N, Qo, Qi, V);
     });

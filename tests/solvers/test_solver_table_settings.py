@@ -65,7 +65,7 @@ def test_03_transmissive_stack_raises_for_unsolved_pairs():
     """Transmission through a stack with a rough top and reflection from below it are not
     solved: the stack raises ValueError for them (instead of returning 0), and still
     solves reflection from above; an opaque stack returns its value, 0, below
-    (test_solver_two_sided.py covers the solved smooth-top, smooth-base stacks)."""
+    (test_solver_two_sided.py and test_solver_rough_base.py cover the solved smooth-top stacks)."""
     model = bl.Layered([bl.RoughDielectric(0.2, 1.5, 1.0)],
                        [bl.Slab(1.0, sigma_a=0.1, sigma_s=0.5, phase={"type": "hg", "g": 0.6})],
                        bl.Dielectric(1.0, 1.5))
@@ -76,7 +76,7 @@ def test_03_transmissive_stack_raises_for_unsolved_pairs():
     for wi, wo in ((down, up), (up, down), (down, down)):
         with pytest.raises(ValueError, match="transmits through a rough top"):
             sol.eval(wi, wo)
-        with pytest.raises(ValueError, match="only for a smooth top and a smooth dielectric base"):
+        with pytest.raises(ValueError, match="only for a smooth top over a smooth or rough dielectric base"):
             sol.eval_with_error(wi, wo)
     opaque = solve(preset("xenopeltis"), [550.0])
     assert opaque.eval(down, up)[0, 0] == 0.0
