@@ -11,9 +11,10 @@ None), which nobody asks to change its base.
   float32 storage;
 - the lookup's delta lobes at T (both methods) vs the explicit model's delta stack: the
   same 1-D adding from an independently built stack, to 1e-9.
-Mutations caught (run once, reported in the commit): the delta stack giving every
-boundary the query's film (the table's delta lobes), and the walk's film lookup giving
-the base the node's thickness (the PFMC cells)."""
+Mutations run once: the walk and its film lookup giving every boundary the node's film
+(the semantics before version 8) fails the PFMC cells (z 6.1 against a bound of 4.6); the
+delta stack doing so fails every delta-lobe test (at T and at the default); adding-doubling's
+``with_film_thickness`` scaling the base's film too fails its cells."""
 
 from __future__ import annotations
 
