@@ -23,6 +23,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from bsdflab import _core
 from bsdflab.jobs.keys import job_key, plain_json
 from bsdflab.render import render, write_exr, write_png
 from bsdflab.render.build import TABULATED, table_request
@@ -77,8 +78,10 @@ def normalise(request: dict[str, Any]) -> dict[str, Any]:
 
 
 def key(request: dict[str, Any]) -> str:
-    """SHA-256 of the canonical request, the kind and the package version."""
-    return job_key("render", request)
+    """SHA-256 of the canonical request, the kind, the package version and the core's
+    estimator version: a layered material renders through PFMC's walks (or tables they
+    made), so a new estimator version renders anew instead of serving the old image."""
+    return job_key("render", {**request, "estimator_version": int(_core.estimator_version)})
 
 
 def files(request_key: str) -> dict[str, str]:

@@ -56,7 +56,8 @@ def table_settings(rel_error: float, n_wavelengths: int) -> dict:
 
 def with_film_thickness(model: Layered, thickness_nm: float) -> Layered:
     """The model with its top film's total thickness set to ``thickness_nm`` (every layer
-    scaled in proportion, as a per-query film thickness does); negative: the model."""
+    scaled in proportion, as a per-query film thickness does; the other boundaries keep
+    their own films, as there); negative: the model."""
     if thickness_nm < 0:
         return model
     d = copy.deepcopy(model.to_dict())

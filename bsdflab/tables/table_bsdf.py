@@ -11,6 +11,7 @@ core/include/bsdflab/table_bsdf.h.
 from __future__ import annotations
 
 import os
+import warnings
 from typing import Any
 
 import numpy as np
@@ -25,6 +26,7 @@ from bsdflab.tables.channels import LUMINANCE_RGB, channel_wavelengths
 from bsdflab.tables.data import TableData
 from bsdflab.tables.delta import delta_stack
 from bsdflab.tables.file_format import read_table
+from bsdflab.tables.film_axis import old_film_axis
 
 
 class TableBSDF(BSDF):
@@ -56,6 +58,8 @@ class TableBSDF(BSDF):
             path = os.fspath(source)
             table = read_table(path)
         table.check()
+        if (reason := old_film_axis(table)) is not None:
+            warnings.warn(reason, RuntimeWarning, stacklevel=2)
         self.table = table
         self.path = path
         self._wavelengths = channel_wavelengths(table.channels)

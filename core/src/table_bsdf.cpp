@@ -327,7 +327,8 @@ void TabulatedBSDF::delta_lobes(const Vec3 &wi, const Query &q, double *R, doubl
         thread_local std::vector<double> buf;
         buf.resize(std::size_t(2) * D);
         double *r = buf.data(), *t = r + D;
-        // Every boundary sees the query's film thickness, as PFMC's walk passes it.
+        // The top sees the query's film thickness, the other boundaries their own, as in
+        // PFMC's walk (boundary_query).
         if (!delta_->solve(wi, direct_query(q, 0), r, t, wt, eta)) eta = 1.0;
         for (int c = 0; c < C; ++c) {
             double ar = 0, at = 0;

@@ -61,7 +61,8 @@ bool TableDeltaStack::solve(const Vec3 &wi, const Query &q, double *R, double *T
     eta = 1.0;
     if (!usable_direction(wi) || wi.z == 0) return false;
     const bool from_above = wi.z > 0;
-    auto boundary = [&](int i) -> const BSDF & { return *boundaries_[from_above ? i : K - i]; };
+    auto index = [&](int i) { return from_above ? i : K - i; }; // boundary i's in the stack (0 the top)
+    auto boundary = [&](int i) -> const BSDF & { return *boundaries_[std::size_t(index(i))]; };
     auto slab = [&](int i) { return from_above ? i : K - 1 - i; }; // the slab after boundary i
     // Per boundary i (entry order): r, t, s, u (table_delta.h), and the slab after it: a.
     thread_local std::vector<double> buf;
@@ -74,9 +75,10 @@ bool TableDeltaStack::solve(const Vec3 &wi, const Query &q, double *R, double *T
     BSDFSample smp;
     for (int i = 0; i <= K; ++i) {
         const BSDF &b = boundary(i);
+        const Query &qb = boundary_query(q, index(i)); // the query's film is the top's alone
         reached = i + 1;
-        delta_sample(b, -v, kDeltaReflection, q, r + i * C, smp);
-        if (!delta_sample(b, -v, kDeltaTransmission, q, t + i * C, smp)) break;
+        delta_sample(b, -v, kDeltaReflection, qb, r + i * C, smp);
+        if (!delta_sample(b, -v, kDeltaTransmission, qb, t + i * C, smp)) break;
         const Vec3 in = smp.wo; // v_{i+1}
         eta *= smp.eta;
         if (i == K) {
@@ -88,8 +90,8 @@ bool TableDeltaStack::solve(const Vec3 &wi, const Query &q, double *R, double *T
             for (int c = 0; c < C; ++c) t[i * C + c] = 0.0;
             break;
         }
-        delta_sample(b, -mirror(in), kDeltaReflection, q, s + i * C, smp);
-        delta_sample(b, -mirror(in), kDeltaTransmission, q, u + i * C, smp);
+        delta_sample(b, -mirror(in), kDeltaReflection, qb, s + i * C, smp);
+        delta_sample(b, -mirror(in), kDeltaTransmission, qb, u + i * C, smp);
         const int j = slab(i);
         for (int c = 0; c < C; ++c) a[i * C + c] = std::exp(-sigma_t_[j][c] * thickness_[j] / std::abs(in.z));
         v = in;

@@ -213,7 +213,9 @@ def test_05_estimator_version():
     # bits: pfmc's version-5 golden values above still hold at 1e-9).
     # 7: a table cell's standard error pools the pilot's walk spread (values, sample counts
     # and Layered.eval unchanged: the golden values above still hold).
-    assert _core.estimator_version == 7
+    # 8: a per-query film thickness is the top film's alone; the golden stacks have no film
+    # below the top (their values still hold; tests/layered/test_top_film_thickness.py).
+    assert _core.estimator_version == 8
 
 
 # -- defect 4: eta, non-finite walks, explicit state ----------------------------------------------

@@ -1,12 +1,9 @@
 """The tabulated delta lobes against independent references (hand-written incoherent sums
 with their own Fresnel; an adversarial review of the delta parts), the core stack's input
-checks, and one known defect kept as a strict xfail: with a film-thickness axis, the delta
-lobes pass the top film's thickness (the table's default, the top film's total) to every
-boundary, so a filmed base is rescaled (here 200 nm -> 300 nm) even at the default
-thickness, while the model itself (PFMC, thickness None) keeps the base's own film
-(docs/known_limits.md). A per-query thickness rescales every boundary's film in PFMC's
-walk and in tabulation too; fixing it means giving only the top the query's thickness
-everywhere (an estimator version bump)."""
+checks, and a table with a film-thickness axis read at its default (the top film's total)
+against the model itself: the delta lobes give that thickness to the top alone, so a
+filmed base keeps its own film (a strict xfail before estimator version 8, when every
+boundary took the query's thickness and the base here read 300 nm instead of 200 nm)."""
 
 from __future__ import annotations
 
@@ -41,11 +38,6 @@ def table_lobe(tb, wi, lobe):
     return np.zeros(3)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known: a per-query film thickness rescales every boundary's film "
-    "(docs/known_limits.md); strict, so the fix is noticed",
-)
 @pytest.mark.parametrize(("side", "lobe"), [(1.0, int(Lobe.DELTA_TRANSMISSION)), (-1.0, int(Lobe.DELTA_REFLECTION))])
 def test_default_thickness_keeps_the_base_film(table, side, lobe):
     t = np.radians(30.0)

@@ -107,7 +107,7 @@ def test_02_accuracy_reports_the_measured_coverage():
     table = tabulate(plastic(), TableGrid(2, 2, 2), rel_error=0.2, wavelengths=WL, progress=False,
                      min_samples=N0)
     cov = table.accuracy()["coverage"]
-    assert table.meta["estimator_version"] == _core.estimator_version == 7
+    assert table.meta["estimator_version"] == _core.estimator_version == 8
     assert cov["command"].startswith("python bench/coverage_tables.py") and cov["cells"] == 14400
     assert set(cov["normal"]) == {"2", "3", "4"}
     assert cov["applies"] and cov["warning"] is None and cov["min_samples"] == N0

@@ -40,6 +40,11 @@ struct Query {
     double film_thickness_nm = -1.0;
 };
 
+// A stack's per-query film thickness is its top film's: the query boundary b (0 the top)
+// of a layered stack sees. Every other boundary keeps its own film (estimator version 8).
+inline constexpr Query kOwnFilm{};
+inline const Query &boundary_query(const Query &q, int b) { return b == 0 ? q : kOwnFilm; }
+
 struct BSDFSample {
     Vec3 wo;
     double pdf = 0;     // solid-angle density; for a delta lobe, the probability of picking it

@@ -30,7 +30,10 @@ namespace bsdflab {
 //    version 5's estimator (its golden values hold to 1e-9).
 // 7: a table cell's standard error pools the pilot's walk spread with the fresh walks'
 //    (tabulation.h pooled_error); values, sample counts and Layered.eval are unchanged.
-constexpr int kEstimatorVersion = 7;
+// 8: a per-query film thickness is the top film's alone (boundary_query, bsdf.h); the
+//    other boundaries keep their own films. Stacks with a film below the top change
+//    (walks, tables, delta lobes); every other stack draws the same numbers.
+constexpr int kEstimatorVersion = 8;
 
 // Growable scratch memory of one thread's estimates.
 class EstimateWorkspace {

@@ -31,6 +31,9 @@
 // delta_reflectance / sample. pdf() is the density with which sample() returns wo
 // (estimated by sample()'s own walk; see core/src/layered/sample.cpp and docs/estimators.md).
 //
+// A query's film thickness (Query::film_thickness_nm) is the top boundary's film total:
+// every other boundary is handed its own film (boundary_query, bsdf.h).
+//
 // Paths whose every vertex is a delta event (e.g. a smooth coat over a smooth mirror) form
 // a delta lobe of the stack and are not part of eval.
 //
@@ -103,7 +106,8 @@ class LayeredBSDF final : public BSDF, public StochasticEstimator {
     BSDFSample sample(const Vec3 &wi, double u1, double u2x, double u2y, uint32_t lobes, const Query &q,
                       double *weight) const override;
     const StochasticEstimator *stochastic() const override { return this; }
-    // The same stack with every boundary's film looked up (BSDF::with_film_lookup).
+    // The same stack with every boundary's film looked up (BSDF::with_film_lookup): the
+    // top's at thickness_nm, the others' at their own (a query's thickness is the top's).
     std::shared_ptr<const BSDF> with_film_lookup(double thickness_nm, FilmLookupStats &stats) const override;
 
     // The whole non-delta BSDF: the multiply scattered light plus the top's own reflection.

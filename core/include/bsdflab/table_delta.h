@@ -49,7 +49,8 @@ class TableDeltaStack {
     // The delta lobes of light arriving along wi (the side from wi.z): reflectance R and
     // transmittance T per channel (weights toward reflect(wi) and toward `wt`, radiance
     // mode), `eta` = n_t / n_i across the stack. Returns false when nothing transmits
-    // (T = 0, wt undefined). q goes to every boundary, as PFMC's walk passes it.
+    // (T = 0, wt undefined). q's film thickness goes to the top boundary only, as PFMC's
+    // walk passes it (boundary_query): every other boundary keeps its own film.
     bool solve(const Vec3 &wi, const Query &q, double *R, double *T, Vec3 &wt, double &eta) const;
 
   private:

@@ -27,7 +27,7 @@ void LayeredBSDF::build_chain(const Vec3 &wo, Side exit, const Query &q, PCG32 &
         ch.reached[j] = true;
         ch.L[j] = L;
         for (int c = 0; c < C; ++c) ch.B[j * C + c] = beyond[c];
-        BSDFSample s = sample_boundary(*boundaries_[xb], L, kTransmission, q, rng, w);
+        BSDFSample s = sample_boundary(*boundaries_[xb], L, kTransmission, boundary_query(q, xb), rng, w);
         if (!s.lobe || !any_positive(w, C)) break;
         double cu = std::abs(s.wo.z);
         if (!(cu > 1e-12)) break;
@@ -83,20 +83,22 @@ void LayeredBSDF::solve_delta_region(Side exit, const Query &q, Chain &ch) const
         transmittance(j, slabs_[j].thickness / cu, ch.tau + j * C);
         // X_j seen from inside: a beam travelling toward the exit along mirror(u_j).
         double *rx = ch.r_exit_side + j * C;
-        BSDFSample r = boundaries_[xb(j)]->sample(-mirror(ch.u[j]), 0.5, 0.5, 0.5, kDeltaReflection, q, w);
+        BSDFSample r = boundaries_[xb(j)]->sample(-mirror(ch.u[j]), 0.5, 0.5, 0.5, kDeltaReflection,
+                                                  boundary_query(q, xb(j)), w);
         for (int c = 0; c < C; ++c) rx[c] = (r.lobe & kDeltaReflection) ? w[c] : 0.0;
     }
     // Inward to outward: rho_j (stored in `down`).
     for (int k = m - 1; k >= 0; --k) {
         const int j = order[k];
         double *rho = ch.down + j * C;
-        BSDFSample r = boundaries_[nb(j)]->sample(-ch.u[j], 0.5, 0.5, 0.5, kDeltaReflection, q, w);
+        BSDFSample r = boundaries_[nb(j)]->sample(-ch.u[j], 0.5, 0.5, 0.5, kDeltaReflection,
+                                                  boundary_query(q, nb(j)), w);
         for (int c = 0; c < C; ++c) rho[c] = (r.lobe & kDeltaReflection) ? w[c] : 0.0;
         if (k + 1 == m) continue;
         const int j2 = order[k + 1];
         // Back across N_j from slab j2, toward the exit.
-        BSDFSample t =
-            boundaries_[nb(j)]->sample(-mirror(ch.u[j2]), 0.5, 0.5, 0.5, kDeltaTransmission, q, t_up);
+        BSDFSample t = boundaries_[nb(j)]->sample(-mirror(ch.u[j2]), 0.5, 0.5, 0.5, kDeltaTransmission,
+                                                  boundary_query(q, nb(j)), t_up);
         if (!(t.lobe & kDeltaTransmission)) continue;
         const double cu2 = std::abs(ch.u[j2].z);
         for (int c = 0; c < C; ++c) {

@@ -37,12 +37,14 @@ bool EvalWalk::rough_exit(int j) const {
 
 void EvalWalk::exit_through(int j, const Vec3 &w, double depth, double p_sampled, bool mis) {
     if (!ch_.reached[j] || !rough_exit(j)) return;
-    const BSDF &X = *m_.boundaries_[std::size_t(near_boundary(exit_, j))];
+    const int xb = near_boundary(exit_, j);
+    const BSDF &X = *m_.boundaries_[std::size_t(xb)];
+    const Query &qx = boundary_query(q_, xb);
     const Vec3 &L = ch_.L[j];
-    X.eval(-w, L, kTransmission, q_, tmp_);
+    X.eval(-w, L, kTransmission, qx, tmp_);
     if (!any_positive(tmp_, C_)) return;
     double wB = 1.0;
-    if (nee_ && mis) wB = power_heuristic(p_sampled, X.pdf(L, -w, kTransmission, q_));
+    if (nee_ && mis) wB = power_heuristic(p_sampled, X.pdf(L, -w, kTransmission, qx));
     m_.transmittance(j, depth / std::abs(w.z), tr_);
     const double inv_cos = 1.0 / std::abs(L.z);
     for (int c = 0; c < C_; ++c)

@@ -69,7 +69,8 @@ std::uint64_t LayeredBSDF::estimate_impl(const Vec3 &wi, const Vec3 &wo, uint32_
     // The entry boundary's own (non-delta) reflection is known exactly.
     std::fill(direct, direct + C, 0.0);
     if (include_direct && entry == exit)
-        boundaries_[outer_boundary(entry, K)]->eval(wi, wo, kReflection, q, direct);
+        boundaries_[outer_boundary(entry, K)]->eval(wi, wo, kReflection,
+                                                    boundary_query(q, outer_boundary(entry, K)), direct);
     project_rows(req.P, R, C, direct, x);
     for (int r = 0; r < R; ++r) {
         out[r] = mean[r] + x[r];

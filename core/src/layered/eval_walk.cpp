@@ -27,15 +27,17 @@ bool EvalWalk::enter(const Vec3 &wi, double entry_scale) {
     std::fill(walk_.beta, walk_.beta + C_, 1.0);
     covered_ = true;
     const int j = outer_slab(entry_, K_);
-    const BSDF &E = *m_.boundaries_[std::size_t(outer_boundary(entry_, K_))];
+    const int e = outer_boundary(entry_, K_);
+    const BSDF &E = *m_.boundaries_[std::size_t(e)];
+    const Query &qe = boundary_query(q_, e);
     if (entry_ != exit_ && !(E.lobes() & kDeltaTransmission) && ch_.ok[j]) {
         if (entry_scale > 0) {
-            E.eval(wi, -ch_.u[j], kTransmission, q_, tmp_);
+            E.eval(wi, -ch_.u[j], kTransmission, qe, tmp_);
             for (int c = 0; c < C_; ++c) tmp_[c] *= entry_scale;
-            connect(j, tmp_, m_.slabs_[std::size_t(j)].thickness, E.pdf(wi, -ch_.u[j], kTransmission, q_));
+            connect(j, tmp_, m_.slabs_[std::size_t(j)].thickness, E.pdf(wi, -ch_.u[j], kTransmission, qe));
         }
     }
-    BSDFSample s = sample_boundary(E, wi, kTransmission, q_, rng_, walk_.wgt);
+    BSDFSample s = sample_boundary(E, wi, kTransmission, qe, rng_, walk_.wgt);
     if (!s.lobe) return false;
     if (!walk_.enter(entry_, s.wo, walk_.wgt)) return false;
     if (entry_ != exit_) {
@@ -93,12 +95,13 @@ bool EvalWalk::cross_exit_side(int b) {
 bool EvalWalk::cross_far_side(int b) {
     const int j = walk_.slab;
     const BSDF &V = *m_.boundaries_[std::size_t(b)];
+    const Query &qv = boundary_query(q_, b);
     const bool outer = b == 0 || b == K_;
     const uint32_t mask = outer ? uint32_t(kReflection) : uint32_t(kAll);
     const double zx = walk_.depth;
     if (ch_.ok[j] && (V.lobes() & (kDiffuseReflection | kGlossyReflection))) {
-        V.eval(-walk_.dir, -ch_.u[j], kReflection, q_, tmp_);
-        if (any_positive(tmp_, C_)) connect(j, tmp_, zx, V.pdf(-walk_.dir, -ch_.u[j], mask, q_));
+        V.eval(-walk_.dir, -ch_.u[j], kReflection, qv, tmp_);
+        if (any_positive(tmp_, C_)) connect(j, tmp_, zx, V.pdf(-walk_.dir, -ch_.u[j], mask, qv));
     }
     const BSDFSample s = walk_.cross(b, mask);
     if (!s.lobe) return false;

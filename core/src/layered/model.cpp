@@ -109,9 +109,9 @@ ScatteredPart::ScatteredPart(std::shared_ptr<const LayeredBSDF> model)
 std::shared_ptr<const BSDF> LayeredBSDF::with_film_lookup(double thickness_nm, FilmLookupStats &stats) const {
     std::vector<std::shared_ptr<const BSDF>> boundaries = boundaries_;
     bool changed = false;
-    for (auto &b : boundaries)
-        if (auto fast = b->with_film_lookup(thickness_nm, stats)) {
-            b = std::move(fast);
+    for (std::size_t i = 0; i < boundaries.size(); ++i) // only the top takes the query's film
+        if (auto fast = boundaries[i]->with_film_lookup(i == 0 ? thickness_nm : -1.0, stats)) {
+            boundaries[i] = std::move(fast);
             changed = true;
         }
     if (!changed) return nullptr;

@@ -36,9 +36,10 @@ double LayeredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Qu
     if (!(lobes & (reflect ? kGlossyReflection : kGlossyTransmission))) return 0.0;
     const int K = static_cast<int>(slabs_.size()), C = channels();
     const BSDF &E = *boundaries_[wi.z > 0 ? 0 : K];
+    const Query &qe = boundary_query(q, wi.z > 0 ? 0 : K);
     const int n = options_.pdf_samples;
     if (n < 1) return approximate_pdf(wi, wo, reflect, q);
-    double p = reflect ? E.pdf(wi, wo, kAll, q) : 0.0;
+    double p = reflect ? E.pdf(wi, wo, kAll, qe) : 0.0;
     const int x = wo.z > 0 ? 0 : K;
     ThreadWorkspace lease;
     double *buf = lease.get().doubles(3 * C);
@@ -49,7 +50,7 @@ double LayeredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Qu
         const double u1 = rng.uniform();
         const double u2x = rng.uniform();
         const double u2y = rng.uniform();
-        BSDFSample s = E.sample(wi, u1, u2x, u2y, kAll, q, buf + C);
+        BSDFSample s = E.sample(wi, u1, u2x, u2y, kAll, qe, buf + C);
         if (!s.lobe || (s.lobe & kReflection)) continue;
         BSDFSample out = sample_walk(wi, s, q, rng, buf, &density);
         if (out.lobe && !(out.lobe & kDelta) && (out.wo.z > 0) == (wo.z > 0)) ++left_through_x;
@@ -69,10 +70,11 @@ double LayeredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Qu
     // refract toward wo (an outside denser than the slab, beyond the critical angle:
     // sample() never goes there) and normalised over the rest.
     const BSDF &X = *boundaries_[x];
+    const Query &qx = boundary_query(q, x);
     double *t = buf + C;
-    if (!(X.sample(wo, 0.5, 0.5, 0.5, kDeltaTransmission, q, t).lobe & kDeltaTransmission)) return p;
+    if (!(X.sample(wo, 0.5, 0.5, 0.5, kDeltaTransmission, qx, t).lobe & kDeltaTransmission)) return p;
     const BSDFSample normal =
-        X.sample(Vec3{0.0, 0.0, wo.z > 0 ? 1.0 : -1.0}, 0.5, 0.5, 0.5, kDeltaTransmission, q, t);
+        X.sample(Vec3{0.0, 0.0, wo.z > 0 ? 1.0 : -1.0}, 0.5, 0.5, 0.5, kDeltaTransmission, qx, t);
     // sin^2 of the critical angle on wo's side (1: no critical angle)
     const double cone = normal.lobe ? std::min(1.0, normal.eta * normal.eta) : 1.0;
     return p + share * std::abs(wo.z) * kInvPi / cone;
@@ -84,13 +86,15 @@ double LayeredBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const Qu
 // share of its draws, and its shape differs from the walk's exits at grazing angles.
 double LayeredBSDF::approximate_pdf(const Vec3 &wi, const Vec3 &wo, bool reflect, const Query &q) const {
     const bool base_transmits = boundaries_.back()->lobes() & kTransmission;
-    const BSDF &E = *boundaries_[wi.z > 0 ? 0 : boundaries_.size() - 1];
+    const int e = wi.z > 0 ? 0 : static_cast<int>(boundaries_.size()) - 1;
+    const BSDF &E = *boundaries_[std::size_t(e)];
+    const Query &qe = boundary_query(q, e);
     const int C = channels();
     ThreadWorkspace lease;
     double *w = lease.get().doubles(C);
-    E.sample(wi, 0.5, 0.5, 0.5, kReflection, q, w);
+    E.sample(wi, 0.5, 0.5, 0.5, kReflection, qe, w);
     double r = std::clamp(channel_mean(w, C), 0.0, 1.0);
-    double p = reflect ? r * E.pdf(wi, wo, kReflection, q) : 0.0;
+    double p = reflect ? r * E.pdf(wi, wo, kReflection, qe) : 0.0;
     double spread = (1.0 - r) * std::abs(wo.z) * kInvPi;
     p += base_transmits ? 0.5 * spread : spread;
     return p;
@@ -109,7 +113,7 @@ BSDFSample LayeredBSDF::sample(const Vec3 &wi, double u1, double u2x, double u2y
     double *buf = lease.get().doubles(3 * C);
     double *w = buf + C;
 
-    BSDFSample s = boundaries_[entry]->sample(wi, u1, u2x, u2y, kAll, q, w);
+    BSDFSample s = boundaries_[entry]->sample(wi, u1, u2x, u2y, kAll, boundary_query(q, entry), w);
     if (!s.lobe) return {};
     if (s.lobe & kReflection) { // the top's own reflection (delta or glossy)
         if (!(s.lobe & lobes)) return {};

@@ -50,7 +50,8 @@ BSDFSample LayeredBSDF::sample_walk(const Vec3 &wi, BSDFSample s, const Query &q
         case Flight::Arrived: {
             const int b = walk.arrive();
             if (density && density->rough && b == density->boundary)
-                density->sum += boundaries_[std::size_t(b)]->pdf(-walk.dir, density->wo, kAll, q);
+                density->sum +=
+                    boundaries_[std::size_t(b)]->pdf(-walk.dir, density->wo, kAll, boundary_query(q, b));
             s = walk.cross(b, kAll);
             if (!s.lobe) return {};
             if (s.lobe & kDelta) delta_prob *= s.pdf;

@@ -63,7 +63,8 @@ int Walk::arrive() {
 }
 
 BSDFSample Walk::cross(int b, uint32_t mask) {
-    BSDFSample s = sample_boundary(*m_.boundaries_[std::size_t(b)], -dir, mask, q_, rng_, wgt);
+    BSDFSample s =
+        sample_boundary(*m_.boundaries_[std::size_t(b)], -dir, mask, boundary_query(q_, b), rng_, wgt);
     if (!s.lobe) return s;
     for (int c = 0; c < C_; ++c) beta[c] *= wgt[c];
     dir = s.wo;
