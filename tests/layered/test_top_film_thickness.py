@@ -12,7 +12,13 @@ family-wise alpha of 1e-3. T = 2 x the top's own total, so the query's film
 wi, wo), is then compared exactly. Mutations run once: every boundary of the walk given the
 query's film again (the semantics before version 8) fails eval (both estimators, z 6.6-10
 against bounds 3.9-4.0 at 4000 walks), sample and pdf on both stacks; the base's sampling
-alone on the query's film fails eval at 16 000 walks (z 5.2-8.1)."""
+alone on the query's film fails eval at 16 000 walks (z 5.2-8.1). The smooth stacks only
+ever sample their non-top boundaries; the rough filmed base is read through eval and pdf
+too, and the mutations that give it the query's film there pass on the smooth stacks and
+fail on it: the direct reflection from below (estimate.cpp; eval z 106-434 against 4.03,
+both estimators), the entry's pdf (sample.cpp pdf(); pdf inexact), strategy B's exit
+through it (connect.cpp; eval z 4.4-4.7 against 4.03) and pdf's exit density through it
+(sample_walk.cpp; pdf inexact)."""
 
 from __future__ import annotations
 
@@ -44,7 +50,16 @@ def filmed_interior(top_nm: float, **kw) -> bl.Layered:
     return bl.Layered([top(top_nm), mid], slabs, bl.Diffuse(0.5), **kw)
 
 
-STACKS = {"filmed base": filmed_base, "filmed interior": filmed_interior}
+def rough_filmed_base(top_nm: float, **kw) -> bl.Layered:
+    """A rough filmed base: its film is read through eval and pdf too (the direct reflection
+    from below, the entry from below, strategy B's exit through it, pdf's exit density),
+    which the smooth stacks above never call (their non-top boundaries are only sampled)."""
+    base = bl.RoughDielectric(0.3, 1.0, 1.5, film=[{"material": 2.2, "thickness_nm": 200.0}])
+    return bl.Layered([top(top_nm)], [bl.Slab(1.0, sigma_a=0.05, sigma_s=0.5)], base, **kw)
+
+
+STACKS = {"filmed base": filmed_base, "filmed interior": filmed_interior, "rough filmed base": rough_filmed_base}
+TRANSMISSIVE = {"filmed base", "rough filmed base"}
 
 
 def sidak_z(m: int) -> float:
@@ -62,7 +77,7 @@ def pairs(name: str) -> tuple[np.ndarray, np.ndarray]:
     transmission both ways and reflection from below."""
     wi = [direction(30, 0, True), direction(10, 0, True), direction(60, 0, True)]
     wo = [direction(40, 180, True), direction(20, 90, True), direction(55, 150, True)]
-    if name == "filmed base":
+    if name in TRANSMISSIVE:
         wi += [direction(30, 0, True), direction(25, 0, False), direction(35, 0, False)]
         wo += [direction(20, 180, False), direction(40, 120, True), direction(30, 160, False)]
     return np.array(wi), np.array(wo)
@@ -88,7 +103,7 @@ def test_sample_at_a_thickness_is_the_model_with_that_top_film(name):
     glossy / delta reflection / transmission; both models from independent uniforms."""
     make = STACKS[name]
     queried, explicit = make(OWN_NM), make(T_NM)
-    sides = [True, False] if name == "filmed base" else [True]
+    sides = [True, False] if name in TRANSMISSIVE else [True]
     kinds = [
         int(Lobe.GLOSSY_REFLECTION),
         int(Lobe.DELTA_REFLECTION),
