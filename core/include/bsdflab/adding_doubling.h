@@ -104,6 +104,12 @@ class AddingDoubling {
     void solve(const std::vector<double> &out_cos, const std::vector<double> &in_cos,
                std::vector<double> &values, const Queries *two_sided = nullptr) const;
     void eval_two_sided(const double *wi, const double *wo, std::size_t n, double *out) const;
+    // solve's rough top over a delta reflection path: Y's delta part (YD, n per task) between
+    // the top's kernels on its fine nodes, added to values, in blocks of fine nodes.
+    void fine_delta_product(const std::vector<double> &fine_down, const std::vector<double> &mu_f,
+                            const std::vector<double> &w_f, const std::vector<double> &B,
+                            const std::vector<double> &YD, const std::vector<double> &out_cos,
+                            const std::vector<double> &in_cos, std::vector<double> &values) const;
     // The pairs with wi.z < 0 or wo.z < 0 of a smooth top over a rough dielectric base
     // (adding_doubling_exits.cpp): the stack's operators with the top's refracted query
     // cosines as extras, the base's kernels product-integrated at the exit and the entry.
