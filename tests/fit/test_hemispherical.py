@@ -175,7 +175,6 @@ def test_instrument_terms_act_on_the_incidence():
     4 x 12 rule: measured 2.0e-6 relative at 60 deg; rtol 1e-5, an absolute 2e-6, far below a
     sphere's noise)."""
     import tomllib
-
     from scipy.spatial.transform import Rotation
 
     config = FullStackConfig.parse(tomllib.loads(STRUCTURE))
