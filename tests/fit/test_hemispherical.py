@@ -206,3 +206,20 @@ def test_instrument_terms_act_on_the_incidence():
         want = weights @ albedo(r.apply(local)[:, 2])
         assert np.isclose(got[row], want, rtol=1e-5, atol=0), (got[row], want)
     assert abs(got[1] / albedo(np.cos(np.radians([60.0])))[0] - 1) > 1e-4  # the cone matters
+
+
+def test_snake_full_model_gives_totals():
+    """The snake's full model (bsdflab.fit.full_forward) reads total rows too: the rule on its
+    own solution, beside a brdf row's pi f (the same solve)."""
+    from bsdflab.fit.config import ModelSettings
+    from bsdflab.fit.full_forward import SolverForwardModel
+    from bsdflab.fit.parameters import ALL
+
+    ds = rows(["total", "brdf"], [8, 30], [np.nan, 30], [550, 550], [np.nan, 0])
+    fwd = SolverForwardModel(ds, ModelSettings(kind="full"))
+    v = np.array([p.default for p in ALL.values()])
+    got = fwd.evaluate(v)
+    sol = solve(fwd.layered(v), wavelengths=[550.0])
+    want = H.directional_albedo(sol, np.cos(np.radians([8.0])), [550.0])[0, 0]
+    assert np.isclose(got[0], want, rtol=0, atol=1e-9), (got, want)
+    assert 0.0 < got[0] < 1.0
