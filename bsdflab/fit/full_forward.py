@@ -31,7 +31,7 @@ from bsdflab.bsdfs import from_dict
 from bsdflab.fit.config import ModelSettings
 from bsdflab.fit.data import GEOMETRIES, Dataset
 from bsdflab.fit.forward import ForwardModel, parameter_sets
-from bsdflab.fit.hemispherical import directional_albedo
+from bsdflab.fit.hemispherical import MAX_INCIDENCE_DEG, directional_albedo
 from bsdflab.fit.material import material_dict
 from bsdflab.fit.parameters import ALL_NAMES, FORWARD_NAMES, in_domain
 from bsdflab.solvers import solve
@@ -71,6 +71,11 @@ class RowPairs:
         pairs, pair_index = np.unique(np.hstack([detector, source])[gonio], axis=0, return_inverse=True)
         self.wi, self.wo = np.ascontiguousarray(pairs[:, :3]), np.ascontiguousarray(pairs[:, 3:])
         self.pick = (pair_index.ravel(), wl_index[gonio])
+        steep = self.total & (dataset.angle_deg > MAX_INCIDENCE_DEG)
+        if np.any(steep):
+            i = int(np.argmax(steep))
+            raise ValueError(f"row {i}: a total row's angle_deg must be at most {MAX_INCIDENCE_DEG:g} "
+                             f"(the hemispherical rule's range), got {dataset.angle_deg[i]:g}")
         self.mu, mu_index = np.unique(source[self.total, 2], return_inverse=True)
         self.total_pick = (mu_index.ravel(), wl_index[self.total])
 

@@ -223,3 +223,5 @@ def test_snake_full_model_gives_totals():
     want = H.directional_albedo(sol, np.cos(np.radians([8.0])), [550.0])[0, 0]
     assert np.isclose(got[0], want, rtol=0, atol=1e-9), (got, want)
     assert 0.0 < got[0] < 1.0
+    with pytest.raises(ValueError, match="row 1: a total row's angle_deg must be at most 85"):
+        SolverForwardModel(rows(["total", "total"], [8, 88], [np.nan] * 2, [550] * 2), ModelSettings(kind="full"))
