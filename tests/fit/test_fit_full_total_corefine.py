@@ -9,7 +9,11 @@ reflected weights' mean, 400k walks: PFMC, not the solver nor the hemispherical 
 Gaussian noise of 2e-3 (a sphere's), sigma = sqrt(MC error^2 + 2e-3^2). Fitted jointly: every
 truth inside its 99.7 % interval; and sigma_s, which the scaled gonio rows alone leave to the
 level of pi f, is pinned by the sphere: its interval narrower jointly than from the gonio
-rows alone."""
+rows alone. Measured (seeds as here): joint 99.7 % intervals roughness [0.1165, 0.1210],
+sigma_s [0.233, 0.402], scale [1.065, 1.114]; gonio alone sigma_s [0.052, 0.695]; emulator
+error 0.16 sigma at most; 62 s on the shared 2-core machine (load 2.3). The sphere rows' noise
+draw sits low (chi^2 13.1 for 6 rows at the truth, p = 0.04), hence sigma_s's interval
+ending just above the truth."""
 
 from __future__ import annotations
 
