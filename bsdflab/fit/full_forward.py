@@ -11,9 +11,10 @@ changes (``Solution.with_model``: roughness, film), which makes fits with a fixe
 several times cheaper.
 
 Rows: ``brdf`` (and ``diffuse``, its in-plane special case) give the reflectance factor
-pi f(theta_i, theta_o, phi), the rough top's own reflection included. ``specular`` and
-``total`` rows are not modelled (a rough top has no mirror beam; the hemispherical integral
-of a narrow gloss lobe needs its own quadrature): ValueError.
+pi f(theta_i, theta_o, phi), the rough top's own reflection included; ``total`` rows the
+directional-hemispherical reflectance (integrating sphere, the top's reflection included:
+bsdflab.fit.hemispherical, its own quadrature around the mirror direction). ``specular``
+rows are not modelled (a rough top has no mirror beam): ValueError.
 
 Geometry: the source lies at polar angle theta_i in the plane of incidence; phi is the
 detector's azimuth measured from the mirror side (phi = 0: the plane of incidence on the
@@ -30,6 +31,7 @@ from bsdflab.bsdfs import from_dict
 from bsdflab.fit.config import ModelSettings
 from bsdflab.fit.data import GEOMETRIES, Dataset
 from bsdflab.fit.forward import ForwardModel, parameter_sets
+from bsdflab.fit.hemispherical import MAX_INCIDENCE_DEG, directional_albedo
 from bsdflab.fit.material import material_dict
 from bsdflab.fit.parameters import ALL_NAMES, FORWARD_NAMES, in_domain
 from bsdflab.solvers import solve
@@ -38,15 +40,16 @@ CACHE = 64   # below-the-top solutions kept for reuse (an emulator grid varies t
 
 
 def row_directions(dataset: Dataset) -> tuple[np.ndarray, np.ndarray]:
-    """(detector, source) unit directions (rows, 3) of brdf and diffuse rows (+z up)."""
+    """(detector, source) unit directions (rows, 3) of brdf, diffuse and total rows (+z up;
+    a total row's detector is the normal, unused: its value is the integral over all)."""
     g = dataset.geometry
     brdf, diffuse = g == GEOMETRIES.index("brdf"), g == GEOMETRIES.index("diffuse")
-    bad = ~(brdf | diffuse)
+    bad = ~(brdf | diffuse | (g == GEOMETRIES.index("total")))
     if np.any(bad):
         i = int(np.argmax(bad))
         raise ValueError(f"row {i}: geometry {GEOMETRIES[g[i]]!r} is not modelled by the full model (a rough top "
-                         "has no mirror beam); use brdf rows (or kind = 'smooth')")
-    theta_o = np.radians(np.where(brdf, dataset.angle_out_deg, np.abs(dataset.angle_out_deg)))
+                         "has no mirror beam); use brdf or total rows (or kind = 'smooth')")
+    theta_o = np.radians(np.where(brdf, dataset.angle_out_deg, np.where(diffuse, np.abs(dataset.angle_out_deg), 0.0)))
     phi = np.radians(np.where(brdf, dataset.phi_deg, np.where(dataset.angle_out_deg >= 0, 0.0, 180.0)))
     ti = np.radians(dataset.angle_deg)
     source = np.column_stack([-np.sin(ti), np.zeros_like(ti), np.cos(ti)])
@@ -55,19 +58,36 @@ def row_directions(dataset: Dataset) -> tuple[np.ndarray, np.ndarray]:
 
 
 class RowPairs:
-    """A dataset's brdf/diffuse rows as the distinct (wi, wo) pairs and wavelengths a solution
-    is evaluated at, and the pick that spreads pi f back over the rows."""
+    """A dataset's rows as what a solution is evaluated at: brdf/diffuse rows as the distinct
+    (wi, wo) pairs and wavelengths, and the pick that spreads pi f back over them; total rows
+    as their distinct incidence cosines (bsdflab.fit.hemispherical)."""
 
     def __init__(self, dataset: Dataset):
         self.wavelengths, wl_index = np.unique(dataset.wavelength_nm, return_inverse=True)
+        wl_index = wl_index.ravel()
         detector, source = row_directions(dataset)
-        pairs, pair_index = np.unique(np.hstack([detector, source]), axis=0, return_inverse=True)
+        self.total = dataset.geometry == GEOMETRIES.index("total")
+        gonio = ~self.total
+        pairs, pair_index = np.unique(np.hstack([detector, source])[gonio], axis=0, return_inverse=True)
         self.wi, self.wo = np.ascontiguousarray(pairs[:, :3]), np.ascontiguousarray(pairs[:, 3:])
-        self.pick = (pair_index.ravel(), wl_index.ravel())
+        self.pick = (pair_index.ravel(), wl_index[gonio])
+        steep = self.total & (dataset.angle_deg > MAX_INCIDENCE_DEG)
+        if np.any(steep):
+            i = int(np.argmax(steep))
+            raise ValueError(f"row {i}: a total row's angle_deg must be at most {MAX_INCIDENCE_DEG:g} "
+                             f"(the hemispherical rule's range), got {dataset.angle_deg[i]:g}")
+        self.mu, mu_index = np.unique(source[self.total, 2], return_inverse=True)
+        self.total_pick = (mu_index.ravel(), wl_index[self.total])
 
     def pi_f(self, sol) -> np.ndarray:
-        """pi f per row from a solution's f |cos theta_o| at the distinct pairs."""
-        return (np.pi * sol.eval(self.wi, self.wo) / self.wo[:, 2:3])[self.pick]
+        """pi f per brdf/diffuse row from a solution's f |cos theta_o| at the distinct pairs,
+        the directional-hemispherical reflectance per total row."""
+        out = np.empty(len(self.total))
+        if len(self.wi):
+            out[~self.total] = (np.pi * sol.eval(self.wi, self.wo) / self.wo[:, 2:3])[self.pick]
+        if len(self.mu):
+            out[self.total] = directional_albedo(sol, self.mu, self.wavelengths)[self.total_pick]
+        return out
 
 
 class BelowTopSolutions:
@@ -126,7 +146,7 @@ class SolverForwardModel(SolveCounts):
     Parameters
     ----------
     dataset : Dataset
-        brdf and diffuse rows (angles, wavelengths; the values are not used).
+        brdf, diffuse and total rows (angles, wavelengths; the values are not used).
     model : ModelSettings
         kind "full": film, platelets, distribution, solver nodes (raised to the slab's
         ``nodes_for_g``) and orders (0: automatic).

@@ -2,7 +2,8 @@
 its ``Layered`` model dict (``FullStructure.model_dict``, what the study writes as
 material.json) and is solved by adding-doubling (bsdflab.solvers.solve) at the dataset's
 wavelengths; rows as the snake's full model (bsdflab.fit.full_forward: ``brdf`` and
-``diffuse`` rows give pi f). What lies below the top is solved once and reused while only
+``diffuse`` rows give pi f, ``total`` rows the directional-hemispherical reflectance,
+bsdflab.fit.hemispherical). What lies below the top is solved once and reused while only
 the top changes (``Solution.with_model``), as there.
 
 The instrument's angle offset, acceptance cone and slit (bsdflab.fit.gonio_instrument) are
@@ -16,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from bsdflab.bsdfs import from_dict
-from bsdflab.fit.data import Dataset
+from bsdflab.fit.data import GEOMETRIES, Dataset
 from bsdflab.fit.forward import parameter_sets
 from bsdflab.fit.full_forward import BelowTopSolutions, RowPairs, SolveCounts, row_directions
 from bsdflab.fit.full_structure import FullStructure
@@ -87,6 +88,7 @@ class StructureSolverForward(SolveCounts):
                 "acceptance_deg" in on,
                 "bandwidth_nm" in on,
                 *quadrature,
+                total=dataset.geometry == GEOMETRIES.index("total"),
             )
 
     @property

@@ -17,6 +17,10 @@ which weights the values are averaged.
 * ``bandwidth_nm`` b: a Gaussian slit of FWHM b over wavelength, Gauss-Hermite nodes
   (bsdflab.fit.stack_forward.slit_nodes, the smooth model's).
 
+On a ``total`` row (an integrating sphere) the same terms act on the incidence alone: the
+tilt moves theta_i, the cone averages the directional-hemispherical reflectance
+(bsdflab.fit.hemispherical) over the illumination's directions, the slit over wavelength.
+
 The reported row is the weighted mean of pi f over the cone's and the slit's nodes (scale
 and background are applied after, by the posterior). All nodes of all rows are evaluated at
 once: one solve at the union of the slit's wavelengths, one ``Solution.eval`` of the
@@ -27,6 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from bsdflab.fit.hemispherical import directional_albedo
 from bsdflab.fit.stack_forward import FWHM_TO_SIGMA, cone_polar_nodes, slit_nodes
 
 TERMS = ("angle_offset_deg", "acceptance_deg", "bandwidth_nm")
@@ -55,8 +60,10 @@ class GonioQuadrature:
         bandwidth_nodes: int,
         cone_polar: int,
         cone_azimuths: int,
+        total=None,
     ):
         self.detector, self.source = np.asarray(detector, float), np.asarray(source, float)
+        self.total = np.zeros(len(self.source), bool) if total is None else np.asarray(total, bool)
         self.wavelength_nm = np.asarray(wavelength_nm, float)
         self._x, self._w = slit_nodes(bandwidth_nodes) if slit else (np.zeros(1), np.ones(1))
         if cone:
@@ -92,20 +99,32 @@ class GonioQuadrature:
         return det, sources, wb / wb.sum(axis=1, keepdims=True), wl, self._w / self._w.sum(), ok
 
     def pi_f(self, solve, offset, acceptance, bandwidth) -> np.ndarray:
-        """The rows' mean pi f (rows,): ``solve(wavelengths)`` gives a solution at those
-        wavelengths; NaN where ``points`` flags a row."""
+        """The rows' mean pi f (rows,), for total rows the mean directional-hemispherical
+        reflectance: ``solve(wavelengths)`` gives a solution at those wavelengths; NaN where
+        ``points`` flags a row."""
         det, sources, wc, wl, wk, ok = self.points(offset, acceptance, bandwidth)
         out = np.full(len(det), np.nan)
         if not np.any(ok):
             return out
-        det, sources, wc, wl = det[ok], sources[ok], wc[ok], wl[ok]
-        waves, wl_index = np.unique(wl, return_inverse=True)
-        rows, cone = sources.shape[:2]
+        waves = np.unique(wl[ok])
+        sol = solve(waves)
+        for rows in (ok & ~self.total, ok & self.total):
+            if np.any(rows):
+                out[rows] = self._mean(sol, waves, rows, det[rows], sources[rows], wc[rows], wl[rows], wk)
+        return out
+
+    def _mean(self, sol, waves, rows, det, sources, wc, wl, wk) -> np.ndarray:
+        """Rows' weighted means over their cone and slit nodes (all gonio or all total rows):
+        pi f of the distinct (detector, source) pairs, or the directional-hemispherical
+        reflectance of the distinct source cosines (bsdflab.fit.hemispherical)."""
+        n, cone = sources.shape[:2]
+        wl_index = np.searchsorted(waves, wl).reshape(n, 1, -1)
+        if np.all(self.total[rows]):
+            mu, mu_index = np.unique(sources[..., 2], return_inverse=True)
+            values = directional_albedo(sol, mu, waves)  # (cosines, wavelengths)
+            return np.einsum("rck,rc,k->r", values[mu_index.reshape(n, cone)[:, :, None], wl_index], wc, wk)
         pairs = np.concatenate([np.repeat(det[:, None, :], cone, axis=1), sources], axis=-1).reshape(-1, 6)
         pairs, pair_index = np.unique(pairs, axis=0, return_inverse=True)
-        sol = solve(waves)
         wi, wo = np.ascontiguousarray(pairs[:, :3]), np.ascontiguousarray(pairs[:, 3:])
         values = np.pi * sol.eval(wi, wo) / wo[:, 2:3]  # (pairs, wavelengths)
-        y = values[pair_index.reshape(rows, cone)[:, :, None], wl_index.reshape(rows, 1, -1)]
-        out[ok] = np.einsum("rck,rc,k->r", y, wc, wk)
-        return out
+        return np.einsum("rck,rc,k->r", values[pair_index.reshape(n, cone)[:, :, None], wl_index], wc, wk)
