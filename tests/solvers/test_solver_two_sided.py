@@ -26,7 +26,8 @@ import bsdflab as bl
 from bsdflab.optics.fresnel import fresnel_reflectance
 from bsdflab.oracles import AddingDoublingOracle
 from bsdflab.solvers import solve
-from bsdflab.testing import random_unit_vectors, sidak_significance, spherical_directions
+from bsdflab.testing import sidak_significance, spherical_directions
+from support.solver_pairs import pairs_by_kind, z_scores
 
 WL = [450.0, 550.0, 650.0]
 FAMILY_SIGNIFICANCE = 0.01
@@ -57,25 +58,7 @@ Z_MAX = stats.norm.isf(sidak_significance(FAMILY_SIGNIFICANCE, FAMILY) / 2)
 
 
 def pairs(seed):
-    """PER_KIND pairs of each kind, the first of each kind grazing on one side."""
-    wis, wos = [], []
-    graze = spherical_directions(np.radians([88.0, 86.0, 87.0, 88.0]), [0.5, 1.0, 2.0, 3.0])
-    for k, (hi, ho) in enumerate(KINDS):
-        wi = random_unit_vectors(PER_KIND, seed=seed + 2 * k, hemisphere=hi)
-        wo = random_unit_vectors(PER_KIND, seed=seed + 2 * k + 1, hemisphere=ho)
-        if k % 2:  # grazing viewer
-            wi[0] = graze[k] * np.array([1.0, 1.0, 1.0 if hi == "upper" else -1.0])
-        else:  # grazing light
-            wo[0] = graze[k] * np.array([1.0, 1.0, 1.0 if ho == "upper" else -1.0])
-        wis.append(wi)
-        wos.append(wo)
-    return np.concatenate(wis), np.concatenate(wos)
-
-
-def z_scores(est, ref, ref_err):
-    z = (np.abs(est.value - ref) - ref_err) / est.stderr
-    signed = (est.value - ref) / np.hypot(est.stderr, ref_err)
-    return z, np.mean(signed) * np.sqrt(signed.shape[0])
+    return pairs_by_kind(KINDS, PER_KIND, seed)
 
 
 _ESTIMATES = {}

@@ -1,0 +1,34 @@
+"""Direction pairs by kind and the z-scores of a PFMC estimate against the solver's value and
+bound, shared by the solver's z-tests (two-sided stacks, unmatched interiors, rough bases)."""
+from __future__ import annotations
+
+import numpy as np
+
+from bsdflab.testing import random_unit_vectors, spherical_directions
+
+# each kind's grazing direction (86-88 deg from the normal), on the light's or the viewer's side
+GRAZE = spherical_directions(np.radians([88.0, 86.0, 87.0, 88.0]), [0.5, 1.0, 2.0, 3.0])
+
+
+def pairs_by_kind(kinds, per_kind: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """``per_kind`` random pairs of each (wi, wo) hemisphere kind, ("upper", "lower") and so
+    on; the first pair of each kind grazing, the viewer for odd kinds and the light for even."""
+    wis, wos = [], []
+    for k, (hi, ho) in enumerate(kinds):
+        wi = random_unit_vectors(per_kind, seed=seed + 2 * k, hemisphere=hi)
+        wo = random_unit_vectors(per_kind, seed=seed + 2 * k + 1, hemisphere=ho)
+        if k % 2:  # grazing viewer
+            wi[0] = GRAZE[k] * np.array([1.0, 1.0, 1.0 if hi == "upper" else -1.0])
+        else:  # grazing light
+            wo[0] = GRAZE[k] * np.array([1.0, 1.0, 1.0 if ho == "upper" else -1.0])
+        wis.append(wi)
+        wos.append(wo)
+    return np.concatenate(wis), np.concatenate(wos)
+
+
+def z_scores(est, ref, ref_err):
+    """Per cell, PFMC's distance from the solver beyond the solver's bound in PFMC standard
+    errors; and the mean signed z of all cells times sqrt(cells) (a shared bias)."""
+    z = (np.abs(est.value - ref) - ref_err) / est.stderr
+    signed = (est.value - ref) / np.hypot(est.stderr, ref_err)
+    return z, np.mean(signed) * np.sqrt(signed.shape[0])
