@@ -58,10 +58,10 @@ def test_a_server_killed_during_an_uploads_check_leaves_no_folder_behind(tmp_pat
                     f"{server.url}/v1/measured", params={"format": "rgl"}, content=second, headers=OCTETS, timeout=120
                 )
             except httpx.HTTPError:
-                pass  # the server is killed under it
+                pass  # expected: the test kills the server while this upload waits for its check
 
         threading.Thread(target=held_upload, daemon=True).start()
-        end = time.monotonic() + 60
+        end = time.monotonic() + 600  # a hang guard only, never a timing check
         while not _private_folders(artefacts):  # the upload written, its check waiting
             assert time.monotonic() < end, "the upload's folder never appeared"
             time.sleep(0.02)
