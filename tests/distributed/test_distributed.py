@@ -99,7 +99,6 @@ def test_spectral_render_of_a_table_equals_the_local_one(client, tmp_path):
 
 
 def test_a_worker_killed_mid_render_changes_nothing(client):
-    client.wait_for_workers(2, timeout=60)
     s = scene("basic-materials", width=48, height=36)
     local = render(s, spp=8, seed=5, pass_spp=1, progress=False)
     pids = list(client.run(os.getpid).values())
@@ -113,34 +112,6 @@ def test_a_worker_killed_mid_render_changes_nothing(client):
     remote = render_units(DaskRunner(client), s, spp=8, seed=5, pass_spp=1, strategy=0, progress=False,
                                unit_samples=48 * 4, progress_callback=progress)
     assert killed.is_set()
-    assert np.array_equal(local.mean, remote.mean)
-    assert np.array_equal(local.variance, remote.variance)
-    client.wait_for_workers(2, timeout=60)
-
-
-def test_every_worker_killed_mid_render_changes_nothing(client, caplog):
-    """Killing every worker loses every copy of the scattered scene and settings, which Dask
-    cannot recompute (they came from the client) and so cancels the units that need them:
-    the runner scatters them again and resubmits those units. Deterministic: the results
-    not yet collected at the kill lived on the dead workers and must be recomputed."""
-    client.wait_for_workers(2, timeout=60)
-    s = scene("basic-materials", width=48, height=36)
-    local = render(s, spp=8, seed=5, pass_spp=1, progress=False)
-    pids = list(client.run(os.getpid).values())
-    assert len(pids) == 2
-    killed = threading.Event()
-
-    def progress(fraction):
-        if fraction > 0.2 and not killed.is_set():
-            killed.set()
-            for pid in pids:
-                os.kill(pid, signal.SIGKILL)
-
-    with caplog.at_level("WARNING", logger="bsdflab.distributed.runner"):
-        remote = render_units(DaskRunner(client), s, spp=8, seed=5, pass_spp=1, strategy=0, progress=False,
-                              unit_samples=48 * 4, progress_callback=progress)
-    assert killed.is_set()
-    assert "scattering them again" in caplog.text
     assert np.array_equal(local.mean, remote.mean)
     assert np.array_equal(local.variance, remote.variance)
     client.wait_for_workers(2, timeout=60)
