@@ -182,6 +182,12 @@ class FullStructure:
                 "[structure] base: a slab needs a base below it ([structure.base] albedo = ... or material = ...)"
             )
         top = Structure.parse({k: v for k, v in d.items() if k not in ("slab", "base", "interface")})
+        if top.spread_layers():
+            name = top.layers[top.spread_layers()[0]].name
+            raise ValueError(
+                f"[structure] layer {name!r}: thickness_spread_nm is not part of the full model ([model] kind = "
+                "'full'; its solver takes one thickness per layer): fit the spread with the smooth model"
+            )
         if top.substrate.material.k or top.substrate.material.k_amp:
             raise ValueError(
                 "[structure] substrate: the slab's matrix must be lossless (a number, {cauchy = [A, B]} "

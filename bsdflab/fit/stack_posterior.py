@@ -119,7 +119,8 @@ class StackPosterior(GaussianPosterior):
             raise ValueError(f"the config names {len(config.datasets)} dataset(s), got {len(datasets)}")
         self.datasets, self.stack = datasets, config
         m = config.model
-        self.models = [StackForward(d, config.structure, m.bandwidth_nodes, m.cone_nodes, m.cone_azimuths)
+        self.models = [StackForward(d, config.structure, m.bandwidth_nodes, m.cone_nodes, m.cone_azimuths,
+                                    m.thickness_nodes)
                        for d in datasets]
         bind(self, config, datasets, tuple(INSTRUMENT))
         self.dataset = concatenate(datasets, [spec.name for spec in config.datasets])
