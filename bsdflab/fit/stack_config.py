@@ -23,7 +23,7 @@ from bsdflab.fit.instrument import Instrument
 from bsdflab.fit.priors import Prior
 from bsdflab.fit.stack_forward import BANDWIDTH_NODES, CONE_AZIMUTHS, CONE_NODES
 from bsdflab.fit.structure import Structure
-from bsdflab.fit.thickness_spread import THICKNESS_NODES
+from bsdflab.fit.thickness_spread import THICKNESS_NODES, check_spread_cost
 
 _DATASET = re.compile(r"^[a-z][a-z0-9_]{0,31}$")
 
@@ -103,7 +103,12 @@ class StackConfig:
         if not priors and not any(s.instrument.priors for s in specs):
             raise ValueError("no free parameter: give at least one a prior")
         sampler = SamplerSettings.parse(d.get("sampler", {}))
-        return cls(structure, tuple(specs), priors, fixed, sampler, StackModelSettings.parse(d.get("model", {})),
+        model = StackModelSettings.parse(d.get("model", {}))
+        # the spreads that can be non-zero cost thickness_nodes^m sets each (a fixed 0 costs nothing)
+        spread = [structure.layers[i].name for i in structure.spread_layers()]
+        check_spread_cost(model.thickness_nodes,
+                          [n for n in spread if fixed.get(f"{n}_thickness_spread_nm", 1.0) != 0.0])
+        return cls(structure, tuple(specs), priors, fixed, sampler, model,
                    AppearanceSettings.parse(d.get("appearance", {})), source)
 
     @classmethod

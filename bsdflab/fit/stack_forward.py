@@ -81,9 +81,10 @@ class StackForward:
     def exact(self, value, offset, acceptance, bandwidth) -> np.ndarray:
         """The smeared reflectance (P, rows) before scale and background, averaged over the
         layers' thickness spreads (bsdflab.fit.thickness_spread: each set's thickness nodes
-        go through the instrument as extra sets of one call)."""
-        def smeared(v, repeat):
-            return self._smeared(v, *(np.repeat(np.asarray(a, float), repeat) for a in (offset, acceptance, bandwidth)))
+        go through the instrument as extra sets, in calls of at most CHUNK_SETS sets)."""
+        def smeared(v, index):
+            inst = (np.atleast_1d(np.asarray(a, float))[index] for a in (offset, acceptance, bandwidth))
+            return self._smeared(v, *inst)
         return spread_average(self.structure, value, smeared, self.thickness_nodes)
 
     def _smeared(self, value, offset, acceptance, bandwidth) -> np.ndarray:

@@ -229,3 +229,65 @@ def test_posterior_recovers_the_spread_from_tmm_data():
     best = run_sampler(sharp, sharp.config.sampler, progress=False).map.x
     m = sharp.predict(best[None, :])[0]
     assert np.mean(((data.reflectance - m) / 0.002) ** 2) > 2.0
+
+
+def test_clamped_nodes_against_tmm():
+    """A spread comparable to the thickness (d 5 nm, s 10 nm): the nodes below 0 nm are
+    evaluated at 0 nm (the layer absent there; thickness_spread.py's "Clamping", which biases
+    the mean thickness up by s phi(d/s) - d Phi(-d/s) = 3.1 nm here). Oracle: the same 12
+    Gauss-Hermite weights over tmm at max(0, d + sqrt(2) s x_k), so the tolerance is the
+    core's agreement with tmm (1e-12). Mutation caught: the clamp removed (negative
+    thicknesses reach the core) misses by > 1e-3."""
+    s = film(10.0, thickness=5.0)
+    got = StackForward(specular(ANGLES, WLS), s).exact(values(s), [0.0], [0.0], [0.0])[0]
+    x, w = np.polynomial.hermite.hermgauss(THICKNESS_NODES)
+    nodes = np.maximum(0.0, 5.0 + np.sqrt(2.0) * 10.0 * x)
+    assert np.sum(nodes == 0.0) >= 3
+    ref = [w @ [r_tmm(d, a, wl) for d in nodes] / np.sqrt(np.pi) for a in ANGLES for wl in WLS]
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12)
+
+
+def layers(count: int) -> dict:
+    return {"substrate": {"n": N_SUB}, "layers": [
+        {"name": f"l{i}", "material": {"n": N_FILM if i % 2 else 1.4}, "thickness_nm": 100.0,
+         "thickness_spread_nm": 2.0} for i in range(count)]}
+
+
+def test_spread_cost_is_capped():
+    """Five layers with a spread at 12 nodes would be 12^5 = 248 832 sets per parameter set:
+    the config refuses it naming thickness_nodes (fixing four spreads at 0 makes it 12 sets),
+    and so does the forward model when the batch turns them on (before it builds any set)."""
+    with pytest.raises(ValueError, match=r"thickness_nodes = 12 over the 5 layers.*248832"):
+        StackConfig.parse({"structure": layers(5), "parameters": {"l0_thickness_nm": {
+            "prior": "uniform", "low": 50.0, "high": 150.0}}})
+    fixed = {f"l{i}_thickness_spread_nm": 0.0 for i in range(1, 5)}
+    StackConfig.parse({"structure": layers(5), "parameters": {"l0_thickness_nm": {
+        "prior": "uniform", "low": 50.0, "high": 150.0}, **fixed}})
+    s = Structure.parse(layers(5))
+    with pytest.raises(ValueError, match="thickness_nodes"):
+        StackForward(specular([10.0], [500.0]), s).exact(values(s), [0.0], [0.0], [0.0])
+
+
+def test_many_sets_are_evaluated_in_chunks(monkeypatch):
+    """600 parameter sets x 12 nodes = 7200 thickness sets: the forward model sees at most
+    CHUNK_SETS at a time (memory of CHUNK_SETS sets, not of the caller's batch), and every
+    set's value equals its own evaluation alone to round-off. Mutation caught: one call for
+    the whole batch (7200 sets) fails the size assertion."""
+    from bsdflab.fit import thickness_spread as ts
+
+    s, data = film(15.0), specular([20.0, 60.0], [400.0, 433.0, 525.0])
+    f = StackForward(data, s)
+    sizes = []
+    smeared = f._smeared
+
+    def spy(value, offset, acceptance, bandwidth):
+        sizes.append(len(offset))
+        return smeared(value, offset, acceptance, bandwidth)
+    monkeypatch.setattr(f, "_smeared", spy)
+    thick = np.linspace(300.0, 500.0, 600)
+    inst = [np.linspace(0.0, 1.0, 600), np.full(600, 3.0), np.zeros(600)]
+    got = f.exact(values(s, 600, film_thickness_nm=thick), *inst)
+    assert max(sizes) <= ts.CHUNK_SETS and sum(sizes) == 600 * THICKNESS_NODES
+    for i in (0, 341, 599):
+        one = f.exact(values(s, 1, film_thickness_nm=thick[i]), *[[a[i]] for a in inst])[0]
+        np.testing.assert_allclose(got[i], one, rtol=0, atol=1e-15)
