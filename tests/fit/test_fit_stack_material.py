@@ -142,3 +142,29 @@ def test_study_material_renders(study, tmp_path):
             "--width", "12", "--height", "12", "--spp", "1", "--quiet", "--out", str(tmp_path / "sphere.exr"))
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "sphere.png").is_file()
+
+
+def test_one_walk_is_exact_for_eval_sample_and_pdf():
+    """The black base ends every walk, so material.json's one walk (stack_material.SAMPLES) is
+    exact: eval is exactly 0 for 4000 random pairs from above, grazing (cos 1e-9..1e-3) and
+    below; sample and pdf do not read ``samples`` (bit-identical to 256 walks), and every
+    sample off the top's delta reflection carries weight exactly 0, so a render that uses them
+    is unbiased. Mutation caught: a base reflectance of 0.01 gives eval > 0."""
+    s = Structure.parse(STRUCTURES["film"])
+    d = stack_material_dict(s, defaults(s))
+    one, many = from_dict(d), from_dict({**d, "samples": 256})
+    rng = np.random.default_rng(7)
+
+    def dirs(n, lo, hi):
+        z, phi = rng.uniform(lo, hi, n), rng.uniform(0.0, 2.0 * np.pi, n)
+        r = np.sqrt(1.0 - z * z)
+        return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+    wi = np.concatenate([dirs(1000, 1e-6, 1.0), dirs(1000, 1e-9, 1e-3), dirs(2000, -1.0, -1e-6)])
+    wo = dirs(4000, -1.0, 1.0)
+    assert np.all(one.eval(wi, wo) == 0.0) and np.all(one.eval(wi, wi * [-1.0, -1.0, 1.0]) == 0.0)
+    assert np.array_equal(one.pdf(wi, wo), many.pdf(wi, wo))
+    a, b = one.sample(wi), many.sample(wi)
+    for key in ("wo", "weight", "pdf", "lobe", "eta"):
+        assert np.array_equal(np.asarray(getattr(a, key)), np.asarray(getattr(b, key)), equal_nan=True), key
+    off = np.asarray(a.lobe) != int(Lobe.DELTA_REFLECTION)
+    assert np.all(np.asarray(a.weight)[off] == 0.0) and np.any(~off)
