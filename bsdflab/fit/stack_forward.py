@@ -81,11 +81,13 @@ class StackForward:
     def exact(self, value, offset, acceptance, bandwidth) -> np.ndarray:
         """The smeared reflectance (P, rows) before scale and background, averaged over the
         layers' thickness spreads (bsdflab.fit.thickness_spread: each set's thickness nodes
-        go through the instrument as extra sets, in calls of at most CHUNK_SETS sets)."""
+        go through the instrument as extra sets, in calls of bounded size)."""
         def smeared(v, index):
             inst = (np.atleast_1d(np.asarray(a, float))[index] for a in (offset, acceptance, bandwidth))
             return self._smeared(v, *inst)
-        return spread_average(self.structure, value, smeared, self.thickness_nodes)
+        # values one set costs: the spectrum per angle at its slit nodes (the shared grid is smaller)
+        per_set = len(self.angles) * len(self.wavelengths) * len(self._x)
+        return spread_average(self.structure, value, smeared, self.thickness_nodes, per_set)
 
     def _smeared(self, value, offset, acceptance, bandwidth) -> np.ndarray:
         bandwidth = np.asarray(bandwidth, float)

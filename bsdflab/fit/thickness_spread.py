@@ -11,8 +11,10 @@ ValueError naming ``thickness_nodes``: 5 layers x 12 nodes would be 248 832 sets
 block's layer is one layer (its parameters are shared), so every period takes the same draw: a spot where one
 platelet is thicker has them all thicker (the correlated case; independent periods would
 need K^periods sets). Each parameter set becomes K^m sets for the forward model, which
-evaluates them (instrument and all) in calls of at most ``CHUNK_SETS`` sets (so memory stays
-that of CHUNK_SETS sets however many draws a caller passes, e.g. 200 predictive draws x 12),
+evaluates them (instrument and all) in calls of about ``CHUNK_VALUES`` values (sets x the
+caller's values per set, e.g. angles x wavelengths x slit nodes; at least one parameter set's
+K^m), so memory stays bounded however many draws a caller passes (200 predictive draws x 12
+nodes on a 12 x 1000-wavelength dataset would be 2400 sets x 84 000 values, 1.6 GB an array),
 then the weights reduce them.
 
 Clamping: a node below 0 nm is evaluated at 0 nm (the layer absent there), so the averaged
@@ -33,7 +35,7 @@ import numpy as np
 
 THICKNESS_NODES = 12     # Gauss-Hermite nodes per layer with a spread
 MAX_SPREAD_SETS = 4096   # K^m thickness sets per parameter set (3 layers at 16 nodes)
-CHUNK_SETS = 4096        # thickness sets per forward call (memory ~ sets x rows)
+CHUNK_VALUES = 1 << 24   # sets x values per set in one forward call (128 MiB a float64 array)
 
 
 def check_spread_cost(k: int, layers) -> None:
@@ -57,11 +59,12 @@ def spread_nodes(k: int, m: int) -> tuple[np.ndarray, np.ndarray]:
             np.prod(np.stack([g.ravel() for g in weights], axis=1), axis=1))
 
 
-def spread_average(structure, value, evaluate, k: int = THICKNESS_NODES):
+def spread_average(structure, value, evaluate, k: int = THICKNESS_NODES, per_set: int = 1):
     """``evaluate(value, index)`` -> (P', rows) through ``structure``'s thickness spreads:
     ``evaluate`` is called with a value function over P' expanded sets (each parameter set's
-    K^m nodes consecutive, at most CHUNK_SETS per call) and ``index`` (P',), each expanded
-    set's parameter set (for the instrument arrays); returns (P, rows). Without a declared
+    K^m nodes consecutive; per call at most CHUNK_VALUES // ``per_set`` sets, ``per_set`` the
+    values one set costs the caller, or one parameter set's K^m) and ``index`` (P',), each
+    expanded set's parameter set (for the instrument arrays); returns (P, rows). Without a declared
     spread, or with every spread 0 in the batch, ``evaluate(value, slice(None))`` runs as is."""
     layers = [structure.layers[i].name for i in structure.spread_layers()]
     if not layers:
@@ -75,7 +78,7 @@ def spread_average(structure, value, evaluate, k: int = THICKNESS_NODES):
     offsets, weights = spread_nodes(k, len(layers))
     count = len(weights)
     mean = {n: np.asarray(value(f"{n}_thickness_nm"), float) for n in layers}
-    per_call = max(1, CHUNK_SETS // count)
+    per_call = max(1, CHUNK_VALUES // (count * max(1, int(per_set))))
     out = []
     for lo in range(0, len(sd), per_call):
         sets = np.arange(lo, min(lo + per_call, len(sd)))

@@ -269,12 +269,14 @@ def test_spread_cost_is_capped():
 
 
 def test_many_sets_are_evaluated_in_chunks(monkeypatch):
-    """600 parameter sets x 12 nodes = 7200 thickness sets: the forward model sees at most
-    CHUNK_SETS at a time (memory of CHUNK_SETS sets, not of the caller's batch), and every
-    set's value equals its own evaluation alone to round-off. Mutation caught: one call for
-    the whole batch (7200 sets) fails the size assertion."""
+    """600 parameter sets x 12 nodes = 7200 thickness sets, each costing 2 angles x 3
+    wavelengths x 7 slit nodes = 42 values, with CHUNK_VALUES lowered to 42 x 1000: the
+    forward model sees at most 1000 sets a call (memory bounded whatever the caller's batch),
+    and every set's value equals its own evaluation alone to round-off. Mutation caught: one
+    call for the whole batch (7200 sets) fails the size assertion."""
     from bsdflab.fit import thickness_spread as ts
 
+    monkeypatch.setattr(ts, "CHUNK_VALUES", 42 * 1000)
     s, data = film(15.0), specular([20.0, 60.0], [400.0, 433.0, 525.0])
     f = StackForward(data, s)
     sizes = []
@@ -287,7 +289,7 @@ def test_many_sets_are_evaluated_in_chunks(monkeypatch):
     thick = np.linspace(300.0, 500.0, 600)
     inst = [np.linspace(0.0, 1.0, 600), np.full(600, 3.0), np.zeros(600)]
     got = f.exact(values(s, 600, film_thickness_nm=thick), *inst)
-    assert max(sizes) <= ts.CHUNK_SETS and sum(sizes) == 600 * THICKNESS_NODES
+    assert max(sizes) <= 1000 and sum(sizes) == 600 * THICKNESS_NODES
     for i in (0, 341, 599):
         one = f.exact(values(s, 1, film_thickness_nm=thick[i]), *[[a[i]] for a in inst])[0]
         np.testing.assert_allclose(got[i], one, rtol=0, atol=1e-15)
