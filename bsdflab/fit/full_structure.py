@@ -44,9 +44,9 @@ from bsdflab.fit import parameters as P
 from bsdflab.fit.config import DISTRIBUTIONS
 from bsdflab.fit.material import SIGMA_A_GRID_NM
 from bsdflab.fit.materials import NAMED, Material, material
+from bsdflab.fit.stack_material import REFERENCE_NM, film_material, real_index
 from bsdflab.fit.structure import Medium, Structure
 
-REFERENCE_NM = 550.0
 SLAB_KEYS = ("thickness_um", "sigma_a", "pigment_absorption", "absorption_exponent", "sigma_s", "hg_g")
 SLAB_PARAMETERS = {
     "thickness_um": "slab_thickness_um",
@@ -104,25 +104,10 @@ class FullStructure:
         return (*TOP_NAMES_FIXED, *(p.name for p in self.top.parameters() if not p.name.startswith("substrate_")))
 
     def _real_index(self, m: Medium, v: dict, prefix: str) -> float:
-        keys = [c.key for c in m.material.coefficients() if c.key != "k"]
-        n = m.material.index({k: np.array([v[f"{prefix}_{k}"]]) for k in keys}, np.array([[REFERENCE_NM]]))
-        return float(n.real[0, 0])
+        return real_index(m, v, prefix)
 
     def _film_material(self, m: Medium, v: dict) -> dict:
-        mat = m.material
-        keys = [c.key for c in mat.coefficients()]
-        coef = {k: v[f"{m.name}_{k}"] for k in keys}
-        k = coef.get("k", mat.k)
-        if k == 0 and not mat.k_amp:
-            return {
-                "type": "cauchy",
-                "A": coef.get("ior", mat.A),
-                "B": coef.get("cauchy_b", mat.B),
-                "C": coef.get("cauchy_c", mat.C),
-            }
-        wl = SIGMA_A_GRID_NM
-        n = mat.index({key: np.array([x]) for key, x in coef.items()}, wl[None, :])[0]
-        return {"type": "tabulated", "wavelengths_nm": wl.tolist(), "n": n.real.tolist(), "k": n.imag.tolist()}
+        return film_material(m, v)
 
     def sigma_a_values(self, v: dict) -> np.ndarray:
         """The slab's absorption coefficient (1/um) on SIGMA_A_GRID_NM."""
@@ -182,6 +167,12 @@ class FullStructure:
                 "[structure] base: a slab needs a base below it ([structure.base] albedo = ... or material = ...)"
             )
         top = Structure.parse({k: v for k, v in d.items() if k not in ("slab", "base", "interface")})
+        if top.spread_layers():
+            name = top.layers[top.spread_layers()[0]].name
+            raise ValueError(
+                f"[structure] layer {name!r}: thickness_spread_nm is not part of the full model ([model] kind = "
+                "'full'; its solver takes one thickness per layer): fit the spread with the smooth model"
+            )
         if top.substrate.material.k or top.substrate.material.k_amp:
             raise ValueError(
                 "[structure] substrate: the slab's matrix must be lossless (a number, {cauchy = [A, B]} "

@@ -6,7 +6,8 @@ and instruments"):
     [[dataset]]        co-refinement: name, data (a CSV path, relative to the config) and its
                        own [dataset.instrument]; the structure's parameters are shared
     [parameters]       priors or fixed values of the structure's parameters and noise_scale
-    [model]            bandwidth_nodes, cone_nodes, cone_azimuths (the instrument's quadratures)
+    [model]            bandwidth_nodes, cone_nodes, cone_azimuths (the instrument's quadratures),
+                   thickness_nodes (the layers' thickness spreads)
     [sampler]          as fit.toml (bsdflab.fit.config.SamplerSettings)
 """
 from __future__ import annotations
@@ -22,6 +23,7 @@ from bsdflab.fit.instrument import Instrument
 from bsdflab.fit.priors import Prior
 from bsdflab.fit.stack_forward import BANDWIDTH_NODES, CONE_AZIMUTHS, CONE_NODES
 from bsdflab.fit.structure import Structure
+from bsdflab.fit.thickness_spread import THICKNESS_NODES, check_spread_cost
 
 _DATASET = re.compile(r"^[a-z][a-z0-9_]{0,31}$")
 
@@ -31,12 +33,13 @@ class StackModelSettings:
     bandwidth_nodes: int = BANDWIDTH_NODES
     cone_nodes: int = CONE_NODES
     cone_azimuths: int = CONE_AZIMUTHS
+    thickness_nodes: int = THICKNESS_NODES
 
     @classmethod
     def parse(cls, d: dict) -> StackModelSettings:
         d = {k: v for k, v in _table("model", d).items() if k != "kind" or v != "stack"}
         s = cls(**_settings(cls, "model", d, {"bandwidth_nodes": (1, 63), "cone_nodes": (1, 64),
-                                              "cone_azimuths": (1, 64)}))
+                                              "cone_azimuths": (1, 64), "thickness_nodes": (1, 64)}))
         if s.bandwidth_nodes % 2 == 0:
             raise ValueError(f"[model] bandwidth_nodes must be odd (the middle node is the nominal "
                              f"wavelength), got {s.bandwidth_nodes}")
@@ -100,7 +103,12 @@ class StackConfig:
         if not priors and not any(s.instrument.priors for s in specs):
             raise ValueError("no free parameter: give at least one a prior")
         sampler = SamplerSettings.parse(d.get("sampler", {}))
-        return cls(structure, tuple(specs), priors, fixed, sampler, StackModelSettings.parse(d.get("model", {})),
+        model = StackModelSettings.parse(d.get("model", {}))
+        # the spreads that can be non-zero cost thickness_nodes^m sets each (a fixed 0 costs nothing)
+        spread = [structure.layers[i].name for i in structure.spread_layers()]
+        check_spread_cost(model.thickness_nodes,
+                          [n for n in spread if fixed.get(f"{n}_thickness_spread_nm", 1.0) != 0.0])
+        return cls(structure, tuple(specs), priors, fixed, sampler, model,
                    AppearanceSettings.parse(d.get("appearance", {})), source)
 
     @classmethod

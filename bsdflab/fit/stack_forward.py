@@ -19,6 +19,7 @@ import numpy as np
 from bsdflab import _core
 from bsdflab.fit.data import GEOMETRIES, Dataset
 from bsdflab.fit.structure import Structure
+from bsdflab.fit.thickness_spread import THICKNESS_NODES, spread_average
 
 GRID_SIGMA_STEPS = 1.2   # the shared grid's step is at most sigma / 1.2
 GRID_MAX_REFINE = 4      # grid step >= h / 4; narrower slits use Gauss-Hermite
@@ -47,7 +48,8 @@ def cone_polar_nodes(n: int = CONE_NODES) -> tuple[np.ndarray, np.ndarray]:
 
 class StackForward:
     def __init__(self, dataset: Dataset, structure: Structure, bandwidth_nodes: int = BANDWIDTH_NODES,
-                 cone_nodes: int = CONE_NODES, cone_azimuths: int = CONE_AZIMUTHS):
+                 cone_nodes: int = CONE_NODES, cone_azimuths: int = CONE_AZIMUTHS,
+                 thickness_nodes: int = THICKNESS_NODES):
         bad = dataset.geometry != GEOMETRIES.index("specular")
         if np.any(bad):
             i = int(np.argmax(bad))
@@ -57,6 +59,9 @@ class StackForward:
             raise ValueError(f"bandwidth_nodes must be odd, in [1, 63], got {bandwidth_nodes}")
         if not 1 <= cone_nodes <= 64 or not 1 <= cone_azimuths <= 64:
             raise ValueError(f"cone_nodes and cone_azimuths must lie in [1, 64], got {cone_nodes}, {cone_azimuths}")
+        if not 1 <= thickness_nodes <= 64:
+            raise ValueError(f"thickness_nodes must lie in [1, 64], got {thickness_nodes}")
+        self.thickness_nodes = int(thickness_nodes)
         self.dataset, self.structure = dataset, structure
         self.angles, self._ai = np.unique(dataset.angle_deg, return_inverse=True)
         self.wavelengths, self._wi = np.unique(dataset.wavelength_nm, return_inverse=True)
@@ -74,7 +79,17 @@ class StackForward:
         return len(self.dataset)
 
     def exact(self, value, offset, acceptance, bandwidth) -> np.ndarray:
-        """The smeared reflectance (P, rows) before scale and background."""
+        """The smeared reflectance (P, rows) before scale and background, averaged over the
+        layers' thickness spreads (bsdflab.fit.thickness_spread: each set's thickness nodes
+        go through the instrument as extra sets, in calls of bounded size)."""
+        def smeared(v, index):
+            inst = (np.atleast_1d(np.asarray(a, float))[index] for a in (offset, acceptance, bandwidth))
+            return self._smeared(v, *inst)
+        # values one set costs: the spectrum per angle at its slit nodes (the shared grid is smaller)
+        per_set = len(self.angles) * len(self.wavelengths) * len(self._x)
+        return spread_average(self.structure, value, smeared, self.thickness_nodes, per_set)
+
+    def _smeared(self, value, offset, acceptance, bandwidth) -> np.ndarray:
         bandwidth = np.asarray(bandwidth, float)
         sigma = np.where(np.isfinite(bandwidth), bandwidth, 0.0) * FWHM_TO_SIGMA
         if self._step is not None and len(sigma) and np.all(sigma > 0):

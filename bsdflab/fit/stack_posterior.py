@@ -22,6 +22,7 @@ from bsdflab.fit.posterior import GaussianPosterior
 from bsdflab.fit.priors import Prior
 from bsdflab.fit.stack_config import StackConfig
 from bsdflab.fit.stack_forward import StackForward
+from bsdflab.fit.stack_material import stack_material_dict, stack_material_note
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 
@@ -119,7 +120,8 @@ class StackPosterior(GaussianPosterior):
             raise ValueError(f"the config names {len(config.datasets)} dataset(s), got {len(datasets)}")
         self.datasets, self.stack = datasets, config
         m = config.model
-        self.models = [StackForward(d, config.structure, m.bandwidth_nodes, m.cone_nodes, m.cone_azimuths)
+        self.models = [StackForward(d, config.structure, m.bandwidth_nodes, m.cone_nodes, m.cone_azimuths,
+                                    m.thickness_nodes)
                        for d in datasets]
         bind(self, config, datasets, tuple(INSTRUMENT))
         self.dataset = concatenate(datasets, [spec.name for spec in config.datasets])
@@ -151,3 +153,14 @@ class StackPosterior(GaussianPosterior):
                                         inst("acceptance_deg"), inst("bandwidth_nm")))
         out[inside] = np.concatenate(parts, axis=1)
         return out
+
+    def _values(self, x) -> dict[str, float]:
+        return {n: float(v[0]) for n, v in self.named(np.atleast_2d(x)).items()}
+
+    def material_dict(self, x) -> dict:
+        """The renderable model dict of one free parameter vector (bsdflab.fit.stack_material)."""
+        return stack_material_dict(self.stack.structure, self._values(x))
+
+    def material_note(self, x) -> str:
+        """What that dict carries of the fit and what not (summary.json)."""
+        return stack_material_note(self.stack.structure, self._values(x))

@@ -3,8 +3,9 @@ posterior draws, parameter table, corner, predictive, residual and trace figures
 summary.json, the inputs. summary.json carries the predictive checks (bsdflab.fit.checks,
 per dataset and series: a row's model value comes through its dataset's instrument) and the
 warnings (bsdflab.fit.alerts). Written into a temporary folder beside ``out`` and renamed at
-the end, like bsdflab.fit.study (whose snake-specific parts -- material.json, appearance,
-renders -- have no counterpart for a general stack)."""
+the end, like bsdflab.fit.study; material.json is the posterior median as a renderable model
+(the smooth stack's: bsdflab.fit.stack_material; the full model's Layered). The snake study's
+appearance and renders have no counterpart for a general stack."""
 from __future__ import annotations
 
 import csv
@@ -17,6 +18,7 @@ import time
 
 import numpy as np
 
+from bsdflab.bsdfs import from_dict
 from bsdflab.fit.alerts import emulator_alert, fit_alerts
 from bsdflab.fit.checks import ALPHA, normalised_residuals, predictive_checks, sidak_level
 from bsdflab.fit.data import Dataset, read_csv
@@ -85,6 +87,20 @@ def _posterior(datasets, config, progress: bool):
     return StackPosterior(datasets, config)
 
 
+def _write_material(post, median: np.ndarray, folder: str, summary: dict) -> None:
+    """material.json: the posterior median as a renderable model (the full model's Layered,
+    or the smooth stack's: bsdflab.fit.stack_material), in its canonical (to_dict) form;
+    summary.json's material_note says what it carries, or why there is none."""
+    try:
+        model = from_dict(post.material_dict(median)).to_dict()
+    except ValueError as e:        # e.g. more film layers than an interface takes
+        summary["material_note"] = f"no material.json: {e}"
+        return
+    if hasattr(post, "material_note"):
+        summary["material_note"] = post.material_note(median)
+    _text(os.path.join(folder, "material.json"), json.dumps(model, indent=1) + "\n")
+
+
 def _write(datasets, config: StackConfig, folder: str, progress: bool) -> dict:
     t0 = time.perf_counter()
     post = _posterior(datasets, config, progress)
@@ -139,9 +155,7 @@ def _write(datasets, config: StackConfig, folder: str, progress: bool) -> dict:
         "warnings": [a.to_dict() for a in alerts],
         "seconds": time.perf_counter() - t0,
     }
-    if hasattr(post, "material_dict"):     # the full model: the posterior median as a renderable material
-        summary.update(extra)
-        median = np.median(draws, axis=0)
-        _text(os.path.join(folder, "material.json"), json.dumps(post.material_dict(median), indent=1) + "\n")
+    summary.update(extra)
+    _write_material(post, np.median(draws, axis=0), folder, summary)
     _text(os.path.join(folder, "summary.json"), json.dumps(summary, indent=1, default=float) + "\n")
     return summary
