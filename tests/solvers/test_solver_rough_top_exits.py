@@ -55,6 +55,10 @@ CASES = {
     "GGX 0.3 top / clear slab / smooth base to 1.0": lambda: bl.Layered(
         [bl.RoughDielectric(0.3, 1.5, 1.0)], [CLEAR], bl.Dielectric(1.0, 1.5)
     ),
+    # a rough interior interface between unequal indices on the way (sampled at the nodes)
+    "GGX 0.2 top / HG slab / GGX 0.5 1.5 -> 2.0 / iso slab / smooth base to 1.0": lambda: bl.Layered(
+        [bl.RoughDielectric(0.2, 1.5, 1.0), bl.RoughDielectric(0.5, 2.0, 1.5)], [HG, ISO], bl.Dielectric(1.0, 2.0)
+    ),
 }
 ESTIMATORS = ("pfmc2", pytest.param("pfmc", marks=pytest.mark.slow))
 FAMILY = len(ESTIMATORS) * len(CASES) * (len(KINDS) * PER_KIND * len(WL) + 1)
