@@ -20,11 +20,11 @@ and a smooth dielectric base (``Solution.two_sided``) also transmission both way
 reflection from below (the stack's four operators by the adding equations); the same
 for a smooth top over a rough dielectric base (``Solution.every_pair``), the base's
 transmission lobes product-integrated at the exit and the entry and its own reflection
-from below evaluated directly; and for a rough top over a smooth dielectric base
-(``every_pair``), the top's lobes product-integrated the same way above. A rough top over
-a rough dielectric base (or a rough base under a smooth interior interface between unequal
-indices): pairs with wi.z < 0 or wo.z < 0 raise ValueError naming it (an opaque stack's
-are zero, its value). Every other stack
+from below evaluated directly; and for a rough top over a smooth or rough dielectric base
+(``every_pair``), the top's lobes product-integrated the same way above (over a rough base
+the beam between the two lobes on their common fine nodes). A rough base under a smooth
+interior interface between unequal indices: pairs with wi.z < 0 or wo.z < 0 raise
+ValueError naming it (an opaque stack's are zero, its value). Every other stack
 ``Layered`` accepts is solved or refused with a ValueError naming its code in ``GAPS``
 (docs/solvers.md, "Solved and refused").
 
@@ -78,11 +78,10 @@ GAPS = {
                 "files; PFMC remains the path)",
     "base-kind": "the solver takes its operators from Diffuse, Conductor, RoughConductor, Dielectric, "
                  "RoughDielectric and spectral Measured bases only",
-    "rough-exit": "transmission and reflection from below through a rough top over a rough base would need "
-                  "both lobes' product integration against each other (the beam between them), and a rough "
-                  "base's under a smooth interior interface between unequal indices would need it on that "
-                  "solve's nodes in n sin(theta) (neither implemented): for pairs with wi.z < 0 or wo.z < 0 "
-                  "use the model's own eval (PFMC)",
+    "rough-exit": "transmission and reflection from below through a rough base under a smooth interior "
+                  "interface between unequal indices would need the base's product integration on that "
+                  "solve's nodes in n sin(theta) (not implemented): for pairs with wi.z < 0 or wo.z < 0 use "
+                  "the model's own eval (PFMC)",
 }
 
 
@@ -206,8 +205,9 @@ class Solution:
     @property
     def every_pair(self) -> bool:
         """Whether every pair is solved: ``two_sided``, or a transmissive stack with a
-        smooth top and a rough dielectric base, or a rough top and a smooth dielectric base
-        (the rough boundary's exits by product integration)."""
+        smooth or rough top over a smooth or rough dielectric base (the rough boundaries'
+        exits by product integration), except a rough base under a smooth unmatched
+        interior interface."""
         return bool(self._core.every_pair)
 
     def _pairs(self, wi, wo) -> tuple[np.ndarray, np.ndarray]:
@@ -215,16 +215,17 @@ class Solution:
         if self._transmits and not self.every_pair and np.any((a[:, 2] < 0) | (b[:, 2] < 0)):
             raise refusal("rough-exit", f"this stack transmits through {exit_gap_reason(self.model)}, and "
                                         f"adding-doubling solves transmission and reflection from below "
-                                        f"for a smooth top over a smooth or rough dielectric base and a rough "
-                                        f"top over a smooth dielectric base")
+                                        f"for a smooth or rough top over a smooth or rough dielectric base "
+                                        f"only where no smooth unmatched interior interface lies above a "
+                                        f"rough base")
         return a, b
 
     def eval(self, wi, wo, scattered_only: bool = False) -> np.ndarray:
         """f(wi, wo) |cos theta_o|, (N, C), light arriving from wo and leaving toward wi:
         reflection from above; for an ``every_pair`` stack every pair (transmission both
         ways, reflection from below); 0 for the other pairs of an opaque stack (its
-        value). Another transmissive stack (a rough top over a rough base) raises
-        ValueError for pairs with wi.z < 0 or wo.z < 0.
+        value). Another transmissive stack (a rough base under a smooth unmatched interior
+        interface) raises ValueError for pairs with wi.z < 0 or wo.z < 0.
         ``scattered_only`` leaves out the entry boundary's own reflection: a rough top's
         from above (what a table stores; ``Layered.exact_part`` re-adds it), a rough
         base's from below (as ``Layered.estimate(scattered_only=True)``)."""
@@ -367,11 +368,8 @@ def one_sided_reason(model: Layered) -> str:
 
 
 def exit_gap_reason(model: Layered) -> str:
-    """Why a transmissive stack's pairs below are refused (``[rough-exit]``): its rough top
-    over a rough base, or its rough base under a smooth interior interface between unequal
-    indices."""
-    if getattr(model.interfaces[0], "alpha", None) is not None:
-        return "a rough top over a rough base"
+    """Why a transmissive stack's pairs below are refused (``[rough-exit]``): its rough base
+    under a smooth interior interface between unequal indices (the only such stack)."""
     return "a rough base under a smooth interior interface between unequal indices"
 
 

@@ -92,8 +92,8 @@ AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
         }
     }
     ad::panel_nodes(settings_.nodes, breaks_, mu_, w_);
-    rough_base_exit_ =
-        smooth_top_ && !snell_ && K >= 1 && media_[K + 1] > 0 && ad::rough_alpha(*boundaries_[K]) > 0;
+    rough_base_exit_ = (smooth_top_ || ad::rough_alpha(*boundaries_[0]) > 0) && !snell_ && K >= 1 &&
+                       media_[K + 1] > 0 && ad::rough_alpha(*boundaries_[K]) > 0;
     rough_top_exit_ = !smooth_top_ && ad::rough_alpha(*boundaries_[0]) > 0 && K >= 1 && media_[K + 1] > 0 &&
                       ad::is_delta(*boundaries_[K]);
     // Fourier orders: what the slabs' phase functions and the boundaries below the top

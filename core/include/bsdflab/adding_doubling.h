@@ -36,7 +36,8 @@
 // product-integrated against the radiance at the nodes at the exit (and at the entry of
 // light from below), its own reflection from below evaluated directly; and a rough top
 // over a smooth dielectric base (every_pair()), the top's kernels product-integrated the
-// same way above, the base's query cosines extras. Other stacks return 0 there.
+// same way above, the base's query cosines extras (over a rough base, both lobes on
+// common fine nodes). Other stacks return 0 there.
 #pragma once
 #include <memory>
 #include <mutex>
@@ -79,9 +80,10 @@ class AddingDoubling {
     // A transmissive stack whose every pair is solved (transmission both ways, reflection
     // from below): a smooth top and a smooth dielectric base around at least one slab.
     bool two_sided() const { return two_sided_; }
-    // Whether every pair is solved: two_sided(), a transmissive stack with a smooth top
-    // and a rough dielectric base (its exits by product integration: eval_rough_base), or
-    // one with a rough top and a smooth dielectric base (the top's: eval_rough_top).
+    // Whether every pair is solved: two_sided(), a transmissive stack with a smooth or
+    // rough top and a rough dielectric base (its exits by product integration:
+    // eval_rough_base), or one with a rough top and a smooth dielectric base (the top's:
+    // eval_rough_top).
     bool every_pair() const { return two_sided_ || rough_base_exit_ || rough_top_exit_; }
     // Largest measured error of the film lookups used (-1: none).
     double film_lookup_error() const { return film_lookup_error_; }
@@ -112,9 +114,10 @@ class AddingDoubling {
                             const std::vector<double> &w_f, const std::vector<double> &B,
                             const std::vector<double> &YD, const std::vector<double> &out_cos,
                             const std::vector<double> &in_cos, std::vector<double> &values) const;
-    // The pairs with wi.z < 0 or wo.z < 0 of a smooth top over a rough dielectric base
-    // (adding_doubling_exits.cpp): the stack's operators with the top's refracted query
-    // cosines as extras, the base's kernels product-integrated at the exit and the entry.
+    // The pairs with wi.z < 0 or wo.z < 0 of a smooth or rough top over a rough dielectric
+    // base (adding_doubling_exits.cpp): the stack's operators with a smooth top's refracted
+    // query cosines as extras, the base's kernels product-integrated at the exit and the
+    // entry (a rough top's too, the beam between the two lobes on common fine nodes).
     void eval_rough_base(const double *wi, const double *wo, std::size_t n, double *out,
                          bool scattered_only) const;
     // The pairs with wi.z < 0 or wo.z < 0 of a rough top over a smooth dielectric base
