@@ -1,6 +1,7 @@
 """Adding-doubling through a rough top over a rough dielectric base (Solution.every_pair):
 transmission down and up and reflection from below against PFMC (bsdflab.Layered), energy
-conservation of a lossless stack from both sides, and reciprocity with the index ratio.
+conservation of a lossless stack from both sides, reciprocity with the index ratio, and
+degenerate directions.
 
 The two lobes meet in the unscattered beam between them, so that part is integrated on
 their common fine nodes against the stack's (smooth) delta part
@@ -137,3 +138,16 @@ def test_04_reciprocity_with_the_index_ratio():
     print(f"reciprocity: max relative difference {np.max(np.abs(a - b) / a):.1e}, "
           f"max difference / bounds {np.max(np.abs(a - b) / tol):.3f}")
     assert np.all(np.abs(a - b) <= tol)
+
+
+def test_05_degenerate_directions_read_zero():
+    """NaN, infinite, zero and horizontal directions read 0 (finite) in the core beside
+    valid pairs, and do not change a valid pair's value."""
+    sol = solve(CASES["GGX 0.3 top / clear slab / GGX 0.5 base to 1.0"](), WL)
+    good_wi, good_wo = pairs_by_kind(KINDS, 1, 3)
+    bad = np.array([[np.nan, 0.0, -1.0], [np.inf, 0.0, -1.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    wi = np.concatenate([good_wi[-1:].repeat(4, 0), bad, good_wi[-1:]])
+    wo = np.concatenate([bad, good_wo[-1:].repeat(4, 0), good_wo[-1:]])
+    v = sol._core.eval(wi, wo, False)
+    assert np.all(np.isfinite(v)) and np.all(v[:8] == 0.0) and np.all(v[8] > 0)
+    assert np.array_equal(v[8], sol.eval(good_wi[-1:], good_wo[-1:])[0])
