@@ -242,7 +242,11 @@ class Solution:
         checks it). Through a rough base or top (``every_pair``, not ``two_sided``) the
         change to a solve with only the fine step doubled is added (``_fine_step_core``). Per pair,
         the largest relative change over the channels applies to every channel (the
-        change alone crosses zero where the error does not)."""
+        change alone crosses zero where the error does not). Not covered: a rough top's
+        sub-panels are clamped to [0.004, 0.05] rad in both solves, so for alpha x
+        ``fine_step`` >= 0.05 (alpha >= 0.2 at the default, 0.1 in tables) or <= 0.002 the
+        fine step's error is missed; over a rough base the top's orders 6/alpha + 2 are
+        the same in all three solves (docs/known_limits.md)."""
         a, b = self._pairs(wi, wo)
         fine = self._core.eval(a, b, bool(scattered_only))
         coarse = self._coarse_core().eval(a, b, bool(scattered_only))
