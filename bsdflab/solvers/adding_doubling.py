@@ -245,8 +245,7 @@ class Solution:
         change alone crosses zero where the error does not). Not covered: a rough top's
         sub-panels are clamped to [0.004, 0.05] rad in both solves, so for alpha x
         ``fine_step`` >= 0.05 (alpha >= 0.2 at the default, 0.1 in tables) or <= 0.002 the
-        fine step's error is missed; over a rough base the top's orders 6/alpha + 2 are
-        the same in all three solves (docs/known_limits.md)."""
+        fine step's error is missed (docs/known_limits.md)."""
         a, b = self._pairs(wi, wo)
         fine = self._core.eval(a, b, bool(scattered_only))
         coarse = self._coarse_core().eval(a, b, bool(scattered_only))

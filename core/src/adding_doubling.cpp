@@ -113,9 +113,11 @@ AddingDoubling::AddingDoubling(std::vector<double> wavelengths,
         else if (boundaries_[j]->lobes() & (kGlossyReflection | kGlossyTransmission)) M = std::max(M, 64);
     }
     // A rough top over a delta reflection path: the returning beam crosses the top twice,
-    // in lobes of its own width (ad::rough_top_values' fine-node product).
+    // in lobes of its own width (ad::rough_top_values' fine-node product); over a rough
+    // base (eval_rough_base) the unscattered beam joins the top's lobe to the base's. In
+    // orders_, so an explicit orders= and the bound's coarser solve reach them.
     const double top_alpha = ad::rough_alpha(*boundaries_[0]);
-    if (!smooth_top_ && delta_below_ && top_alpha > 0)
+    if (!smooth_top_ && (delta_below_ || rough_base_exit_) && top_alpha > 0)
         M = std::max(M, static_cast<int>(std::ceil(6.0 / top_alpha)) + 2);
     orders_ = settings_.orders > 0 ? settings_.orders : M;
     int H = 32;

@@ -45,8 +45,8 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
     // orders, at most 4 x (light entering and leaving through the base returns in a lobe
     // as narrow, around the mirror direction).
     // A rough top (over the rough base): its transmission lobes meet the base's in the
-    // unscattered beam, so the narrower of the two sets the samples and orders, and the
-    // top's own lobe carries 6 / alpha + 2 orders.
+    // unscattered beam, so the narrower of the two sets the samples and orders (orders_
+    // carries the top's 6 / alpha + 2: the constructor).
     const bool rough_top = !smooth_top_;
     const double nb = media_[K], nu = media_[K + 1], at = ad::rough_alpha(*boundaries_[0]);
     const double contrast_b = std::max(std::abs(nb - nu) / std::max(nb, nu), 1.0 / 16.0);
@@ -56,8 +56,7 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
     int Hx = half_samples_, widen = 1;
     while (Hx * contrast < half_samples_) Hx *= 2;
     while (widen < 4 && widen * contrast < 1.0) widen *= 2;
-    const int M0 = rough_top ? std::max(orders_, static_cast<int>(std::ceil(6.0 / at)) + 2) : orders_;
-    const int C = channels(), M = M0 * widen, n = static_cast<int>(mu_.size());
+    const int C = channels(), M = orders_ * widen, n = static_cast<int>(mu_.size());
     while (rough_top && Hx < 2 * M) Hx *= 2;
     const std::size_t CM = static_cast<std::size_t>(C) * M;
     const BSDF &top = *boundaries_[0], &base = *boundaries_[K];

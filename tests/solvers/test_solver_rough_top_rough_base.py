@@ -151,3 +151,19 @@ def test_05_degenerate_directions_read_zero():
     v = sol._core.eval(wi, wo, False)
     assert np.all(np.isfinite(v)) and np.all(v[:8] == 0.0) and np.all(v[8] > 0)
     assert np.array_equal(v[8], sol.eval(good_wi[-1:], good_wo[-1:])[0])
+
+
+def test_06_the_top_lobes_orders_are_the_solves_own():
+    """The rough top's lobes need 6/alpha + 2 Fourier orders; they are part of the solve's
+    orders (``Solution.orders``), so an explicit ``orders=`` and the bound's check solve
+    (2/3 of them) reach the top's lobes below a rough base too. Here the base (GGX 0.5:
+    14) would set fewer than the top (GGX 0.3: 22). Before, eval_rough_base raised any
+    orders to 22 on its own: the check solve's change missed that truncation and orders=2
+    read exactly what orders=4 did (measured after: 0.55 relative apart at a grazing
+    transmission pair, orders=4 within 6.2e-3 of the default 22)."""
+    model = CASES["GGX 0.3 top / clear slab / GGX 0.5 base to 1.0"]()
+    assert solve(model, [550.0]).orders >= 22
+    wi, wo = pairs_by_kind(KINDS[:2], 1, 7)
+    few, more = (solve(model, [550.0], orders=m).eval(wi, wo) for m in (2, 4))
+    assert np.all(few > 0) and np.all(more > 0)
+    assert np.max(np.abs(few - more) / more) > 0.1
