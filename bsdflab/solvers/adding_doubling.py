@@ -20,9 +20,11 @@ and a smooth dielectric base (``Solution.two_sided``) also transmission both way
 reflection from below (the stack's four operators by the adding equations); the same
 for a smooth top over a rough dielectric base (``Solution.every_pair``), the base's
 transmission lobes product-integrated at the exit and the entry and its own reflection
-from below evaluated directly. A rough top of a transmissive stack (or a rough base under
-a smooth interior interface between unequal indices): pairs with wi.z < 0 or wo.z < 0
-raise ValueError naming it (an opaque stack's are zero, its value). Every other stack
+from below evaluated directly; and for a rough top over a smooth or rough dielectric base
+(``every_pair``), the top's lobes product-integrated the same way above (over a rough base
+the beam between the two lobes on their common fine nodes). A rough base under a smooth
+interior interface between unequal indices: pairs with wi.z < 0 or wo.z < 0 raise
+ValueError naming it (an opaque stack's are zero, its value). Every other stack
 ``Layered`` accepts is solved or refused with a ValueError naming its code in ``GAPS``
 (docs/solvers.md, "Solved and refused").
 
@@ -76,10 +78,10 @@ GAPS = {
                 "files; PFMC remains the path)",
     "base-kind": "the solver takes its operators from Diffuse, Conductor, RoughConductor, Dielectric, "
                  "RoughDielectric and spectral Measured bases only",
-    "rough-exit": "transmission and reflection from below through a rough top would need the top's product "
-                  "integration at the exit, and a rough base's under a smooth interior interface between unequal "
-                  "indices would need it on that solve's nodes in n sin(theta) (neither implemented): for pairs "
-                  "with wi.z < 0 or wo.z < 0 use the model's own eval (PFMC)",
+    "rough-exit": "transmission and reflection from below through a rough base under a smooth interior "
+                  "interface between unequal indices would need the base's product integration on that "
+                  "solve's nodes in n sin(theta) (not implemented): for pairs with wi.z < 0 or wo.z < 0 use "
+                  "the model's own eval (PFMC)",
 }
 
 
@@ -151,8 +153,8 @@ class Solution:
         return self._coarse
 
     def _fine_step_core(self):
-        """A rough base's exits: the same solve with only the fine step doubled. Its
-        transmission lobe is cut by the half-vector's horizon (a jump in the BSDF), so
+        """A rough base's or top's exits: the same solve with only the fine step doubled.
+        A transmission lobe is cut by the half-vector's horizon (a jump in the BSDF), so
         the product integration converges like the sub-panel width, with changing sign:
         the all-coarser solve's change can cancel it (measured: 6.6e-5 against an error of
         2e-4 at a grazing pair), this one's alone does not."""
@@ -203,23 +205,27 @@ class Solution:
     @property
     def every_pair(self) -> bool:
         """Whether every pair is solved: ``two_sided``, or a transmissive stack with a
-        smooth top and a rough dielectric base (its exits by product integration)."""
+        smooth or rough top over a smooth or rough dielectric base (the rough boundaries'
+        exits by product integration), except a rough base under a smooth unmatched
+        interior interface."""
         return bool(self._core.every_pair)
 
     def _pairs(self, wi, wo) -> tuple[np.ndarray, np.ndarray]:
         a, b = check.direction_pair(wi, wo)
         if self._transmits and not self.every_pair and np.any((a[:, 2] < 0) | (b[:, 2] < 0)):
             raise refusal("rough-exit", f"this stack transmits through {exit_gap_reason(self.model)}, and "
-                                        f"adding-doubling solves transmission and reflection from below only "
-                                        f"for a smooth top over a smooth or rough dielectric base")
+                                        f"adding-doubling solves transmission and reflection from below "
+                                        f"for a smooth or rough top over a smooth or rough dielectric base "
+                                        f"only where no smooth unmatched interior interface lies above a "
+                                        f"rough base")
         return a, b
 
     def eval(self, wi, wo, scattered_only: bool = False) -> np.ndarray:
         """f(wi, wo) |cos theta_o|, (N, C), light arriving from wo and leaving toward wi:
         reflection from above; for an ``every_pair`` stack every pair (transmission both
         ways, reflection from below); 0 for the other pairs of an opaque stack (its
-        value). Another transmissive stack (a rough top) raises ValueError for pairs with
-        wi.z < 0 or wo.z < 0.
+        value). Another transmissive stack (a rough base under a smooth unmatched interior
+        interface) raises ValueError for pairs with wi.z < 0 or wo.z < 0.
         ``scattered_only`` leaves out the entry boundary's own reflection: a rough top's
         from above (what a table stores; ``Layered.exact_part`` re-adds it), a rough
         base's from below (as ``Layered.estimate(scattered_only=True)``)."""
@@ -233,10 +239,13 @@ class Solution:
         azimuth samples, 2/3 of the orders, a 16 x thicker doubling start, twice the
         spectral stride and fine step); the truncations converge geometrically, the start
         quadratically, so the error of the finer solve is below that change (tests/solvers
-        checks it). Through a rough base (``every_pair``, not ``two_sided``) the change to
-        a solve with only the fine step doubled is added (``_fine_step_core``). Per pair,
+        checks it). Through a rough base or top (``every_pair``, not ``two_sided``) the
+        change to a solve with only the fine step doubled is added (``_fine_step_core``). Per pair,
         the largest relative change over the channels applies to every channel (the
-        change alone crosses zero where the error does not)."""
+        change alone crosses zero where the error does not). Not covered: a rough top's
+        sub-panels are clamped to [0.004, 0.05] rad in both solves, so for alpha x
+        ``fine_step`` >= 0.05 (alpha >= 0.2 at the default, 0.1 in tables) or <= 0.002 the
+        fine step's error is missed (docs/known_limits.md)."""
         a, b = self._pairs(wi, wo)
         fine = self._core.eval(a, b, bool(scattered_only))
         coarse = self._coarse_core().eval(a, b, bool(scattered_only))
@@ -362,10 +371,8 @@ def one_sided_reason(model: Layered) -> str:
 
 
 def exit_gap_reason(model: Layered) -> str:
-    """Why a transmissive stack's pairs below are refused (``[rough-exit]``): its rough top,
-    or its rough base under a smooth interior interface between unequal indices."""
-    if getattr(model.interfaces[0], "alpha", None) is not None:
-        return "a rough top"
+    """Why a transmissive stack's pairs below are refused (``[rough-exit]``): its rough base
+    under a smooth interior interface between unequal indices (the only such stack)."""
     return "a rough base under a smooth interior interface between unequal indices"
 
 

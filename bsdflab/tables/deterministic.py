@@ -6,7 +6,9 @@ the solver's settings and its a-posteriori error bound in the header (``meta``).
 
 The stored ``stderr`` of each cell is the solver's deterministic bound (the change to a
 solve with half the nodes, 2/3 of the orders and a 16 x thicker doubling start,
-``Solution.eval_with_error``), not a standard error; ``meta["error_kind"]`` says so.
+``Solution.eval_with_error``), not a standard error; ``meta["error_kind"]`` says so. It
+misses the fine-step error of a rough top with alpha >= 0.1 at ``table_settings``' fine step
+0.5 (the sub-panels' 0.05 rad clamp; docs/known_limits.md).
 A transmissive stack the solver solves on both sides (a smooth top over a smooth
 dielectric base, ``Solution.two_sided``) gets a two-sided table (four lobes: reflection and
 transmission of light from above and from below); other transmissive stacks raise

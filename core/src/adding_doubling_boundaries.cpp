@@ -125,4 +125,30 @@ TopOperators top_operators(const BSDF &top, bool smooth, const std::vector<doubl
     return T;
 }
 
+TopOperators rough_top_with_extras(const BSDF &top, const std::vector<double> &grid,
+                                   const std::vector<double> &mu, const std::vector<double> &w,
+                                   const std::vector<double> &breaks, const std::vector<double> &in_cos,
+                                   const std::vector<double> &out_cos, const ADSettings &settings,
+                                   const Sizes &s) {
+    TopOperators T = top_operators(top, false, grid, mu, w, breaks, in_cos, out_cos, settings, s);
+    const int n = s.n;
+    const std::size_t N = s.N, cm = static_cast<std::size_t>(s.C) * s.M, X = N - n;
+    T.Rb.resize(N * N * cm, 0.0);  // rows n.. appended (top_operators' are n x N)
+    if (X == 0) return T;
+    std::vector<double> mu_f, w_f, B;
+    const double h = std::clamp(rough_alpha(top) * settings.fine_step, 0.004, 0.05);
+    product_nodes(settings.nodes, breaks, h, mu_f, w_f, B);
+    const std::size_t nf = mu_f.size();
+    std::vector<double> scale(nf * n);
+    for (std::size_t f = 0; f < nf; ++f)
+        for (int k = 0; k < n; ++k) scale[f * n + k] = mu_f[f] * w_f[f] / (mu[k] * w[k]);
+    const std::vector<double> extras(grid.begin() + n, grid.end());
+    const std::vector<double> rows = projected_kernel(top, signed_cos(mu_f, -1.0), signed_cos(extras, -1.0),
+                                                      false, B, scale, n, s.M, s.H);  // X x n
+    for (std::size_t e = 0; e < X; ++e)
+        std::copy(rows.begin() + e * n * cm, rows.begin() + (e + 1) * n * cm,
+                  T.Rb.begin() + (n + e) * N * cm);
+    return T;
+}
+
 } // namespace bsdflab::ad

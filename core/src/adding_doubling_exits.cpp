@@ -14,7 +14,9 @@
 // the top and the base it carries the beam to one direction, where the base's BSDF is
 // evaluated directly (no Fourier series: the lobe is narrower than the orders resolve);
 // between the base's exit and entry (reflection from below) it is interpolated onto the
-// fine nodes and both fine kernels are integrated against it there.
+// fine nodes and both fine kernels are integrated against it there. A rough top (over the
+// rough base) enters through its own product-integrated kernels (no extras), and the beam
+// between its lobe and the base's is integrated the same way on their common fine nodes.
 #include <algorithm>
 #include <cmath>
 #include "adding_doubling_parts.h"
@@ -42,12 +44,20 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
     // kernels follow its width (1 / c more, in powers of 2, at most 16), and so do the
     // orders, at most 4 x (light entering and leaving through the base returns in a lobe
     // as narrow, around the mirror direction).
-    const double nb = media_[K], nu = media_[K + 1];
-    const double contrast = std::max(std::abs(nb - nu) / std::max(nb, nu), 1.0 / 16.0);
+    // A rough top (over the rough base): its transmission lobes meet the base's in the
+    // unscattered beam, so the narrower of the two sets the samples and orders (orders_
+    // carries the top's 6 / alpha + 2: the constructor).
+    const bool rough_top = !smooth_top_;
+    const double nb = media_[K], nu = media_[K + 1], at = ad::rough_alpha(*boundaries_[0]);
+    const double contrast_b = std::max(std::abs(nb - nu) / std::max(nb, nu), 1.0 / 16.0);
+    const double contrast_t =
+        std::max(std::abs(media_[0] - media_[1]) / std::max(media_[0], media_[1]), 1.0 / 16.0);
+    const double contrast = rough_top ? std::min(contrast_b, contrast_t) : contrast_b;
     int Hx = half_samples_, widen = 1;
     while (Hx * contrast < half_samples_) Hx *= 2;
     while (widen < 4 && widen * contrast < 1.0) widen *= 2;
     const int C = channels(), M = orders_ * widen, n = static_cast<int>(mu_.size());
+    while (rough_top && Hx < 2 * M) Hx *= 2;
     const std::size_t CM = static_cast<std::size_t>(C) * M;
     const BSDF &top = *boundaries_[0], &base = *boundaries_[K];
     // Per active pair: its kind, the cosines it reads (a top extra's refracted cosine, the
@@ -64,7 +74,10 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
         double mu = 0.0, s = std::abs(wo.z);
         std::fill(t.begin(), t.end(), 1.0);
         std::fill(d.begin(), d.end(), 0.0);
-        if (k == kDown) { // the light crosses the smooth top: its solid angle inside is (n1 / n0)^2 its own
+        if (k != kBelow && rough_top) { // the top's cosine outside; its BSDF carries its own scaling
+            mu = k == kDown ? wo.z : wi.z;
+        } else if (k ==
+                   kDown) { // the light crosses the smooth top: its solid angle inside is (n1 / n0)^2 its own
             ad::delta_weight(top, wo.z, kDeltaTransmission, t.data(), &mu);
             s *= (media_[1] / media_[0]) * (media_[1] / media_[0]);
         } else if (k == kUp) {
@@ -79,7 +92,7 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
             direct.push_back(d[c]);
         }
         kind.push_back(k);
-        extra_cos.push_back(mu); // 0 for reflection from below (unused)
+        extra_cos.push_back(mu); // 0 for reflection from below (unused); a rough top's outside cosine
         exit_cos.push_back(k == kUp ? 0.0 : wi.z);
         entry_cos.push_back(k == kDown ? 0.0 : wo.z);
         active.push_back(p);
@@ -88,11 +101,17 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
     const std::size_t P = active.size();
 
     // The grid: nodes, then the top's refracted query cosines.
-    std::vector<double> tops;
-    for (std::size_t a = 0; a < P; ++a)
-        if (kind[a] != kBelow) tops.push_back(extra_cos[a]);
-    std::vector<int> top_index;
-    const std::vector<double> extras = ad::distinct(tops, top_index);
+    // A rough top has no extras: its cosines outside, the light's (down) and the viewer's
+    // (up), index its kernels instead.
+    std::vector<double> tops, downs, ups;
+    for (std::size_t a = 0; a < P; ++a) {
+        if (kind[a] != kBelow && !rough_top) tops.push_back(extra_cos[a]);
+        if (kind[a] == kDown && rough_top) downs.push_back(extra_cos[a]);
+        if (kind[a] == kUp && rough_top) ups.push_back(extra_cos[a]);
+    }
+    std::vector<int> top_index, down_index, up_index;
+    const std::vector<double> extras = ad::distinct(tops, top_index), qi = ad::distinct(downs, down_index),
+                              qo = ad::distinct(ups, up_index);
     std::vector<double> grid(mu_);
     grid.insert(grid.end(), extras.begin(), extras.end());
     const ad::Sizes s{C, M, Hx, n, grid.size()};
@@ -101,10 +120,12 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
     // The base's outside cosines at the exit (viewer below) and the entry (light below).
     std::vector<double> xs, es;
     std::vector<int> xa(P, -1), ea(P, -1), ta(P, -1);
-    for (std::size_t a = 0, j = 0; a < P; ++a) {
+    for (std::size_t a = 0, j = 0, u = 0, v = 0; a < P; ++a) {
         if (kind[a] != kUp) xs.push_back(exit_cos[a]);
         if (kind[a] != kDown) es.push_back(entry_cos[a]);
-        if (kind[a] != kBelow) ta[a] = n + top_index[j++];
+        if (kind[a] != kBelow && !rough_top) ta[a] = n + top_index[j++];
+        if (kind[a] == kDown && rough_top) ta[a] = down_index[u++];
+        if (kind[a] == kUp && rough_top) ta[a] = up_index[v++];
     }
     std::vector<int> xi, ei;
     const std::vector<double> qx = ad::distinct(xs, xi), qe = ad::distinct(es, ei);
@@ -116,7 +137,8 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
 
     // Fine nodes of the base's lobes and its kernels there; their projection onto the nodes.
     std::vector<double> mu_f, w_f, B;
-    const double h = std::clamp(ad::rough_alpha(base) * contrast * settings_.fine_step, 0.002, 0.05);
+    double h = std::clamp(ad::rough_alpha(base) * contrast_b * settings_.fine_step, 0.002, 0.05);
+    if (rough_top) h = std::min(h, std::clamp(at * contrast_t * settings_.fine_step, 0.002, 0.05));
     ad::product_nodes(settings_.nodes, breaks_, h, mu_f, w_f, B);
     const std::size_t nf = mu_f.size();
     const std::vector<double> X = ad::fourier_kernel(base, qx, mu_f, M, Hx); // Qx x nf
@@ -140,9 +162,9 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
         Query q;
         std::vector<double> f(C);
         for (std::size_t a = begin; a < end; ++a) {
-            if (kind[a] == kBelow) continue;
+            if (kind[a] == kBelow || rough_top) continue; // a rough top's beam: the fine product below
             const std::size_t p = active[a];
-            const double *o = kind[a] == kDown ? &wo_[3 * p] : &wi_[3 * p];  // the direction inside the top
+            const double *o = kind[a] == kDown ? &wo_[3 * p] : &wi_[3 * p]; // the direction inside the top
             const double r = std::hypot(o[0], o[1]), mu = extra_cos[a];
             const double sn = std::sqrt(std::max(0.0, (1.0 - mu) * (1.0 + mu)));
             const Vec3 in = r > 0 ? Vec3{sn * o[0] / r, sn * o[1] / r, mu} : Vec3{0.0, 0.0, 1.0};
@@ -154,7 +176,7 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
             for (int c = 0; c < C; ++c) fbeam[a * C + c] = f[c] / cos_light;
         }
     });
-    std::vector<double> dbeam(P * C, 0.0);  // the stack's delta transmission at the extra, per channel
+    std::vector<double> dbeam(P * C, 0.0); // the stack's delta transmission at the extra, per channel
 
     std::vector<ad::BoundaryOperators> below(K + 1);
     for (std::size_t j = 1; j <= K; ++j)
@@ -162,7 +184,17 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
     std::vector<ad::SlabOperators> slabs;
     slabs.reserve(K);
     for (std::size_t j = 0; j < K; ++j) slabs.emplace_back(slabs_[j], grid, settings_, M);
-    const ad::TopOperators T = ad::top_operators(top, true, grid, mu_, w_, breaks_, {}, {}, settings_, s);
+    const ad::TopOperators T =
+        ad::top_operators(top, !rough_top, grid, mu_, w_, breaks_, qi, qo, settings_, s);
+    // A rough top's kernels at the fine nodes: the unscattered beam between its lobe and the
+    // base's, both integrated on the fine nodes against the (smooth) delta part between.
+    const std::size_t Qi = qi.size(), Qo = qo.size();
+    std::vector<double> TdF, TuF;
+    if (rough_top) {
+        const std::vector<double> fine_down = ad::signed_cos(mu_f, -1.0);
+        TdF = ad::fourier_kernel(top, fine_down, qi, M, Hx); // nf x Qi
+        TuF = ad::fourier_kernel(top, qo, fine_down, M, Hx); // Qo x nf
+    }
 
     std::vector<double> V(CM * P, 0.0);
     parallel_for_each(CM, [&](std::size_t task) {
@@ -184,9 +216,43 @@ void AddingDoubling::eval_rough_base(const double *wi_, const double *wo_, std::
             for (std::size_t f = 0; f < nf; ++f)
                 for (int k = 0; k < n; ++k) Df[f] += B[f * n + k] * S.Rb.D[k];
         const double order_w = kPi * (m == 0 ? 2.0 : 1.0);
+        // A rough top: the stack below its lobes (Zd = S_Td.K W Td, Zu = Tu W S_Tu.K on the
+        // nodes) and the delta parts of S_Td and S_Tu on the fine nodes.
+        std::vector<double> Zd, Zu, Ddf, Duf;
+        if (rough_top) {
+            Zd.assign(static_cast<std::size_t>(n) * Qi, 0.0);
+            Zu.assign(Qo * n, 0.0);
+            Ddf.assign(nf, 0.0);
+            Duf.assign(nf, 0.0);
+            for (int k = 0; k < n; ++k)
+                for (int j = 0; j < n; ++j) {
+                    const double wj = g.W[j];
+                    if (!S.Td.K.empty())
+                        for (std::size_t b = 0; b < Qi; ++b)
+                            Zd[k * Qi + b] += S.Td.K[k * N + j] * wj * T.Td[(j * Qi + b) * CM + task];
+                    if (!S.Tu.K.empty())
+                        for (std::size_t q = 0; q < Qo; ++q)
+                            Zu[q * n + k] += T.Tu[(q * n + j) * CM + task] * wj * S.Tu.K[j * N + k];
+                }
+            for (std::size_t f = 0; f < nf; ++f)
+                for (int k = 0; k < n; ++k) {
+                    if (!S.Td.D.empty()) Ddf[f] += B[f * n + k] * S.Td.D[k];
+                    if (!S.Tu.D.empty()) Duf[f] += B[f * n + k] * S.Tu.D[k];
+                }
+        }
         for (std::size_t a = 0; a < P; ++a) {
             double v = 0.0;
-            if (kind[a] == kDown) {
+            if (kind[a] == kDown && rough_top) {
+                for (int k = 0; k < n; ++k) v += px(xa[a], k) * g.W[k] * Zd[k * Qi + ta[a]];
+                for (std::size_t f = 0; f < nf; ++f)
+                    v += X[(xa[a] * nf + f) * CM + task] * Ddf[f] * TdF[(f * Qi + ta[a]) * CM + task] *
+                         order_w * mu_f[f] * w_f[f];
+            } else if (kind[a] == kUp && rough_top) {
+                for (int k = 0; k < n; ++k) v += Zu[ta[a] * n + k] * g.W[k] * pe(k, ea[a]);
+                for (std::size_t f = 0; f < nf; ++f)
+                    v += TuF[(ta[a] * nf + f) * CM + task] * Duf[f] * E[(f * Qe + ea[a]) * CM + task] *
+                         order_w * mu_f[f] * w_f[f];
+            } else if (kind[a] == kDown) {
                 const int e = ta[a];
                 if (!S.Td.K.empty())
                     for (int k = 0; k < n; ++k) v += px(xa[a], k) * g.W[k] * S.Td.K[k * N + e];

@@ -85,6 +85,18 @@ TopOperators top_operators(const BSDF &top, bool smooth, const std::vector<doubl
                            const std::vector<double> &breaks, const std::vector<double> &in_cos,
                            const std::vector<double> &out_cos, const ADSettings &settings, const Sizes &s);
 
+// A rough top over grid extras (the pairs below a transmissive stack: inside cosines at
+// the base): top_operators' kernels, with the reflection from below N x N. Its node rows
+// are top_operators' (projected in the row); an extra's row is projected in its columns
+// (a viewer extra reads the lobe against the smooth radiance at the nodes); between two
+// extras it is 0: that unscattered beam meets the lobe at one direction, which the caller
+// evaluates directly.
+TopOperators rough_top_with_extras(const BSDF &top, const std::vector<double> &grid,
+                                   const std::vector<double> &mu, const std::vector<double> &w,
+                                   const std::vector<double> &breaks, const std::vector<double> &in_cos,
+                                   const std::vector<double> &out_cos, const ADSettings &settings,
+                                   const Sizes &s);
+
 // -- a slab by doubling (adding_doubling_slab.cpp) ----------------------------------------
 
 // Slab j's operators at every (channel, order): its phase function's coefficients on the

@@ -34,8 +34,10 @@
 // or last slab, the Fresnel transmittances at the ends. A smooth top over a rough
 // dielectric base (every_pair()): the same operators, the base's transmission kernels
 // product-integrated against the radiance at the nodes at the exit (and at the entry of
-// light from below), its own reflection from below evaluated directly. Other stacks
-// return 0 there.
+// light from below), its own reflection from below evaluated directly; and a rough top
+// over a smooth dielectric base (every_pair()), the top's kernels product-integrated the
+// same way above, the base's query cosines extras (over a rough base, both lobes on
+// common fine nodes). Other stacks return 0 there.
 #pragma once
 #include <memory>
 #include <mutex>
@@ -78,9 +80,11 @@ class AddingDoubling {
     // A transmissive stack whose every pair is solved (transmission both ways, reflection
     // from below): a smooth top and a smooth dielectric base around at least one slab.
     bool two_sided() const { return two_sided_; }
-    // Whether every pair is solved: two_sided(), or a transmissive stack with a smooth top
-    // and a rough dielectric base (its exits by product integration: eval_rough_base).
-    bool every_pair() const { return two_sided_ || rough_base_exit_; }
+    // Whether every pair is solved: two_sided(), a transmissive stack with a smooth or
+    // rough top and a rough dielectric base (its exits by product integration:
+    // eval_rough_base), or one with a rough top and a smooth dielectric base (the top's:
+    // eval_rough_top).
+    bool every_pair() const { return two_sided_ || rough_base_exit_ || rough_top_exit_; }
     // Largest measured error of the film lookups used (-1: none).
     double film_lookup_error() const { return film_lookup_error_; }
     // f |cos theta_o| for n direction pairs (rows of 3), written to out (n x channels);
@@ -110,11 +114,17 @@ class AddingDoubling {
                             const std::vector<double> &w_f, const std::vector<double> &B,
                             const std::vector<double> &YD, const std::vector<double> &out_cos,
                             const std::vector<double> &in_cos, std::vector<double> &values) const;
-    // The pairs with wi.z < 0 or wo.z < 0 of a smooth top over a rough dielectric base
-    // (adding_doubling_exits.cpp): the stack's operators with the top's refracted query
-    // cosines as extras, the base's kernels product-integrated at the exit and the entry.
+    // The pairs with wi.z < 0 or wo.z < 0 of a smooth or rough top over a rough dielectric
+    // base (adding_doubling_exits.cpp): the stack's operators with a smooth top's refracted
+    // query cosines as extras, the base's kernels product-integrated at the exit and the
+    // entry (a rough top's too, the beam between the two lobes on common fine nodes).
     void eval_rough_base(const double *wi, const double *wo, std::size_t n, double *out,
                          bool scattered_only) const;
+    // The pairs with wi.z < 0 or wo.z < 0 of a rough top over a smooth dielectric base
+    // (adding_doubling_top_exits.cpp): the stack's operators with the base's refracted query
+    // cosines as extras, the top's kernels product-integrated at the exit and the entry
+    // above, its point values (the unscattered beam's) evaluated directly.
+    void eval_rough_top(const double *wi, const double *wo, std::size_t n, double *out) const;
     // The solve of a stack with a smooth interior interface between unequal indices
     // (adding_doubling_snell.cpp): one node set in the Snell invariant p = n sin(theta),
     // the same p in every medium, so its transmission is diagonal (docs/solvers.md).
@@ -139,6 +149,7 @@ class AddingDoubling {
     bool smooth_top_ = false;
     bool two_sided_ = false;
     bool rough_base_exit_ = false;  // every_pair() through a rough dielectric base
+    bool rough_top_exit_ = false;   // every_pair() through a rough top (smooth dielectric base)
     bool delta_below_ = false;      // a delta boundary below the top (a delta reflection path)
     bool snell_ = false;  // a smooth interior interface between unequal indices (solve_snell)
     double n_max_ = 0.0;  // snell_: the densest slab's index, in which mu_ are the node cosines
