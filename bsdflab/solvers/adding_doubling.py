@@ -56,6 +56,7 @@ PHASES = ("isotropic", "hg")
 # weights); spectral ``measured`` files are isotropic by the reader's check.
 BASES = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric", "measured")
 RGB_BASES = ("merl",)  # and RGB measured files
+PROBE_NM = 550.0  # solves_every_pair's one wavelength (the rule depends on no wavelength)
 
 # Every stack ``bsdflab.Layered`` accepts is either solved or refused with one of these
 # reasons, by code (docs/solvers.md, "Solved and refused"; tests/solvers/
@@ -352,13 +353,15 @@ def model_gap(model) -> tuple[str, str] | None:
     return None
 
 
-def one_sided_reason(model: Layered) -> str:
-    """The rough boundaries of a transmissive stack (its top, its base): what keeps its
-    adding-doubling table one-sided (bsdflab/tables/deterministic.py; the solver's own
-    exit refusal is ``exit_gap_reason``)."""
-    parts = [name for name, part in (("a rough top", model.interfaces[0]), ("a rough base", model.base))
-             if getattr(part, "alpha", None) is not None]
-    return " and ".join(parts) or "its boundaries"
+def solves_every_pair(model) -> bool:
+    """Whether ``solve(model)`` answers every direction pair (``Solution.every_pair``:
+    transmission both ways and reflection from below), asked without a solve: the core
+    decides it when it sets the stack up, at one wavelength here, before any operator is
+    built (the solve runs at the first eval). False where ``model_gap`` finds a gap. The
+    one rule adding-doubling tables follow (bsdflab/tables/deterministic.py)."""
+    if model_gap(model) is not None:
+        return False
+    return Solution(model, [PROBE_NM], Settings()).every_pair
 
 
 def exit_gap_reason(model: Layered) -> str:
