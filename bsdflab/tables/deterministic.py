@@ -9,7 +9,8 @@ solve with half the nodes, 2/3 of the orders and a 16 x thicker doubling start,
 ``Solution.eval_with_error``), not a standard error; ``meta["error_kind"]`` says so.
 A transmissive stack whose every pair the solver solves (``solves_every_pair`` in
 bsdflab.solvers.adding_doubling, the solver's own rule: today a smooth top, with or without
-a film, over a smooth or rough dielectric base) gets a two-sided table (four lobes:
+a film, over a smooth dielectric base or a rough one with no smooth interior interface
+between unequal indices above it) gets a two-sided table (four lobes:
 reflection and transmission of light from above and from below; a rough base's own
 reflection from below left out, as the top's from above, and added back at lookup);
 other transmissive stacks raise ValueError (PFMC tabulates them).
