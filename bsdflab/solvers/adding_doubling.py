@@ -57,6 +57,12 @@ PHASES = ("isotropic", "hg")
 BASES = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric", "measured")
 RGB_BASES = ("merl",)  # and RGB measured files
 PROBE_NM = 550.0  # solves_every_pair's one wavelength (the rule depends on no wavelength)
+# A rough base's exits: its transmission lobe is ~contrast x alpha wide (contrast = |n1 - n2|
+# / max); the core's fine sub-panels and azimuth samples follow it down to this contrast and
+# no further (core/src/adding_doubling_exits.cpp, the clamp). Below it the bound grows (18 %
+# at 1.45 / 1.5, 27 % at 1.47 / 1.5, 4 x 4 x 5 table at a 1 % target) and values turn
+# negative (1.49 / 1.5): a table leaves such a stack to PFMC (bsdflab/tables/deterministic.py).
+MIN_EXIT_CONTRAST = 1.0 / 16.0
 
 # Every stack ``bsdflab.Layered`` accepts is either solved or refused with one of these
 # reasons, by code (docs/solvers.md, "Solved and refused"; tests/solvers/
@@ -362,6 +368,14 @@ def solves_every_pair(model) -> bool:
     if model_gap(model) is not None:
         return False
     return Solution(model, [PROBE_NM], Settings()).every_pair
+
+
+def base_contrast(model: Layered) -> float | None:
+    """|n_above - n_below| / max of a transmissive rough base (None: not one)."""
+    media = media_indices(model)
+    if getattr(model.base, "alpha", None) is None or not media[-1] > 0:
+        return None
+    return abs(media[-2] - media[-1]) / max(media[-2], media[-1])
 
 
 def exit_gap_reason(model: Layered) -> str:

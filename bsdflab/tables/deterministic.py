@@ -10,7 +10,8 @@ solve with half the nodes, 2/3 of the orders and a 16 x thicker doubling start,
 A transmissive stack whose every pair the solver solves (``solves_every_pair`` in
 bsdflab.solvers.adding_doubling, the solver's own rule: today a smooth top, with or without
 a film, over a smooth dielectric base or a rough one with no smooth interior interface
-between unequal indices above it) gets a two-sided table (four lobes:
+between unequal indices above it, and an index contrast at the base of at least
+``MIN_EXIT_CONTRAST``) gets a two-sided table (four lobes:
 reflection and transmission of light from above and from below; a rough base's own
 reflection from below left out, as the top's from above, and added back at lookup);
 other transmissive stacks raise ValueError (PFMC tabulates them).
@@ -27,7 +28,14 @@ from bsdflab._version import __version__
 from bsdflab.bsdfs.base import from_dict
 from bsdflab.layered import Layered
 from bsdflab.solvers import solve
-from bsdflab.solvers.adding_doubling import Settings, check_model, exit_gap_reason, solves_every_pair
+from bsdflab.solvers.adding_doubling import (
+    MIN_EXIT_CONTRAST,
+    Settings,
+    base_contrast,
+    check_model,
+    exit_gap_reason,
+    solves_every_pair,
+)
 from bsdflab.tables.channels import table_channels
 from bsdflab.tables.data import DEFAULT_REL_ERROR, LOBES, TWO_SIDED_LOBES, TableData, TableGrid
 from bsdflab.tables.stages import by_part
@@ -87,6 +95,10 @@ def adding_doubling_gap(model) -> str | None:
     if _transmits(model) and not solves_every_pair(model):
         return (f"the stack transmits through {exit_gap_reason(model)}, where the solver refuses the pairs below "
                 "([rough-exit]), and a table of a transmissive stack holds light from below and transmission")
+    contrast = base_contrast(model) if _transmits(model) else None
+    if contrast is not None and contrast < MIN_EXIT_CONTRAST:
+        return (f"the rough base's index contrast {contrast:.3g} is below {MIN_EXIT_CONTRAST:g}, where the solver's "
+                "sub-panels no longer follow its transmission lobe (bounds of 20 % and more, negative values)")
     return None
 
 

@@ -95,3 +95,22 @@ def test_02_every_part_agrees_with_pfmc(tables):
         mutant = type(ad)(**{**ad.__dict__, "values": ad.values[order], "stderr": ad.stderr[order]})
         print(f"  parts {order}: max z {worst_z(mutant, pfmc):.1f}")
         assert worst_z(mutant, pfmc) > Z_MAX, (name, order, worst_z(mutant, pfmc))
+
+
+def test_03_a_nearly_index_matched_rough_base_stays_pfmc():
+    """A rough base whose index contrast is below the solver's exit resolution
+    (``MIN_EXIT_CONTRAST``): its lobe is narrower than the core's sub-panels, so the table
+    bound reads 18-27 % at 1.45-1.47 / 1.5 and a 1.49 / 1.5 table has negative cells
+    (tabulation raised). The automatic method leaves it to PFMC, saying why, and an
+    explicit adding-doubling request is refused; at the threshold (1.6 / 1.5) the rule
+    is the solver's."""
+    def stack(n_below):
+        return bl.Layered([bl.Dielectric(1.5, 1.0)], [bl.Slab(1.0, sigma_a=0.2, sigma_s=1.0)],
+                          bl.RoughDielectric(0.3, n_below, 1.5))
+
+    for n_below in (1.45, 1.49, 1.51):
+        request = TableRequest.make(stack(n_below), GRID, 0.01, WL)
+        assert request.method == "pfmc" and "index contrast" in request.method_note, request.method_note
+        with pytest.raises(ValueError, match="index contrast"):
+            TableRequest.make(stack(n_below), GRID, 0.01, WL, method="adding-doubling")
+    assert TableRequest.make(stack(1.6), GRID, 0.01, WL).method == "adding-doubling"
