@@ -58,6 +58,13 @@ PHASES = ("isotropic", "hg")
 # weights); spectral ``measured`` files are isotropic by the reader's check.
 BASES = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric", "measured")
 RGB_BASES = ("merl",)  # and RGB measured files
+PROBE_NM = 550.0  # solves_every_pair's one wavelength (the rule depends on no wavelength)
+# A rough base's exits: its transmission lobe is ~contrast x alpha wide (contrast = |n1 - n2|
+# / max); the core's fine sub-panels and azimuth samples follow it down to this contrast and
+# no further (core/src/adding_doubling_exits.cpp, the clamp). Below it the bound grows (18 %
+# at 1.45 / 1.5, 27 % at 1.47 / 1.5, 4 x 4 x 5 table at a 1 % target) and values turn
+# negative (1.49 / 1.5): a table leaves such a stack to PFMC (bsdflab/tables/deterministic.py).
+MIN_EXIT_CONTRAST = 1.0 / 16.0
 
 # Every stack ``bsdflab.Layered`` accepts is either solved or refused with one of these
 # reasons, by code (docs/solvers.md, "Solved and refused"; tests/solvers/
@@ -361,13 +368,23 @@ def model_gap(model) -> tuple[str, str] | None:
     return None
 
 
-def one_sided_reason(model: Layered) -> str:
-    """The rough boundaries of a transmissive stack (its top, its base): what keeps its
-    adding-doubling table one-sided (bsdflab/tables/deterministic.py; the solver's own
-    exit refusal is ``exit_gap_reason``)."""
-    parts = [name for name, part in (("a rough top", model.interfaces[0]), ("a rough base", model.base))
-             if getattr(part, "alpha", None) is not None]
-    return " and ".join(parts) or "its boundaries"
+def solves_every_pair(model) -> bool:
+    """Whether ``solve(model)`` answers every direction pair (``Solution.every_pair``:
+    transmission both ways and reflection from below), asked without a solve: the core
+    decides it when it sets the stack up, at one wavelength here, before any operator is
+    built (the solve runs at the first eval). False where ``model_gap`` finds a gap. The
+    one rule adding-doubling tables follow (bsdflab/tables/deterministic.py)."""
+    if model_gap(model) is not None:
+        return False
+    return Solution(model, [PROBE_NM], Settings()).every_pair
+
+
+def base_contrast(model: Layered) -> float | None:
+    """|n_above - n_below| / max of a transmissive rough base (None: not one)."""
+    media = media_indices(model)
+    if getattr(model.base, "alpha", None) is None or not media[-1] > 0:
+        return None
+    return abs(media[-2] - media[-1]) / max(media[-2], media[-1])
 
 
 def exit_gap_reason(model: Layered) -> str:

@@ -9,10 +9,14 @@ solve with half the nodes, 2/3 of the orders and a 16 x thicker doubling start,
 ``Solution.eval_with_error``), not a standard error; ``meta["error_kind"]`` says so. It
 misses the fine-step error of a rough top with alpha >= 0.1 at ``table_settings``' fine step
 0.5 (the sub-panels' 0.05 rad clamp; docs/known_limits.md).
-A transmissive stack the solver solves on both sides (a smooth top over a smooth
-dielectric base, ``Solution.two_sided``) gets a two-sided table (four lobes: reflection and
-transmission of light from above and from below); other transmissive stacks raise
-ValueError (PFMC tabulates them).
+A transmissive stack whose every pair the solver solves (``solves_every_pair`` in
+bsdflab.solvers.adding_doubling, the solver's own rule: a smooth or rough top, with or
+without a film, over a smooth dielectric base or a rough one with no smooth interior
+interface between unequal indices above it, and an index contrast at a rough base of at
+least ``MIN_EXIT_CONTRAST``) gets a two-sided table (four lobes: reflection and
+transmission of light from above and from below; a rough base's own reflection from below
+left out, as the top's from above, and added back at lookup); other transmissive stacks
+raise ValueError (PFMC tabulates them).
 """
 from __future__ import annotations
 
@@ -26,7 +30,14 @@ from bsdflab._version import __version__
 from bsdflab.bsdfs.base import from_dict
 from bsdflab.layered import Layered
 from bsdflab.solvers import solve
-from bsdflab.solvers.adding_doubling import Settings, check_model, one_sided_reason
+from bsdflab.solvers.adding_doubling import (
+    MIN_EXIT_CONTRAST,
+    Settings,
+    base_contrast,
+    check_model,
+    exit_gap_reason,
+    solves_every_pair,
+)
 from bsdflab.tables.channels import table_channels
 from bsdflab.tables.data import DEFAULT_REL_ERROR, LOBES, TWO_SIDED_LOBES, TableData, TableGrid
 from bsdflab.tables.stages import by_part
@@ -75,17 +86,21 @@ def with_film_thickness(model: Layered, thickness_nm: float) -> Layered:
 def adding_doubling_gap(model) -> str | None:
     """Why this method cannot tabulate ``model`` (None: it can): it tabulates ``Layered``
     stacks within the solver's validated range (bsdflab.solvers.adding_doubling
-    ``check_model``) that reflect only, or transmit through a smooth top and a smooth
-    dielectric base (the stacks the solver solves on both sides: ``Solution.two_sided``)."""
+    ``check_model``) that reflect only, or transmit and have every pair solved (the
+    solver's ``solves_every_pair``: a two-sided table needs light from below too)."""
     if not isinstance(model, Layered):
         return f"it tabulates Layered models, not {type(model).__name__}"
-    if _transmits(model) and not _two_sided(model):
-        return (f"the stack transmits through {one_sided_reason(model)} and tables by adding-doubling hold light "
-                "from below and transmission only for a smooth top over a smooth dielectric base")
     try:
         check_model(model)
     except ValueError as e:
         return str(e)
+    if _transmits(model) and not solves_every_pair(model):
+        return (f"the stack transmits through {exit_gap_reason(model)}, where the solver refuses the pairs below "
+                "([rough-exit]), and a table of a transmissive stack holds light from below and transmission")
+    contrast = base_contrast(model) if _transmits(model) else None
+    if contrast is not None and contrast < MIN_EXIT_CONTRAST:
+        return (f"the rough base's index contrast {contrast:.3g} is below {MIN_EXIT_CONTRAST:g}, where the solver's "
+                "sub-panels no longer follow its transmission lobe (bounds of 20 % and more, negative values)")
     return None
 
 
@@ -107,7 +122,7 @@ def solver_settings(nodes: int | None = None, orders: int | None = None) -> dict
 def tabulate_adding_doubling(model, grid: TableGrid, rel_error: float = DEFAULT_REL_ERROR, wavelengths=None,
                              nodes: int | None = None, orders: int | None = None,
                              solver: dict | None = None) -> TableData:
-    """The table of a ``Layered`` reflector on ``grid`` by adding-doubling (module
+    """The table of a ``Layered`` stack on ``grid`` by adding-doubling (module
     docstring). ``rel_error`` sets the solver's truncations (``table_settings``) and is
     recorded as the target; ``meta["error_bound_max_rel"]`` is what the solver's bound
     achieved over the significant cells. ``nodes`` (default ``TABLE_NODES``) and ``orders``
@@ -182,13 +197,6 @@ def lobe_directions(grid: TableGrid, n_lobes: int) -> tuple[np.ndarray, np.ndarr
     flip = np.array([1.0, 1.0, -1.0])
     pairs = [(wi, wo), (wi, wo * flip), (wi * flip, wo * flip), (wi * flip, wo)][:n_lobes]
     return np.concatenate([a for a, _ in pairs]), np.concatenate([b for _, b in pairs])
-
-
-def _two_sided(model: Layered) -> bool:
-    """Whether the solver solves every pair of ``model`` (``Solution.two_sided``'s rule,
-    asked without a solve): a smooth top over a smooth base that transmits."""
-    return (getattr(model.interfaces[0], "alpha", None) is None and getattr(model.base, "alpha", None) is None
-            and _transmits(model))
 
 
 def _transmits(model: Layered) -> bool:

@@ -69,7 +69,8 @@ def tabulate(model: BSDF, grid: TableGrid | None = None, rel_error: float = DEFA
         evaluates every film exactly (the reference; not available with a runner).
     method : 'pfmc' (default), 'adding-doubling' or 'auto'
         'adding-doubling' tabulates a ``Layered`` model deterministically (reflecting, or
-        transmitting through a smooth top and smooth base: a two-sided table)
+        transmitting with every pair solved, e.g. a smooth top over a smooth or rough
+        dielectric base: a two-sided table)
         (bsdflab.tables.deterministic: one solve per thickness node, the solver's error
         bound stored as each cell's error, method and settings in ``meta``); the walk
         settings (samples, seed, film_lookup) do not apply to it. 'auto' (the default of a

@@ -392,10 +392,13 @@ double TabulatedBSDF::pdf(const Vec3 &wi, const Vec3 &wo, uint32_t lobes, const 
     // the density of what it returns is the mixture's inside the mask and 0 outside.
     const bool reflect = wi.z * wo.z > 0;
     if (!(lobes & (reflect ? kGlossyReflection : kGlossyTransmission))) return 0.0;
-    const Mixture m = mixture(wi, q, nullptr, nullptr);
+    return mixture_pdf(mixture(wi, q, nullptr, nullptr), wi, wo, q);
+}
+
+double TabulatedBSDF::mixture_pdf(const Mixture &m, const Vec3 &wi, const Vec3 &wo, const Query &q) const {
     double p = std::max(0.0, 1.0 - m.p_delta - m.p_transmit - m.p_direct) * table_pdf(wi, wo, q);
     const int side = side_of(wi);
-    if (const BSDF *d = direct(side); d && m.p_direct > 0 && reflect)
+    if (const BSDF *d = direct(side); d && m.p_direct > 0 && wi.z * wo.z > 0)
         p += m.p_direct * d->pdf(wi, wo, kGlossyReflection | kDiffuseReflection, direct_query(q, side));
     return p;
 }
@@ -464,7 +467,9 @@ BSDFSample TabulatedBSDF::sample(const Vec3 &wi, double u1, double u2x, double u
     }
     s.lobe = wi.z * s.wo.z > 0 ? kGlossyReflection : kGlossyTransmission;
     if (!(s.lobe & lobes)) return {};
-    s.pdf = pdf(wi, s.wo, lobes, q);
+    // pdf() of s.wo (its lobe is in the mask, wi checked above) with this call's mixture:
+    // the delta stack's 1-D adding is solved once per sample, not again by pdf().
+    s.pdf = usable_direction(s.wo) ? mixture_pdf(m, wi, s.wo, q) : 0.0;
     if (!(s.pdf > 0)) return {};
     eval(wi, s.wo, lobes & ~kDelta, q, weight);
     for (int c = 0; c < C; ++c) weight[c] /= s.pdf;

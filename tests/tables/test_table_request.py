@@ -78,8 +78,10 @@ def test_03_each_setting_is_refused_by_name_in_every_form(field, value, message)
 def test_04_the_method_is_chosen_and_said():
     """auto: adding-doubling where the solver covers the model, else PFMC with the reason."""
     assert TableRequest.make(SNAKE).method_note == "automatic: the solver covers this model"
-    transmits = bl.Layered([bl.RoughDielectric(0.2, 1.5, 1.0)], [bl.Slab(1.0, sigma_s=1.0)],
-                           bl.RoughDielectric(0.3, 1.0, 1.5))
+    # a rough base under a smooth interior interface between unequal indices: the solver
+    # refuses its pairs below ([rough-exit]), so its two-sided table is PFMC's
+    transmits = bl.Layered([bl.Dielectric(1.5, 1.0), bl.Dielectric(1.7, 1.5)],
+                           [bl.Slab(1.0, sigma_s=1.0), bl.Slab(1.0, sigma_s=1.0)], bl.RoughDielectric(0.3, 1.0, 1.7))
     too_smooth = bl.Layered([bl.RoughDielectric(1e-4, 1.5, 1.0)], [bl.Slab(1.0)], bl.Diffuse(0.5))
     for model, why in ((bl.Diffuse(0.5), "Layered models, not Diffuse"), (transmits, "transmits"),
                        (too_smooth, "interfaces[0].alpha must be in")):

@@ -153,7 +153,7 @@ def test_07_units_on_a_runner_give_the_same_two_sided_table():
     from bsdflab.util.runners import LocalRunner
 
     rough_base = bl.Layered([bl.Dielectric(1.5, N_ABOVE)], [bl.Slab(1.0, sigma_a=0.2, sigma_s=1.0)],
-                            bl.RoughDielectric(0.3, N_BELOW, 1.5))  # PFMC: AD refuses a rough base
+                            bl.RoughDielectric(0.3, N_BELOW, 1.5))  # PFMC, tabulate's default method
     runner = LocalRunner()
     runner.workers = lambda: 3
     grid = TableGrid(2, 3, 3)

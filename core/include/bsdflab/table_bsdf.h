@@ -87,6 +87,9 @@ class TabulatedBSDF final : public BSDF {
         double eta = 1.0;
     };
     Mixture mixture(const Vec3 &wi, const Query &q, double *delta_weight, double *transmit_weight) const;
+    // pdf() of a non-delta wo inside the mask, given wi's mixture (sample() passes its own:
+    // one delta solve per call; a local value, so nothing is shared between threads).
+    double mixture_pdf(const Mixture &m, const Vec3 &wi, const Vec3 &wo, const Query &q) const;
     // The delta lobes' weights projected to the table's channels (R, T may be null); the
     // delta stack's when there is one, else the side's own delta reflection.
     void delta_lobes(const Vec3 &wi, const Query &q, double *R, double *T, Vec3 &wt, double &eta) const;
