@@ -28,7 +28,7 @@ import bsdflab as bl
 from bsdflab.optics.fresnel import fresnel_reflectance
 from bsdflab.solvers import solve
 from bsdflab.testing import sidak_significance, spherical_directions
-from support.solver_pairs import pairs_by_kind, z_scores
+from support.solver_pairs import assert_solver_matches_pfmc, pairs_by_kind, z_scores
 
 WL = [450.0, 550.0, 650.0]
 FAMILY_SIGNIFICANCE = 0.01
@@ -91,17 +91,7 @@ def estimate(name, estimator):
 def test_01_rough_top_matches_pfmc(name, estimator):
     wi, wo, est, _, ref, ref_err = estimate(name, estimator)
     assert np.all(ref > 0)
-    z, mean_z = z_scores(est, ref, ref_err)
-    worst = np.unravel_index(np.argmax(z), z.shape)
-    print(
-        f"{name} [{estimator}]: max z {np.max(z):.2f}, sqrt(pairs) mean z {mean_z:.2f}, limit {Z_MAX:.2f}, "
-        f"median PFMC rel. error {np.median(est.stderr / ref):.4f}, max solver bound {np.max(ref_err / ref):.1e}"
-    )
-    assert np.max(z) <= Z_MAX, (
-        f"max z {np.max(z):.2f} > {Z_MAX:.2f} at wi {wi[worst[0]]}, wo {wo[worst[0]]}, {WL[worst[1]]} nm: "
-        f"PFMC {est.value[worst]:.6g} +- {est.stderr[worst]:.2g}, solver {ref[worst]:.6g}"
-    )
-    assert abs(mean_z) <= Z_MAX
+    assert_solver_matches_pfmc(f"{name} [{estimator}]", wi, wo, WL, est, ref, ref_err, Z_MAX)
 
 
 def test_02_mutations_fail():

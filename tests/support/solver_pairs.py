@@ -32,3 +32,19 @@ def z_scores(est, ref, ref_err):
     z = (np.abs(est.value - ref) - ref_err) / est.stderr
     signed = (est.value - ref) / np.hypot(est.stderr, ref_err)
     return z, np.mean(signed) * np.sqrt(signed.shape[0])
+
+
+def assert_solver_matches_pfmc(label, wi, wo, wavelengths, est, ref, ref_err, z_max):
+    """The solver z-tests' verdict: every cell's z (``z_scores``) and the shared-bias z
+    within ``z_max``; the worst cell named in the failure message."""
+    z, mean_z = z_scores(est, ref, ref_err)
+    worst = np.unravel_index(np.argmax(z), z.shape)
+    print(
+        f"{label}: max z {np.max(z):.2f}, sqrt(pairs) mean z {mean_z:.2f}, limit {z_max:.2f}, "
+        f"median PFMC rel. error {np.median(est.stderr / ref):.4f}, max solver bound {np.max(ref_err / ref):.1e}"
+    )
+    assert np.max(z) <= z_max, (
+        f"max z {np.max(z):.2f} > {z_max:.2f} at wi {wi[worst[0]]}, wo {wo[worst[0]]}, {wavelengths[worst[1]]} nm: "
+        f"PFMC {est.value[worst]:.6g} +- {est.stderr[worst]:.2g}, solver {ref[worst]:.6g}"
+    )
+    assert abs(mean_z) <= z_max
