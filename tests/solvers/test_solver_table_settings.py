@@ -62,22 +62,29 @@ def test_02_spectral_stride_interpolates_smooth_stacks():
 
 
 def test_03_transmissive_stack_raises_for_unsolved_pairs():
-    """Transmission through a stack with a rough top and reflection from below it are not
-    solved: the stack raises ValueError for them (instead of returning 0), and still
-    solves reflection from above; an opaque stack returns its value, 0, below
-    (test_solver_two_sided.py and test_solver_rough_base.py cover the solved smooth-top stacks)."""
-    model = bl.Layered([bl.RoughDielectric(0.2, 1.5, 1.0)],
-                       [bl.Slab(1.0, sigma_a=0.1, sigma_s=0.5, phase={"type": "hg", "g": 0.6})],
-                       bl.Dielectric(1.0, 1.5))
-    sol = solve(model, [550.0])
+    """The one transmissive stack whose pairs below are not solved, a rough base under a
+    smooth interior interface between unequal indices, raises ValueError ``[rough-exit]``
+    for them (instead of returning 0) and still solves reflection from above; a rough top
+    over a smooth base solves every pair; an opaque stack returns its value, 0, below
+    (test_solver_refusals.py covers every top on every base)."""
+    slab = bl.Slab(1.0, sigma_a=0.1, sigma_s=0.5, phase={"type": "hg", "g": 0.6})
     up = spherical_directions(np.radians([30.0]), [0.0])
     down = -spherical_directions(np.radians([40.0]), [1.0])
+    gap = bl.Layered([bl.Dielectric(1.5, 1.0), bl.Dielectric(1.3, 1.5)], [slab, slab],
+                     bl.RoughDielectric(0.3, 1.0, 1.3))
+    sol = solve(gap, [550.0], nodes=8)
+    assert not sol.every_pair
     assert sol.eval(up, up)[0, 0] > 0
     for wi, wo in ((down, up), (up, down), (down, down)):
-        with pytest.raises(ValueError, match="transmits through a rough top"):
-            sol.eval(wi, wo)
-        with pytest.raises(ValueError, match="only for a smooth top over a smooth or rough dielectric base"):
-            sol.eval_with_error(wi, wo)
+        for call in (sol.eval, sol.eval_with_error):
+            with pytest.raises(ValueError, match=r"\[rough-exit\].*rough base under a smooth interior interface"):
+                call(wi, wo)
+    rough_top = solve(bl.Layered([bl.RoughDielectric(0.2, 1.5, 1.0)], [slab], bl.Dielectric(1.0, 1.5)),
+                      [550.0], nodes=8)
+    assert rough_top.every_pair
+    for wi, wo in ((down, up), (up, down), (down, down)):
+        v = rough_top.eval(wi, wo)
+        assert np.isfinite(v[0, 0]) and v[0, 0] > 0
     opaque = solve(preset("xenopeltis"), [550.0])
     assert opaque.eval(down, up)[0, 0] == 0.0
 
