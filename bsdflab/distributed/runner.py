@@ -16,6 +16,7 @@ import contextlib
 import signal
 import threading
 import time
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
@@ -55,14 +56,18 @@ class DaskRunner(Runner):
             on_result: Callable[[Any, Any], None], *, key: str, desc: str = "units",
             progress: bool = True, progress_callback: Callable[[float], None] | None = None,
             cancelled: Callable[[], bool] | None = None) -> None:
-        """``Runner.run`` on the cluster. ``shared`` values are scattered once (broadcast)
-        instead of being sent with every unit; unit ``i`` is the task ``f"{key}-{i}"``.
+        """``Runner.run`` on the cluster. ``shared`` values are sent once (as tasks that
+        return them) instead of with every unit; unit ``i`` is the task ``f"{key}-{i}"``.
         Ctrl-C, a job monitor's cancel or ``cancelled()`` cancel every outstanding unit."""
         client = self.client
-        # Wrapped in a list: scatter() would take a dict's items as separate pieces of data.
-        # Fresh keys (hash=False): a content-hash key shared with an earlier, just-released
-        # scatter of the same value could be forgotten under this job ("lost dependencies").
-        shared_futures = [client.scatter([v], broadcast=True, hash=False)[0] for v in shared]
+        # Each shared value is the result of a task that returns it, not scattered data:
+        # a task's result has lineage, so when the worker holding it dies the scheduler
+        # computes it again elsewhere, where scattered data would be lost with it (and
+        # every unit with FutureCancelledError; Dask's memory manager keeps one copy of a
+        # broadcast). Workers fetch it from each other on first use. pure=False: fresh keys.
+        with warnings.catch_warnings():  # the value travels in the graph once, on purpose
+            warnings.filterwarnings("ignore", message=".*[Ll]arge graph.*")
+            shared_futures = [client.submit(_shared_value, v, pure=False) for v in shared]
         futures = [client.submit(fn, *shared_futures, u, key=f"{key}-{i}", retries=RETRIES, pure=False)
                    for i, u in enumerate(units)]
         unit_of = {f.key: u for f, u in zip(futures, units)}
@@ -93,6 +98,11 @@ class DaskRunner(Runner):
         finally:
             for f in shared_futures:
                 f.release()
+
+
+def _shared_value(value: Any) -> Any:
+    """The task whose result is a job's shared value (recomputed if its holder dies)."""
+    return value
 
 
 @contextlib.contextmanager
