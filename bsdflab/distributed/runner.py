@@ -30,6 +30,10 @@ from bsdflab.util.runners import Runner, finished_unit, progress_bar
 # worker died, which `distributed.scheduler.allowed-failures` bounds).
 RETRIES = 2
 POLL_S = 0.05
+# A shared value travels in the graph once, on purpose (its lineage): Dask's advice to use
+# futures instead does not apply. A filter set once, at import: catch_warnings() around
+# the submit is not thread-safe, and the job server runs several jobs in threads.
+warnings.filterwarnings("ignore", message="Sending large graph", category=UserWarning, module="distributed.client")
 
 
 class DaskRunner(Runner):
@@ -65,9 +69,7 @@ class DaskRunner(Runner):
         # computes it again elsewhere, where scattered data would be lost with it (and
         # every unit with FutureCancelledError; Dask's memory manager keeps one copy of a
         # broadcast). Workers fetch it from each other on first use. pure=False: fresh keys.
-        with warnings.catch_warnings():  # the value travels in the graph once, on purpose
-            warnings.filterwarnings("ignore", message=".*[Ll]arge graph.*")
-            shared_futures = [client.submit(_shared_value, v, pure=False) for v in shared]
+        shared_futures = [client.submit(_shared_value, v, pure=False) for v in shared]
         futures = [client.submit(fn, *shared_futures, u, key=f"{key}-{i}", retries=RETRIES, pure=False)
                    for i, u in enumerate(units)]
         unit_of = {f.key: u for f, u in zip(futures, units)}

@@ -113,22 +113,31 @@ def test_a_worker_killed_mid_render_changes_nothing(client):
     as task results they are recomputed."""
     s = scene("basic-materials", width=48, height=36)
     local = render(s, spp=8, seed=5, pass_spp=1, progress=False)
-    pid_of = client.run(os.getpid)
     killed = threading.Event()
+    events_before = len(client.get_events("all"))
 
     def progress(fraction):
         if fraction > 0.2 and not killed.is_set():
             killed.set()
             holders = client.run_on_scheduler(_holders_of_shared_values)
             assert holders, "no worker holds the shared values"
-            for address in holders:  # every copy: the nannies restart them; their units are redone
-                os.kill(pid_of[address], signal.SIGKILL)
+            # every copy (the pids looked up now: a worker restarted earlier has a new one);
+            # the nannies restart them, their units are redone
+            for pid in client.run(os.getpid, workers=holders).values():
+                os.kill(pid, signal.SIGKILL)
 
     remote = render_units(DaskRunner(client), s, spp=8, seed=5, pass_spp=1, strategy=0, progress=False,
                                unit_samples=48 * 4, progress_callback=progress)
     assert killed.is_set()
     assert np.array_equal(local.mean, remote.mean)
     assert np.array_equal(local.variance, remote.variance)
+    # the shared values were really lost with the killed workers and recomputed (lineage),
+    # none was scattered data
+    removed = [msg for _, msg in client.get_events("all")[events_before:]
+               if isinstance(msg, dict) and msg.get("action") == "remove-worker"]
+    lost = [str(k) for m in removed for k in m["lost-computed-tasks"]]
+    assert any(k.startswith("_shared_value-") for k in lost), removed
+    assert not any(m["lost-scattered-tasks"] for m in removed), removed
     client.wait_for_workers(2, timeout=60)
 
 
