@@ -24,23 +24,14 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-BSDFLAB = [sys.executable, "-m", "bsdflab.cli.main"]
-
-
-def cpu_seconds(pid: int) -> float:
-    with open(f"/proc/{pid}/stat") as f:
-        fields = f.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
-def default_sigint() -> None:
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
+sys.path.insert(0, str(ROOT / "tests"))
+from support.cli import BSDFLAB, _default_sigint, cpu_seconds  # noqa: E402  (the tests' helpers)
 
 
 def interrupt_once(args: list[str], marker: str, env: dict) -> tuple[float, float, int]:
     """(wall s, CPU s after the signal, exit status) of one interrupted run."""
     proc = subprocess.Popen(args, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, env=env,
-                            preexec_fn=default_sigint)
+                            preexec_fn=_default_sigint)
     seen = b""
     while marker.encode() not in seen[-4096:]:
         chunk = proc.stderr.read1(256)
