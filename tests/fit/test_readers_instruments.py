@@ -73,6 +73,48 @@ def test_bad_procspec(tmp_path, make, match):
         import_files([str(path)], SPEC)
 
 
+def procspec_chain_xml(wl, processed, last_ref="../../stage[2]/processedPixels"):
+    """SpectraSuite's real layout (tests/fit/data/instruments/standard-blue.ProcSpec): one
+    processedPixels per processing stage, written once and otherwise XStream references;
+    the first stage's points at the raw counts."""
+    doubles = lambda v: "".join(f"<double>{float(x)!r}</double>" for x in v)  # noqa: E731
+    return ("<spectrum>\n"
+            f"  <sourceSpectra><omni><pixelValues>{doubles(processed * 40)}</pixelValues>\n"
+            f"    <channelWavelengths>{doubles(wl)}</channelWavelengths></omni></sourceSpectra>\n"
+            "  <certificates>\n"
+            "    <stage><processedPixels reference=\"../../../sourceSpectra/omni/pixelValues\"/></stage>\n"
+            f"    <stage><processedPixels>{doubles(processed)}</processedPixels></stage>\n"
+            f"    <stage><processedPixels reference=\"{last_ref}\"/></stage>\n"
+            "  </certificates>\n"
+            "</spectrum>\n")
+
+
+@pytest.mark.parametrize("last_ref", ["../../stage[2]/processedPixels",
+                                      "/spectrum/certificates/stage[2]/processedPixels",
+                                      "../../stage[3]/../stage[2]/processedPixels"])
+def test_procspec_references(tmp_path, last_ref):
+    """The last stage's pixels, references followed (relative, absolute, through a
+    sibling), not the raw counts the first stage points at (40x the values here)."""
+    path = write_procspec(tmp_path / "scan_20deg.ProcSpec", procspec_chain_xml(WL, PCT, last_ref))
+    ds, _ = import_files([path], SPEC)
+    np.testing.assert_allclose(ds.reflectance, PCT / 100, rtol=1e-9, atol=0)
+
+
+@pytest.mark.parametrize("last_ref, match", [
+    ("../../stage[7]/processedPixels", r"the reference '\.\./\.\./stage\[7\]/processedPixels' names no element "
+                                       r"at 'stage\[7\]'"),
+    ("../../../../../x", r"the reference '(\.\./)+x' climbs above the document"),
+    ("/other/certificates", r"the reference '/other/certificates' names no element at 'other'"),
+    (".", r"more than 16 references in a chain \(a cycle\)"),
+    ("a/../" * 40, r"a reference of 80 steps \(at most 64\)"),   # bounded: an upload may be hostile
+])
+def test_bad_procspec_reference(tmp_path, last_ref, match):
+    path = tmp_path / "s.ProcSpec"
+    write_procspec(path, procspec_chain_xml(WL, PCT, last_ref))
+    with pytest.raises(ValueError, match=r"s\.ProcSpec: ps_0\.xml: <processedPixels>: " + match):
+        import_files([str(path)], SPEC)
+
+
 def zipfile_bytes(xml):
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:

@@ -1,13 +1,16 @@
 """Ocean Optics SpectraSuite .ProcSpec: a zip archive holding one XML document ``ps_<n>.xml``
 (and ``OOISignatures.xml``).
 
-The document (an XStream serialisation of OmniDriver's spectrum object) holds the
+The document (an XStream serialisation of SpectraSuite's ``ProcessedSpectrum``) holds the
 wavelengths as ``<channelWavelengths><double>...</double>...</channelWavelengths>`` and the
 processed spectrum (reflectance or transmittance, in percent as SpectraSuite shows it) as
 ``<processedPixels><double>...</double>...</processedPixels>``; beside them the raw sample,
 dark and reference pixels (``pixelValues``, ``darkSpectrum``, ``referenceSpectrum``) and the
-acquisition settings. SpectraSuite writes some bytes outside ASCII into the document; they
-are dropped before parsing (as pavo/lightr do).
+acquisition settings. A real file lists one ``processedPixels`` per stage of the processing
+chain (in ``certificates``), most of them XStream references (``xstream.py``): the first
+stage's points at the raw counts, so the last stage's is read, references followed.
+SpectraSuite writes some bytes outside ASCII into the document; they are dropped before
+parsing (as pavo/lightr do).
 """
 from __future__ import annotations
 
@@ -19,6 +22,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from bsdflab.fit.readers.base import Reader, Spectrum
+from bsdflab.fit.readers.xstream import Tree
 
 _MEMBER = re.compile(r"(^|/)ps_\d+\.xml$")
 _CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f]")
@@ -31,10 +35,12 @@ MAX_MEMBERS = 64
 MAX_INFLATED = 4 << 20
 
 
-def _doubles(root, tag: str, where: str) -> np.ndarray:
-    node = root.find(f".//{tag}")
-    if node is None:
+def _doubles(tree: Tree, tag: str, where: str, last: bool = False) -> np.ndarray:
+    """The <double> values of the first (``last``: the last) <tag> element, references followed."""
+    nodes = tree.root.findall(f".//{tag}")
+    if not nodes:
         raise ValueError(f"{where}: no <{tag}> element")
+    node = tree.resolve(nodes[-1 if last else 0], f"{where}: <{tag}>")
     values = []
     for k, el in enumerate(node.iter("double")):
         try:
@@ -86,8 +92,9 @@ class ProcSpec(Reader):
         except ElementTree.ParseError as e:
             line, column = e.position
             raise ValueError(f"{where}: line {line}, column {column + 1}: bad XML: {str(e).split(':')[0]}") from None
-        wl = _doubles(root, "channelWavelengths", where)
-        value = _doubles(root, "processedPixels", where)
+        tree = Tree(root)
+        wl = _doubles(tree, "channelWavelengths", where)
+        value = _doubles(tree, "processedPixels", where, last=True)
         if len(wl) != len(value):
             raise ValueError(f"{where}: {len(wl)} channelWavelengths but {len(value)} processedPixels")
         return [Spectrum(wl, value, path, "", f"{where} <processedPixels>", np.zeros(0, int))]
