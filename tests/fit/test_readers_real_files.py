@@ -2,8 +2,9 @@
 SOURCES.md there) read by bsdflab's readers and checked against what the same bytes say
 when read by an independent path written here: zipfile + ElementTree walking the XStream
 document by hand (.ProcSpec), struct at the AvaSoft 8 header's offsets (.Raw8), the
-JCAMP-DX text's own lines and header (.jdx). Each file is also checked for its wavelength
-range, its units and what `bsdflab fit import` makes of it."""
+JCAMP-DX text's own lines and header (.jdx), the rows between the markers (OOIBase32
+text). Each file is also checked for its wavelength range, its units and what
+`bsdflab fit import` makes of it."""
 from __future__ import annotations
 
 import re
@@ -145,3 +146,31 @@ def test_jcamp_hemispherical_reflectance_in_wavenumbers():
     with pytest.raises(ValueError, match=r"fitr_nitrocellulose\.jdx: ##XYDATA: no wavelength inside the "
                                          r"model's range 350-1000 nm"):
         import_files([path], ImportSpec(geometry="total", sigma_relative=0.02, angle_deg=8.0))
+
+
+def test_ooibase32_scope_text():
+    """Ocean Optics OOIBase32 text (the family of OceanView/SpectraSuite text; CRLF line ends,
+    suffix .scope, so the format is named): the rows between the markers, 2048 pixels,
+    339.95-1013.55 nm, with their line numbers. The values are counts (a laser line, 656.6
+    at 787.02 nm): undeclared, the units rule refuses them, naming that line."""
+    path = str(DATA / "tsunami.scope")
+    lines = Path(path).read_bytes().decode("ascii").split("\r\n")
+    assert lines[0] == "OOIBase32 Version 1.0.1.6 Data File" and "Spectrometer Serial Number: USB2E2859" in lines
+    begin, end = lines.index(">>>>>Begin Spectral Data<<<<<"), lines.index(">>>>>End Spectral Data<<<<<")
+    rows = np.array([[float(c) for c in ln.split("\t")] for ln in lines[begin + 1:end]])
+    assert rows.shape == (2048, 2) and (rows[0, 0], rows[-1, 0]) == (339.95, 1013.55)
+
+    curve = reader_for(path, "oceanview").read(path, None)[0]
+    assert curve.units is None
+    np.testing.assert_array_equal(curve.wavelength_nm, rows[:, 0])
+    np.testing.assert_array_equal(curve.value, rows[:, 1])
+    np.testing.assert_array_equal(curve.lines, np.arange(begin + 2, end + 1))    # 1-based: 15 ... 2062
+
+    inside = (rows[:, 0] >= 350) & (rows[:, 0] <= 1000)
+    peak = int(np.flatnonzero(inside)[np.argmax(rows[inside, 1])])
+    assert (rows[peak, 0], rows[peak, 1], begin + 2 + peak) == (787.02, 656.6, 1296)
+    with pytest.raises(ValueError, match=r"tsunami\.scope, line 1296: the values look like percent \(a specular "
+                                         r"reflectance of 656\.6"):
+        import_files([path], ImportSpec(format="oceanview", geometry="specular", sigma_absolute=1.0, angle_deg=10.0))
+    with pytest.raises(ValueError, match=r"cannot tell the format from the suffix '\.scope'"):
+        reader_for(path)
