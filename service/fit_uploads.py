@@ -31,7 +31,7 @@ def check_zip(path: str, name: str) -> None:
     try:
         with zipfile.ZipFile(path) as z:
             infos = z.infolist()
-    except (zipfile.BadZipFile, OSError, EOFError) as e:
+    except (zipfile.BadZipFile, OSError, EOFError, UnicodeDecodeError) as e:   # a name flagged UTF-8 that is not
         raise ValueError(f"{name}: not a readable zip archive ({type(e).__name__})") from None
     check_sizes(infos, name)
 

@@ -24,6 +24,11 @@ import numpy as np
 from bsdflab.fit.readers.base import Reader, Spectrum
 from bsdflab.fit.readers.xstream import Tree
 
+try:
+    from lzma import LZMAError
+except ImportError:   # a Python without lzma: zipfile refuses such members with a RuntimeError
+    LZMAError = zlib.error
+
 _MEMBER = re.compile(r"(^|/)ps_\d+\.xml$")
 _CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f]")
 # The archive is bounded here, in the reader, from its declared sizes (zipfile never inflates
@@ -41,8 +46,13 @@ def _doubles(tree: Tree, tag: str, where: str, last: bool = False) -> np.ndarray
     if not nodes:
         raise ValueError(f"{where}: no <{tag}> element")
     node = tree.resolve(nodes[-1 if last else 0], f"{where}: <{tag}>")
+    # a double[] is its own <double> children only: a reference to an element holding one (a
+    # stage, a spectrum) is not read through its descendants, which may be another array
+    other = next((el for el in node if el.tag != "double"), None)
+    if other is not None:
+        raise ValueError(f"{where}: <{tag}> holds <{other.tag}>, not only <double> values")
     values = []
-    for k, el in enumerate(node.iter("double")):
+    for k, el in enumerate(node):
         try:
             values.append(float(el.text or ""))
         except ValueError:
@@ -81,12 +91,20 @@ class ProcSpec(Reader):
                                      f"{members or 'none'} (members: {', '.join(z.namelist()) or 'none'})")
                 member = members[0]
                 raw = z.read(member)
-        except (zipfile.BadZipFile, zlib.error, EOFError) as e:
+        # zipfile's RuntimeError (an encrypted member), NotImplementedError (deflate64, AES),
+        # LZMAError (a corrupt lzma member), UnicodeDecodeError (a name flagged UTF-8 that is not)
+        except (zipfile.BadZipFile, zlib.error, EOFError, RuntimeError, NotImplementedError, LZMAError,
+                UnicodeDecodeError) as e:
             raise ValueError(f"{path}: not a readable ProcSpec (zip) archive: {e}") from None
         except OSError as e:
             raise ValueError(f"cannot read {path}: {e}") from None
         where = f"{path}: {member}"
         text = _CONTROL.sub("", raw.decode("ascii", errors="ignore"))
+        dtd = text.find("<!DOCTYPE")
+        if dtd >= 0:   # SpectraSuite writes none; its entities inflate past MAX_INFLATED (expat's own
+            # guard allows 100-fold past 8 MiB) and an external DTD is never wanted
+            raise ValueError(f"{where}: line {text.count(chr(10), 0, dtd) + 1}: a document type declaration "
+                             "(<!DOCTYPE), which SpectraSuite does not write, is not read")
         try:
             root = ElementTree.fromstring(text)
         except ElementTree.ParseError as e:

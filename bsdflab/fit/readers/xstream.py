@@ -51,6 +51,8 @@ class Tree:
             if not 1 <= k <= len(same):
                 raise ValueError(f"{where}: the reference {path!r} names no element at {step!r}")
             node = same[k - 1]
+        if node is None:   # "/": an absolute path of no steps names the document, not an element
+            raise ValueError(f"{where}: the reference {path!r} names no element")
         return node
 
     def resolve(self, el: ElementTree.Element, where: str) -> ElementTree.Element:
