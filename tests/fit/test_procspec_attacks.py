@@ -121,3 +121,15 @@ def test_upload_zip_name_not_utf8(tmp_path):
     path.write_bytes(bad_utf8_name())
     with pytest.raises(ValueError, match=r"^s\.ProcSpec: not a readable zip archive \(UnicodeDecodeError\)"):
         read_summary(str(path), "s.ProcSpec", str(tmp_path))
+
+
+@pytest.mark.parametrize("digits", ["1" * 5000, "0" * 5000 + "2", "1" * 10])
+def test_reference_index_of_many_digits(tmp_path, digits):
+    """An index of thousands of digits: int() refused it past 4300 digits with a ValueError
+    naming neither the file nor the reference (and converts such strings in quadratic time
+    where that limit is raised); no document has a billion siblings."""
+    ref = f"../../stage[{digits}]/processedPixels"
+    path = write_procspec(tmp_path / "s.ProcSpec", procspec_chain_xml(WL, PCT, ref))
+    with pytest.raises(ValueError, match=WHERE + r"<processedPixels>: the reference '\.\./\.\./stage\[\d+\]/proc"
+                                                 r"essedPixels' has a step XStream does not write"):
+        read(path)

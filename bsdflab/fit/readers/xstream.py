@@ -12,7 +12,9 @@ from __future__ import annotations
 import re
 from xml.etree import ElementTree
 
-_STEP = re.compile(r"^([^\[\]/]+)(?:\[(\d+)\])?$")
+# an index of at most 9 digits: no document has a billion siblings, and int() of thousands of
+# digits raises its own ValueError (quadratic where its limit is lifted)
+_STEP = re.compile(r"^([^\[\]/]+)(?:\[(\d{1,9})\])?$")
 MAX_HOPS = 16    # a reference to a reference ...: more than this is a cycle
 # steps in one reference: real ones have under ten; any document may reach the reader (an
 # upload), so a path is bounded, and each step is a dictionary look-up, not a scan
