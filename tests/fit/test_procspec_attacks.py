@@ -133,3 +133,20 @@ def test_reference_index_of_many_digits(tmp_path, digits):
     with pytest.raises(ValueError, match=WHERE + r"<processedPixels>: the reference '\.\./\.\./stage\[\d+\]/proc"
                                                  r"essedPixels' has a step XStream does not write"):
         read(path)
+
+
+@pytest.mark.parametrize("ref, units", [
+    ("../../stage[1]/processedPixels", ""),                                # the first stage's: raw counts
+    ("../../../sourceSpectra/omni/pixelValues", ""),
+    ("../../stage[2]/processedPixels", '<yUnits class="com.oceanoptics.spectrasuite.unitdescriptors.'
+                                       'CountsIntensityDescriptor"/>'),
+])
+def test_last_stage_in_counts(tmp_path, ref, units):
+    """A spectrum saved in scope mode: its last (only) stage's pixels are the raw counts (a
+    reference to the source's <pixelValues>, or units in counts). Read as percent silently
+    (40x the processed values here); refused by name."""
+    xml = procspec_chain_xml(WL, PCT, ref).replace(f'reference="{ref}"/>', f'reference="{ref}"/>{units}')
+    path = write_procspec(tmp_path / "s.ProcSpec", xml)
+    with pytest.raises(ValueError, match=WHERE + r"the last <processedPixels> (is the <pixelValues> of <omni>|"
+                                                 r"is in counts \(.*CountsIntensityDescriptor\)), .*scope mode"):
+        read(path)

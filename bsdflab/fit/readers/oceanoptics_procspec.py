@@ -8,7 +8,8 @@ processed spectrum (reflectance or transmittance, in percent as SpectraSuite sho
 dark and reference pixels (``pixelValues``, ``darkSpectrum``, ``referenceSpectrum``) and the
 acquisition settings. A real file lists one ``processedPixels`` per stage of the processing
 chain (in ``certificates``), most of them XStream references (``xstream.py``): the first
-stage's points at the raw counts, so the last stage's is read, references followed.
+stage's points at the raw counts, so the last stage's is read, references followed (and
+refused when it is those counts: a spectrum saved in scope mode).
 SpectraSuite writes some bytes outside ASCII into the document; they are dropped before
 parsing (as pavo/lightr do).
 """
@@ -51,6 +52,8 @@ def _doubles(tree: Tree, tag: str, where: str, last: bool = False) -> np.ndarray
     other = next((el for el in node if el.tag != "double"), None)
     if other is not None:
         raise ValueError(f"{where}: <{tag}> holds <{other.tag}>, not only <double> values")
+    if last:
+        _processed(tree, nodes[-1], node, tag, where)
     values = []
     for k, el in enumerate(node):
         try:
@@ -64,6 +67,23 @@ def _doubles(tree: Tree, tag: str, where: str, last: bool = False) -> np.ndarray
         k = int(np.flatnonzero(~np.isfinite(v))[0])
         raise ValueError(f"{where}: <{tag}> value {k + 1} is not finite: {values[k]!r}")
     return v
+
+
+def _processed(tree: Tree, el, node, tag: str, where: str) -> None:
+    """ValueError when the last stage's ``el`` (resolved to ``node``) holds raw counts, not a
+    processed spectrum: a spectrum saved in scope mode has one stage, whose pixels are a
+    reference to the source spectrum's <pixelValues> (the first stage of any file is), and its
+    units (<yUnits class="...CountsIntensityDescriptor">) say so. Read, they were taken as
+    percent without a word."""
+    if node.tag != tag:
+        of = tree.up.get(node)
+        raise ValueError(f"{where}: the last <{tag}> is the <{node.tag}>{f' of <{of.tag}>' if of is not None else ''}"
+                         ", not a processed spectrum (raw counts saved in scope mode?)")
+    stage = tree.up.get(el)
+    units = stage.find("yUnits") if stage is not None else None
+    if units is not None and "Counts" in (units.get("class") or ""):
+        raise ValueError(f"{where}: the last <{tag}> is in counts ({units.get('class')}), not a processed "
+                         "spectrum (saved in scope mode?)")
 
 
 def check_sizes(infos: list[zipfile.ZipInfo], where: str) -> None:
