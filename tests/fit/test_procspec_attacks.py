@@ -150,3 +150,19 @@ def test_last_stage_in_counts(tmp_path, ref, units):
     with pytest.raises(ValueError, match=WHERE + r"the last <processedPixels> (is the <pixelValues> of <omni>|"
                                                  r"is in counts \(.*CountsIntensityDescriptor\)), .*scope mode"):
         read(path)
+
+
+def test_tree_indexes_only_the_elements_stepped_into():
+    """The children by tag are indexed for the elements a reference steps into, not for every
+    element of the document (the eager index doubled the time a dense upload takes to read)."""
+    from xml.etree import ElementTree
+
+    from bsdflab.fit.readers.xstream import Tree
+
+    junk = "<a><b/></a>" * 2000
+    xml = procspec_chain_xml(WL, PCT).replace("<certificates>", f"<certificates><junk>{junk}</junk>")
+    root = ElementTree.fromstring(xml)
+    tree = Tree(root)
+    el = root.findall(".//processedPixels")[-1]
+    assert tree.resolve(el, "s").tag == "processedPixels"
+    assert len(tree.named) == 2      # "../../stage[2]/processedPixels": certificates and stage[2]
