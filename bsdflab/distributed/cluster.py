@@ -15,9 +15,8 @@ from collections.abc import Iterator
 
 from distributed import Client, LocalCluster
 
-# Seconds to wait for a scheduler before giving up: an unreachable address must fail
-# before any work starts, with a message that names it.
-CONNECT_TIMEOUT_S = 10.0
+from bsdflab.util.settings import library_settings
+
 _LOCAL = re.compile(r"^local:(\d+)$")
 MAX_LOCAL_WORKERS = 256
 
@@ -53,12 +52,13 @@ def local_cluster(n_workers: int, threads_per_worker: int | None = None):
 
 @contextlib.contextmanager
 def connect(scheduler: str | None = None, cluster: str | None = None,
-            timeout: float = CONNECT_TIMEOUT_S) -> Iterator[object]:
+            timeout: float | None = None) -> Iterator[object]:
     """A ``distributed.Client`` for ``scheduler`` (an address) or ``cluster`` ("local:N"),
     closed (and the local cluster shut down) on exit.
 
     Raises ValueError for a malformed argument and ConnectionError naming the address when
-    no scheduler answers within ``timeout`` seconds — before any work is sent.
+    no scheduler answers within ``timeout`` seconds (default BSDFLAB_CONNECT_TIMEOUT_S, 10) —
+    before any work is sent.
     """
     if (scheduler is None) == (cluster is None):
         raise ValueError("give exactly one of scheduler (an address) or cluster ('local:N')")
@@ -71,6 +71,8 @@ def connect(scheduler: str | None = None, cluster: str | None = None,
                 raise
         return
     address = check_scheduler_address(scheduler)
+    if timeout is None:   # an unreachable address must fail before any work, naming it
+        timeout = library_settings().connect_timeout_s
     try:
         client = Client(address, timeout=timeout)
     except (OSError, TimeoutError) as e:

@@ -78,6 +78,8 @@ class LibrarySettings(BaseSettings):
                                                           "(scalar_rgb or llvm_ad_rgb)")
     blender_python: str | None = Field(None, description="the Python interpreter with bpy that `bsdflab export "
                                                          "--format blender` runs (default: .venv-blender)")
+    connect_timeout_s: float = Field(10.0, gt=0, description="seconds to wait for a Dask scheduler (--scheduler, "
+                                                             "dask:<address>) before giving up, before any work")
 
 
 def library_settings() -> LibrarySettings:

@@ -94,9 +94,13 @@ def test_table_and_render_end_to_end(server, tmp_path):
 
 def test_sigkill_mid_job_then_restart_completes_it(tmp_path):
     """The job is re-queued by the next server and completes; nothing half-written is left."""
-    # long enough to be killed mid-way after the store records its start (tens of seconds)
+    # long enough to be killed mid-way after the store records its start: 5 CPU-s (the kill
+    # follows within milliseconds; the check below fails loudly if it ever finished first).
+    # The table runs about 2.5 times (before the kill, after the restart, in this process):
+    # 8192 walks took 12.5 CPU-s each. Mutation caught: a restart that gives a crashed job up
+    # at once (``_recover`` without its attempts count) leaves it failed.
     request = {**SMALL_TABLE, "grid": {"n_theta_i": 4, "n_theta_o": 5, "n_phi": 3},
-               "min_samples": 8192, "max_samples": 8192}
+               "min_samples": 4096, "max_samples": 4096}
     first = ServiceProcess(tmp_path)
     try:
         job = httpx.post(f"{first.url}/v1/tables", json=request, timeout=60).json()
