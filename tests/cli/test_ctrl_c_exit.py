@@ -52,8 +52,9 @@ def test_interrupted_exit_keeps_the_exit_steps_and_skips_the_teardown(tmp_path):
     Mutations: leave() without threading._shutdown (no `thread`), without the atexit
     handlers (no `atexit`, the temporary folder left), without the flush (stdout empty);
     main() without leave() (the teardown's line on stderr)."""
+    buffered = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}  # set by some CI shells
     r = subprocess.run([sys.executable, "-c", CHILD, str(tmp_path)], capture_output=True, text=True,
-                       timeout=300)  # a hang guard only
+                       env=buffered, timeout=300)  # a hang guard only
     assert (r.returncode, r.stderr) == (130, "\nbsdflab info: interrupted\n"), (r.returncode, r.stderr[-2000:])
     assert r.stdout == "unflushed output"
     assert sorted(os.listdir(tmp_path)) == ["atexit", "thread"]
