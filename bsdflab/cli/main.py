@@ -23,11 +23,20 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from bsdflab.cli.errors import run_command
+    """Run the command in ``argv`` and return its exit status. As the program (``argv``
+    None: the console script, ``python -m``) an interrupted command leaves at once,
+    skipping the interpreter's teardown (bsdflab/cli/leave.py); with a list, as tests call
+    it in-process, it returns 130."""
+    from bsdflab.cli.errors import INTERRUPTED, run_command
 
     parser = build_parser()
     args = parser.parse_args(argv)
-    return run_command(args)
+    status = run_command(args)
+    if status == INTERRUPTED and argv is None:
+        from bsdflab.cli.leave import leave
+
+        leave(status)
+    return status
 
 
 if __name__ == "__main__":
