@@ -18,8 +18,8 @@ from the configuration, not read from the solver.
 Cost: each top and base is built once and shared by every stack it joins (a multiscatter
 top's and a MERL base's core set-up, ~2-3 s, is cached on the instance), and every solve
 runs at ``ORDERS`` Fourier orders: this file checks outcomes and finiteness, not accuracy
-(the automatic orders, up to 62 for the alpha 0.1 top over a rough base, took ~190 s of
-~250 s here; the z-tests of tests/solvers solve at them). Mutation checked: dropping the
+(at the automatic orders, 62 for the alpha 0.1 top over a rough base, that one stack took
+190 s of test_01's ~300 s at load ~22; the z-tests of tests/solvers solve at them). Mutation checked: dropping the
 ``rough-exit`` refusal of Solution._pairs fails test_02[smooth-smooth unmatched]."""
 
 from __future__ import annotations
