@@ -13,7 +13,14 @@ Mises-Fisher, non-scattering). A stack counts only where PFMC itself evaluates i
 solved stack is queried with all four kinds of pairs (reflection from above and below,
 transmission down and up, grazing ones included): values
 finite, and those of an opaque stack below it exactly 0. The expected outcome is stated here
-from the configuration, not read from the solver."""
+from the configuration, not read from the solver.
+
+Cost: each top and base is built once and shared by every stack it joins (a multiscatter
+top's and a MERL base's core set-up, ~2-3 s, is cached on the instance), and every solve
+runs at ``ORDERS`` Fourier orders: this file checks outcomes and finiteness, not accuracy
+(at the automatic orders, 62 for the alpha 0.1 top over a rough base, that one stack took
+190 s of test_01's ~300 s at load ~22; the z-tests of tests/solvers solve at them). Mutation checked: dropping the
+``rough-exit`` refusal of Solution._pairs fails test_02[smooth-smooth unmatched]."""
 
 from __future__ import annotations
 
@@ -34,6 +41,7 @@ from tests.support.tables import valid_table
 WL = [450.0, 550.0, 650.0]
 FILM = [{"material": 1.83, "thickness_nm": 300.0}]
 ISO = bl.Slab(1.0, sigma_a=0.2, sigma_s=1.0)
+ORDERS = 8  # Fourier orders of every solve here (module docstring: outcomes, not accuracy)
 
 # name -> (top, rough, expected stack-wide gap or None)
 TOPS = {
@@ -57,7 +65,7 @@ def _bases(folder):
     export_model(cu, rgb, n_theta_i=6, resolution=16, error_points=200)
     merl.write_bytes(merl_bytes(np.full((3, *DIMS), 0.1)))
     # name -> (base, transmissive, rough, expected stack-wide gap or None)
-    return {
+    bases = {
         "diffuse": (lambda: bl.Diffuse(0.5), False, False, None),
         "conductor film": (lambda: bl.Conductor(material="Au", ext_ior=1.5, film=FILM), False, False, None),
         "roughconductor": (lambda: bl.RoughConductor(0.3, material="Cu", ext_ior=1.5), False, True, None),
@@ -68,6 +76,14 @@ def _bases(folder):
         "merl": (lambda: bl.Merl(merl), False, True, "rgb-base"),
         "table": (lambda: TableBSDF(valid_table()), False, True, "base-kind"),
     }
+    # one instance each, shared by every top (module docstring)
+    return {name: (shared(make), *rest) for name, (make, *rest) in bases.items()}
+
+
+def shared(make):
+    """A factory answering one instance of ``make()`` every time."""
+    instance = make()
+    return lambda: instance
 
 
 # name -> (interface below slab 0 (top of slab 1), its lower index, expected gap under a
@@ -121,7 +137,7 @@ def check(model, expected: set, transmissive: bool, rough_exit: bool, scatters: 
     ``scatters`` False: every path is specular, so eval (no delta lobes) is 0 everywhere."""
     assert pfmc_accepts(model)
     try:
-        sol = solve(model, WL, nodes=8, fine_step=1.0)
+        sol = solve(model, WL, nodes=8, fine_step=1.0, orders=ORDERS)
     except ValueError as e:
         code = re.search(r"\[([a-z-]+)\]", str(e))
         assert code and code.group(1) in expected, f"refused with an unexpected reason: {e}"
@@ -152,7 +168,8 @@ def bases(tmp_path_factory):
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_01_every_top_on_every_base(bases):
     outcomes = {}
-    for tname, (top, _top_rough, top_gap) in TOPS.items():
+    for tname, (make_top, _top_rough, top_gap) in TOPS.items():
+        top = shared(make_top)
         for bname, (base, transmissive, _base_rough, base_gap) in bases.items():
             model = bl.Layered([top()], [ISO], base())
             if not pfmc_accepts(model):

@@ -32,14 +32,7 @@ def _run(args, tmp, timeout=900):
     return subprocess.run([*BSDFLAB, *args], capture_output=True, text=True, timeout=timeout, env=env)
 
 
-@pytest.fixture(scope="session")
-def quick_report(tmp_path_factory):
-    """(process, results document, report folder) of `bsdflab validate --level quick`."""
-    tmp = tmp_path_factory.mktemp("validate-quick")
-    out = tmp / "report"
-    proc = _run(["--level", "quick", "--out", str(out), "--quiet"], tmp)
-    assert (out / "results.json").exists(), proc.stderr[-3000:]
-    return proc, json.loads((out / "results.json").read_text()), out
+# quick_report: tests/validation/conftest.py (one quick run, shared with test_validation_families.py)
 
 
 def _marks(check: Check):
