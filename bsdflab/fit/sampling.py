@@ -216,18 +216,38 @@ def moves():
     return [(emcee.moves.DEMove(), 0.8), (emcee.moves.StretchMove(), 0.2)]
 
 
+class _InterruptLater:
+    """The log posterior as emcee sees it. A Ctrl-C that lands inside it is held until the
+    step ends, then raised by ``run_sampler``'s loop: emcee's own wrapper prints a traceback
+    for anything the likelihood raises, which would stand above the CLI's one-line message.
+    The step's proposals get -inf (rejected) and the chain is thrown away with the raise."""
+
+    def __init__(self, logpost: LogPosterior):
+        self.logpost, self.interrupted = logpost, False
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        try:
+            return self.logpost(x)
+        except KeyboardInterrupt:
+            self.interrupted = True
+            return np.full(len(x), -np.inf)
+
+
 def run_sampler(logpost: LogPosterior, settings: SamplerSettings, progress: bool = True) -> RunResult:
     rng = np.random.default_rng(settings.seed)
     t0 = time.perf_counter()
     map_result = find_map(logpost, settings.map_starts, rng, progress)
     p0 = initial_ball(logpost, map_result.x, settings.walkers, rng)
     before = logpost.evaluations
-    sampler = emcee.EnsembleSampler(settings.walkers, logpost.ndim, logpost, moves=moves(), vectorize=True)
+    target = _InterruptLater(logpost)
+    sampler = emcee.EnsembleSampler(settings.walkers, logpost.ndim, target, moves=moves(), vectorize=True)
     # emcee's moves draw from its own RandomState; seed it from our generator for repeatability
     sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
     history: list[tuple[int, np.ndarray]] = []
     converged, old_tau = False, None
     for _ in sampler.sample(p0, iterations=settings.max_steps, progress=progress):
+        if target.interrupted:
+            raise KeyboardInterrupt
         n = sampler.iteration
         report_progress("sampling", n / settings.max_steps)   # the cap: converging earlier jumps to the end
         stop_if_cancelled("sampling")
