@@ -9,7 +9,6 @@ from __future__ import annotations
 import os
 import re
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -25,6 +24,7 @@ from bsdflab.render.units import plan_units, render_units
 from bsdflab.scenes import scene
 from bsdflab.tables.units import tabulate_units
 from support.cli import interruptible
+from support.service_process import free_port
 
 BSDFLAB = [sys.executable, "-m", "bsdflab.cli.main"]
 
@@ -34,12 +34,6 @@ def client():
     with connect(cluster="local:2") as c:
         c.wait_for_workers(2, timeout=60)
         yield c
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def test_units_cover_every_pixel_and_pass_once():
@@ -143,7 +137,7 @@ def test_a_worker_killed_mid_render_changes_nothing(client):
 
 
 def test_unreachable_scheduler_is_a_clear_error_before_any_work():
-    address = f"tcp://127.0.0.1:{_free_port()}"
+    address = f"tcp://127.0.0.1:{free_port()}"
     with pytest.raises(ConnectionError, match=r"no Dask scheduler answers at tcp://127.0.0.1:\d+ \(waited 2 s\)"):
         with connect(scheduler=address, timeout=2):
             pass
@@ -167,7 +161,7 @@ def test_cli_unreachable_scheduler_exits_2_and_writes_nothing(tmp_path):
     Mutation: connect() ignoring the setting (a fixed 10 s) fails the message check."""
     out = tmp_path / "r.exr"
     p = subprocess.run([*BSDFLAB, "render", "furnace", "--width", "8", "--height", "6", "--spp", "2",
-                        "--scheduler", f"tcp://127.0.0.1:{_free_port()}", "--out", str(out), "--quiet"],
+                        "--scheduler", f"tcp://127.0.0.1:{free_port()}", "--out", str(out), "--quiet"],
                        capture_output=True, text=True, timeout=120,
                        env={**os.environ, "BSDFLAB_CONNECT_TIMEOUT_S": "1"})
     assert p.returncode == 2, p.stderr

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import os
+import random
 import shutil
 import signal
 import socket
@@ -13,11 +14,29 @@ from pathlib import Path
 
 import httpx2 as httpx
 
+# pytest-xdist's workers (PYTEST_XDIST_WORKER gw0, gw1, ...) each draw ports from a band of
+# their own below Linux's ephemeral range (32768-60999): a port one worker has probed and not
+# yet handed to its server cannot be taken by the other worker's probe, nor by any
+# outgoing connection's local port. Without xdist, the kernel's free port.
+_BAND_START, _BAND_SIZE = 20000, 1000
+
 
 def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    """A port on 127.0.0.1 that was free when probed, and that no other test worker draws."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "")
+    if not worker.startswith("gw"):
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            return s.getsockname()[1]
+    start = _BAND_START + int(worker[2:]) * _BAND_SIZE
+    for port in random.Random().sample(range(start, start + _BAND_SIZE), _BAND_SIZE):
+        with socket.socket() as s:
+            try:
+                s.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return port
+    raise RuntimeError(f"no free port in {start}-{start + _BAND_SIZE - 1}")
 
 
 def bsdflab_command() -> list[str]:
