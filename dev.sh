@@ -100,7 +100,10 @@ case "$cmd" in
     test)
         setup
         lint
-        "$VENV/bin/python" -m pytest -m "not slow" "$@"
+        # one worker per core (at most 4: each can hold ~1.5 GB), whole files per worker,
+        # longest files first (tests/support/scheduling.py)
+        "$VENV/bin/python" -m pytest -m "not slow" -n auto --maxprocesses 4 --dist loadfile \
+            --no-loadscope-reorder "$@"
         ;;
     *) echo "usage: ./dev.sh [demo|test|setup|lint] [args...]" >&2; exit 2 ;;
 esac

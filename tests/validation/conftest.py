@@ -1,6 +1,6 @@
-"""The one `bsdflab validate --level quick` run of tests/validation, shared by both files:
-test_validation_registry.py holds every check to its row, test_validation_families.py each
-new family's checks (re-running them in-process doubled the quick level's ~100 s)."""
+"""The one `bsdflab validate --level quick` run of tests/validation, read by
+test_validation_registry.py only (it holds every check to its row): under pytest-xdist a
+session fixture is built once per worker that needs it, so one file uses it."""
 from __future__ import annotations
 
 import json

@@ -32,7 +32,7 @@ def _run(args, tmp, timeout=900):
     return subprocess.run([*BSDFLAB, *args], capture_output=True, text=True, timeout=timeout, env=env)
 
 
-# quick_report: tests/validation/conftest.py (one quick run, shared with test_validation_families.py)
+# quick_report: tests/validation/conftest.py (one quick run; only this file reads it)
 
 
 def _marks(check: Check):
