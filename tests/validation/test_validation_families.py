@@ -170,7 +170,7 @@ def test_service_fails_a_server_that_answers_500(tmp_path):
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()
 
-    def broken_serve(folder):
+    def broken_serve(folder, limits):
         return f"http://127.0.0.1:{server.server_address[1]}", lambda: None
 
     try:

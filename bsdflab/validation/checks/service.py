@@ -4,7 +4,10 @@ bsdflab.validation in the layers, so the check is the service's client, not its 
 Every schemathesis check but ``positive_data_acceptance`` (physical ranges are the Python
 API's to refuse with a 422) must hold, with zero 5xx, and the computing operations must
 answer some cases (an API that refuses everything would pass the rest). The model under test
-is ``{"serve": callable(folder) -> (url, stop)}``: a server that answers 500 must fail."""
+is ``{"serve": callable(folder, limits) -> (url, stop)}``: a server that answers 500 must fail.
+The quick level's server caps a lobe's resolution (BSDFLAB_LIMIT_LOBE_RESOLUTION): the
+contract is the same, and the lobe operations' examples at the default 181 took 30 of its
+68 s; standard and full run the default limits."""
 
 from __future__ import annotations
 
@@ -29,8 +32,9 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def serve(folder: Path, timeout: float = 120.0):
-    """Start ``bsdflab serve`` with its data in ``folder``: (url, stop)."""
+def serve(folder: Path, limits: dict[str, str] | None = None, timeout: float = 120.0):
+    """Start ``bsdflab serve`` with its data in ``folder`` and the settings ``limits``
+    (BSDFLAB_LIMIT_* variables) over the environment's: (url, stop)."""
     import urllib.error
     import urllib.request
 
@@ -56,7 +60,7 @@ def serve(folder: Path, timeout: float = 120.0):
         ],
         stdout=log,
         stderr=subprocess.STDOUT,
-        env=dict(os.environ),
+        env={**os.environ, **(limits or {})},
     )
 
     def stop():
@@ -178,14 +182,15 @@ def fuzz(url: str, examples: int) -> dict:
     statistic="failed cases + 5xx responses + computing operations that never answered",
     tolerance="0: deterministic cases (derandomised hypothesis); a contract holds or it does not. "
     "tests/service/test_schema_fuzz_live.py runs the large sample and the stateful run",
-    effort=effort({"examples": 2}, {"examples": 12}, {"examples": 120}),
+    effort=effort({"examples": 2, "limits": {"BSDFLAB_LIMIT_LOBE_RESOLUTION": "48"}}, {"examples": 12},
+                  {"examples": 120}),
     make_model=lambda: {"serve": serve},
     seed=0,
     requires=("schemathesis",),
 )
 def _schemathesis(ctx):
     with tempfile.TemporaryDirectory() as tmp:
-        url, stop = ctx.model["serve"](Path(tmp))
+        url, stop = ctx.model["serve"](Path(tmp), ctx.effort.get("limits"))
         try:
             result = fuzz(url, int(ctx.effort["examples"]))
         finally:
