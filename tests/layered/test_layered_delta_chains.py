@@ -144,7 +144,18 @@ QUERIES = [("glass iso tau.5", 0.5), ("glass iso tau.5", 0.12), ("glass iso tau.
            ("clear air gap over scattering 2.0, mirror", 0.7),
            ("clear air gap over scattering 2.0, mirror", 0.25)]
 ESTIMATORS = ("pfmc2", "pfmc")  # issue 32: both estimators (pfmc2 shares deterministic chains here)
-FAMILY = 2 * len(QUERIES) * len(ESTIMATORS) + 2
+# CI sample of test_02: 9 of the 24 query x estimator cases (every stack, light from above
+# and from below where the stack has both, a grazing query, both estimators); the other 15
+# carry the slow marker. Each set is its own family: the CI one with test_01's 2.
+CI = {("glass iso tau.5", 0.5, "pfmc2"), ("glass iso tau.5", -0.7, "pfmc"),
+      ("mirror hg.6 tau1", 0.9, "pfmc"), ("mirror hg.6 tau1", 0.15, "pfmc2"),
+      ("glass|1.3|water two slabs", 0.2, "pfmc"), ("glass|1.3|water two slabs", -0.6, "pfmc2"),
+      ("clear over scattering, TIR", -0.6, "pfmc2"), ("clear over scattering, TIR", -0.3, "pfmc"),
+      ("clear air gap over scattering 2.0, mirror", 0.7, "pfmc2")}
+PARAMS = [pytest.param(name, cos_theta, estimator, marks=() if (name, cos_theta, estimator) in CI else pytest.mark.slow)
+          for name, cos_theta in QUERIES for estimator in ESTIMATORS]
+FAMILY = 2 * len(CI) + 2
+SLOW_FAMILY = 2 * (len(PARAMS) - len(CI))
 
 
 def direction(cos_theta):
@@ -180,15 +191,16 @@ def test_01_closed_form_delta_parts_match_the_sampler():
             assert abs(z) < sidak_z_limit(ALPHA, FAMILY), (cos_theta, x.mean(), ref)
 
 
-@pytest.mark.parametrize("estimator", ESTIMATORS)
-@pytest.mark.parametrize("name,cos_theta", QUERIES)
+@pytest.mark.parametrize("name,cos_theta,estimator", PARAMS)
 def test_02_eval_plus_delta_equals_sample(name, cos_theta, estimator):
-    """Reflection and transmission separately: eval-albedo + delta part = sample-albedo."""
+    """Reflection and transmission separately: eval-albedo + delta part = sample-albedo.
+    Mutation: Layered.estimate's value x 1.02 fails it (clear over scattering, TIR at -0.3,
+    transmission: z 3.5 > 3.48; the 24-case family's higher limit would let it pass)."""
     factory, iors, slabs, mirror = CASES[name]
     m = bl.from_dict({**factory().to_dict(), "estimator": estimator})
     a = split_albedos(m, direction(cos_theta), 30_000, seed=11)
     r_delta, t_delta = expected_delta(iors, slabs, cos_theta, mirror)
-    limit = sidak_z_limit(ALPHA, FAMILY)
+    limit = sidak_z_limit(ALPHA, FAMILY if (name, cos_theta, estimator) in CI else SLOW_FAMILY)
     for side, delta in (("R", r_delta), ("T", t_delta)):
         (e, se), (s, ss) = a["eval " + side], a["sample " + side]
         if mirror is not None and side == "T":

@@ -91,18 +91,26 @@ STACKS = {
 }
 
 
-@pytest.mark.parametrize("name", list(STACKS))
-@pytest.mark.parametrize("cos_theta", [0.9, 0.3])
+ALBEDO_CI = {("smooth-interior-mirror", 0.3), ("two-interior-conductor", 0.9),
+             ("rough-interior-mirror", 0.3), ("smooth-interior-rough-conductor", 0.9)}
+
+
+@pytest.mark.parametrize("cos_theta, name", [
+    pytest.param(c, n, marks=() if (n, c) in ALBEDO_CI else pytest.mark.slow)
+    for c in (0.9, 0.3) for n in STACKS])
 def test_02_eval_albedo_equals_sample_albedo(name, cos_theta):
     """The albedo integrated from eval (cosine-sampled wo) equals the mean weight of the
     sampler's plain random walk (which has no connections and so cannot miss a path
-    class), minus the delta reflection that eval leaves out. Family: 8 tests."""
+    class), minus the delta reflection that eval leaves out. CI runs each stack at one
+    angle (ALBEDO_CI, 4 of 8, both angles twice), the other 4 are slow; each set is a
+    family of 4 tests. Mutation: Layered.estimate's value x 1.05 fails it (3 of the 4; x 1.02
+    passes: a 2 % albedo shift is within these errors)."""
     m = STACKS[name]()
     wi = directions_at(cos_theta)
     e, se, bad = albedo_cosine(m, wi, n=30_000, seed=3)
     s, ss = sampled_albedo(m, wi, n=200_000, seed=4, lobes=Lobe.ALL & ~Lobe.DELTA_REFLECTION)
     z = (e - s) / np.hypot(se, ss)
-    assert abs(z) < sidak_z_limit(ALPHA, 8), (name, e, se, s, ss)
+    assert abs(z) < sidak_z_limit(ALPHA, 4), (name, e, se, s, ss)
     assert bad == 0
 
 

@@ -43,8 +43,10 @@ def _sample_albedo(m, wi, side, n=200_000):
     return x.mean(), x.std() / np.sqrt(n)
 
 
-@pytest.mark.parametrize("estimator", ["pfmc", "pfmc2"])
+@pytest.mark.parametrize("estimator", [pytest.param("pfmc", marks=pytest.mark.slow), "pfmc2"])
 def test_02_eval_agrees_with_sampling_through_a_stack_into_a_denser_medium(estimator):
+    """CI runs the default estimator (pfmc2), pfmc is slow (test_03 runs both in CI).
+    Mutation: Layered.estimate's value x 1.02 fails it."""
     wi = np.array([0.3, 0.0, 1.0]) / np.hypot(0.3, 1.0)
     m = bl.Layered([bl.RoughDielectric(0.6, 1.2, 1.0)], [bl.Slab(1.0, sigma_s=1.0)],
                    bl.RoughDielectric(0.6, 2.0, 1.2), estimator=estimator)

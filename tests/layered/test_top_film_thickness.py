@@ -83,9 +83,16 @@ def pairs(name: str) -> tuple[np.ndarray, np.ndarray]:
     return np.array(wi), np.array(wo)
 
 
-@pytest.mark.parametrize("name", list(STACKS))
-@pytest.mark.parametrize("estimator", ["pfmc", "pfmc2"])
+EVAL_CI = {("pfmc2", "filmed base"), ("pfmc", "filmed interior"), ("pfmc", "rough filmed base")}
+
+
+@pytest.mark.parametrize("estimator, name", [
+    pytest.param(e, n, marks=() if (e, n) in EVAL_CI else pytest.mark.slow)
+    for e in ("pfmc", "pfmc2") for n in STACKS])
 def test_eval_at_a_thickness_is_the_model_with_that_top_film(name, estimator):
+    """CI runs each stack with one estimator (EVAL_CI, 3 of 6, both estimators), the other
+    3 are slow. Mutation: the queried thickness ignored (Layered.estimate dropping
+    thickness_nm) fails it."""
     make = STACKS[name]
     queried, explicit = make(OWN_NM, estimator=estimator), make(T_NM, estimator=estimator)
     wi, wo = pairs(name)

@@ -18,8 +18,16 @@ def test_01_goldens_cover_every_case():
     assert sorted(GOLDENS) == sorted(solver_goldens.CASES)
 
 
-@pytest.mark.parametrize("name", list(solver_goldens.CASES))
+# ~20 CPU-s, half this test's cost: the rough interior interface (GGX 0.5, 1.5 -> 2.0) stays
+# in the normal suite in the one-sided stack over a diffuse base, two-sidedness in the other
+# two-sided cases
+SLOW_GOLDENS = {"two-sided smooth/hg/ggx 0.5 1.5-2.0/iso/air"}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW_GOLDENS else n
+                                  for n in solver_goldens.CASES])
 def test_02_bit_identical(name):
+    """Mutation: Solution.eval's value x 1.02 fails it (any change of a bit does)."""
     got, want = solver_goldens.outputs(name), GOLDENS[name]
     assert sorted(got) == sorted(want)
     for key in want:

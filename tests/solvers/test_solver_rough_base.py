@@ -127,8 +127,13 @@ def hemisphere_integral(sol, light, h, n_mu, n_phi):
     return (2.0 * np.pi / n_phi) * np.sum(np.repeat(w * mu, n_phi)[:, None] * f_cos, axis=0)
 
 
-@pytest.mark.parametrize("below_ior", [1.0, 1.33, pytest.param(1.7, marks=pytest.mark.slow)])
-def test_03_lossless_stack_conserves_energy_from_both_sides(below_ior):
+ALL_ANGLES = (0.0, 60.0, 80.0)
+
+
+@pytest.mark.parametrize("below_ior, angles", [
+    (1.0, (0.0, 80.0)), pytest.param(1.0, (60.0,), marks=pytest.mark.slow),
+    pytest.param(1.33, ALL_ANGLES, marks=pytest.mark.slow), pytest.param(1.7, ALL_ANGLES, marks=pytest.mark.slow)])
+def test_03_lossless_stack_conserves_energy_from_both_sides(below_ior, angles):
     """R + T = 1 for light from above and from below at 0, 60 and 80 degrees: from above the
     top's Fresnel reflection plus the scattered light leaving into both half-spaces; from
     below the whole eval (the rough base has no delta lobe: its own reflection is in eval)
@@ -146,13 +151,18 @@ def test_03_lossless_stack_conserves_energy_from_both_sides(below_ior):
     wavelengths took 88 s for the base to 1.33 (its transmission pairs, through a narrow
     lobe, are the expensive ones; the cost is linear in pairs), 12 x the work of this.
     Mutation checked: Solution.eval scaling its transmission pairs by 1.05 fails it (by
-    1.01 it passes: within the tolerance). Slow: a base denser than
-    the slab (1.7 below 1.5: total internal reflection at the base for light from
-    below), max |R + T - 1| 8.7e-4."""
+    1.01 it passes: within the tolerance). Mutation: transmission pairs x 1.05 fails the
+    CI case (base to 1.0: |R + T - 1| 1.3e-2 at normal incidence from above). Slow: the
+    base to water (1.33, the same regime as 1.0, a base less dense than the slab, but
+    through a narrow transmission lobe: ~75 CPU-s, 6 x the base to 1.0), and a base
+    denser than the slab (1.7 below 1.5: total internal reflection at the base for
+    light from below), max |R + T - 1| 8.7e-4. CI keeps one of the three (a third), at 0 and
+    80 degrees (80: where the quadrature's error peaks); 60 degrees is slow (the cost is per
+    light direction)."""
     sol = solve(lossless(below_ior), [550.0])
     worst = 0.0
     for side in (1.0, -1.0):
-        for theta in np.radians([0.0, 60.0, 80.0]):
+        for theta in np.radians(angles):
             light = spherical_directions(np.array([theta]), np.array([0.3])) * np.array([1, 1, side])
             total = fresnel_reflectance(np.cos(theta), 1.0, 1.5).unpolarised if side > 0 else 0.0
             for h in (1.0, -1.0):

@@ -130,8 +130,13 @@ def hemisphere_integral(sol, light, h, n_mu, n_phi):
     return (2.0 * np.pi / n_phi) * np.sum(np.repeat(w * mu, n_phi)[:, None] * f_cos, axis=0)
 
 
-@pytest.mark.parametrize("below_ior", [1.0, 1.33])
-def test_03_lossless_stack_conserves_energy_from_both_sides(below_ior):
+ALL_ANGLES = (0.0, 60.0, 80.0)
+
+
+@pytest.mark.parametrize("below_ior, angles", [
+    (1.0, (0.0, 80.0)), pytest.param(1.0, (60.0,), marks=pytest.mark.slow),
+    pytest.param(1.33, ALL_ANGLES, marks=pytest.mark.slow)])
+def test_03_lossless_stack_conserves_energy_from_both_sides(below_ior, angles):
     """R + T = 1 for light from above and from below at 0, 60 and 80 degrees: from above the
     whole eval (the rough top has no delta lobe: its own reflection is in eval) into both
     half-spaces; from below the base's Fresnel reflection plus the eval into both. The
@@ -142,11 +147,14 @@ def test_03_lossless_stack_conserves_energy_from_both_sides(below_ior):
     the top's own energy error (the same integral of the top alone, 256 x 384 nodes:
     |1 - E| <= 1.2e-3 for light inside, 1.8e-4 outside), the quadrature's (its change from
     64 x 96 to 128 x 192 nodes: <= 2.4e-4) and the solver's (its change from fine step 0.1
-    to 0.05: <= 6.6e-4), summed and rounded up; docs/solvers.md."""
+    to 0.05: <= 6.6e-4), summed and rounded up; docs/solvers.md. The base to water (1.33,
+    the same regime as air: a base less dense than the slab) is slow (~12 CPU-s); CI checks
+    the base to air at 0 and 80 degrees (80: where the fine step's error peaks), 60 is slow.
+    Mutation: Solution.eval's transmission pairs x 1.05 fails it (the base to air)."""
     sol = solve(lossless(below_ior), [550.0], fine_step=0.1)
     worst = 0.0
     for side in (1.0, -1.0):
-        for theta in np.radians([0.0, 60.0, 80.0]):
+        for theta in np.radians(angles):
             light = spherical_directions(np.array([theta]), np.array([0.3])) * np.array([1, 1, side])
             total = 0.0 if side > 0 else fresnel_reflectance(np.cos(theta), below_ior, 1.5).unpolarised
             for h in (1.0, -1.0):

@@ -92,21 +92,25 @@ def hemisphere_integral(sol, light, h, n_mu, n_phi):
     return (2.0 * np.pi / n_phi) * np.sum(np.repeat(w * mu, n_phi)[:, None] * f_cos, axis=0)
 
 
-def test_03_lossless_stack_conserves_energy_from_both_sides():
+@pytest.mark.parametrize("angles", [(0.0, 80.0), pytest.param((60.0,), marks=pytest.mark.slow)])
+def test_03_lossless_stack_conserves_energy_from_both_sides(angles):
     """R + T = 1 for light from above and from below at 0, 60 and 80 degrees: the whole eval
     (neither boundary has a delta lobe) into both half-spaces. Lossless HG slab of optical
     depth 15, both boundaries GGX 0.3 multiscatter, base to air (to water the base's fine
     nodes are 3 x finer: 6 min), one wavelength, fine step 0.1
     (test_solver_rough_top_exits.py::test_03), 48 x 64 quadrature nodes per half-space.
     Tolerance 4e-3: the top's own energy error (<= 1.2e-3) and the base's (<= 1.1e-3), the
-    quadrature's (<= 8e-4) and the solver's (<= 6.6e-4), summed and rounded up."""
+    quadrature's (<= 8e-4) and the solver's (<= 6.6e-4), summed and rounded up. CI checks
+    0 and 80 degrees (80: where the quadrature and fine-step errors peak), 60 is slow (the
+    cost is per light direction).
+    Mutation: Solution.eval's transmission pairs x 1.05 fails it."""
     slab = bl.Slab(5.0, sigma_a=0.0, sigma_s=3.0, phase={"type": "hg", "g": 0.5})
     model = bl.Layered([bl.RoughDielectric(0.3, 1.5, 1.0, multiscatter=True)], [slab],
                        bl.RoughDielectric(0.3, 1.0, 1.5, multiscatter=True))
     sol = solve(model, [550.0], fine_step=0.1)
     worst = 0.0
     for side in (1.0, -1.0):
-        for theta in np.radians([0.0, 60.0, 80.0]):
+        for theta in np.radians(angles):
             light = spherical_directions(np.array([theta]), np.array([0.3])) * np.array([1, 1, side])
             total = sum(hemisphere_integral(sol, light, h, 48, 64) for h in (1.0, -1.0))
             worst = max(worst, float(np.max(np.abs(total - 1.0))))

@@ -4,8 +4,9 @@ tests do not cover: 2.0 -> 1.2 with a forward HG 0.8 slab below, an interface to
 three slabs with two unmatched interfaces, a strongly reflecting interior film (2.3,
 70 nm) 1.4 -> 1.7 over water. Pass: |v - r| <= z s + e, Sidak family of every
 (pair, wavelength) plus a sqrt(pairs) x mean-z test per case, alpha 0.01.
-Measured: max z 2.04, 2.01, 1.65, 1.69 (limit 3.98); with the interior film dropped
-from the solve the film case reads max z 8.71."""
+Measured (all four as one family): max z 2.04, 2.01, 1.65, 1.69 (limit 3.98); with the
+interior film dropped from the solve the film case reads max z 8.71. CI runs two of the
+four (SLOW_CASES below), each set its own family."""
 
 import numpy as np
 import pytest
@@ -55,13 +56,20 @@ cases = {
         16,
     ),
 }
-FAM = len(cases) * (12 * len(WL) + 1)
+# CI runs the interface to 3.5 and the interior film (2 of 4, the power case among them);
+# the 2.0 -> 1.2 stack with its forward HG 0.8 slab (~12 CPU-s) and the three slabs (~7)
+# are slow. Each set is its own Sidak family.
+SLOW_CASES = {"2.0 iso / 2.0->1.2 / HG 0.8 / to air", "3 slabs 1.5/2.0/1.3 to air"}
+FAM = (len(cases) - len(SLOW_CASES)) * (12 * len(WL) + 1)
+SLOW_FAM = len(SLOW_CASES) * (12 * len(WL) + 1)
 ZMAX = stats.norm.isf(sidak_significance(0.01, FAM) / 2)
+SLOW_ZMAX = stats.norm.isf(sidak_significance(0.01, SLOW_FAM) / 2)
 GRAZE = spherical_directions(np.radians([88.0, 86.0, 87.0, 89.0]), [0.5, 1.0, 2.0, 3.0])
 
 
-@pytest.mark.parametrize("name", list(cases))
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW_CASES else n for n in cases])
 def test_matches_pfmc(name):
+    """Mutation: Solution.eval_with_error's value x 1.02 fails it (the interior film case)."""
     mk, nodes = cases[name]
     wis = []
     wos = []
@@ -85,5 +93,6 @@ def test_matches_pfmc(name):
     z = (np.abs(est.value - r) - e) / est.stderr
     signed = (est.value - r) / np.hypot(est.stderr, e)
     mz = np.mean(signed) * np.sqrt(signed.shape[0])
-    print(f"{name}: max z {z.max():.2f}, sqrt(pairs) mean z {mz:.2f}, limit {ZMAX:.2f}")
-    assert z.max() <= ZMAX and abs(mz) <= ZMAX
+    zmax = SLOW_ZMAX if name in SLOW_CASES else ZMAX
+    print(f"{name}: max z {z.max():.2f}, sqrt(pairs) mean z {mz:.2f}, limit {zmax:.2f}")
+    assert z.max() <= zmax and abs(mz) <= zmax

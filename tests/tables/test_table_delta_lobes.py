@@ -89,10 +89,17 @@ CASES = [
     for theta in ANGLES
 ]
 LOBES = (int(Lobe.DELTA_REFLECTION), int(Lobe.DELTA_TRANSMISSION))
-FAMILY = len(CASES) * len(LOBES) * 3
+# CI sample: 7 of the 20 (each stack, both sides, every angle at least once, total internal
+# reflection from below at 85 degrees, the metal base); the rest carry the slow marker.
+# Each set is its own family.
+CI = {("clear", 1.0, 0.0), ("clear", 1.0, 70.0), ("clear", -1.0, 40.0), ("clear", -1.0, 85.0),
+      ("thick", 1.0, 85.0), ("thick", -1.0, 0.0), ("film-metal", 1.0, 40.0)}
+PARAMS = [pytest.param(*c, marks=() if c in CI else pytest.mark.slow) for c in CASES]
+FAMILY = len(CI) * len(LOBES) * 3
+SLOW_FAMILY = (len(CASES) - len(CI)) * len(LOBES) * 3
 
 
-@pytest.mark.parametrize(("name", "side", "theta"), CASES)
+@pytest.mark.parametrize(("name", "side", "theta"), PARAMS)
 def test_delta_lobes_match_pfmc_walks(tables, name, side, theta):
     """Per channel z = (table - PFMC) / PFMC's standard error (the table's lobes are exact)
     within the Sidak limit over the whole family; the direction and eta of the transmitted
@@ -100,10 +107,11 @@ def test_delta_lobes_match_pfmc_walks(tables, name, side, theta):
     or a metal base) the table has none either. Power (mutations run once): without the
     geometric series (no repeated bounces) 5 of the 20 cases fail (the metal base at every
     angle, total internal reflection from below at 85 degrees); with slabs attenuating by
-    absorption alone (sigma_a, not sigma_a + sigma_s) 15 fail."""
+    absorption alone (sigma_a, not sigma_a + sigma_s) 15 fail. Mutation: the table's
+    delta weights x 1.02 (TableBSDF.sample) fails the CI sample."""
     tb, model, wi = tables[name], STACKS[name], direction(theta, side)
     ours = table_delta(tb, wi)
-    limit = sidak_z_limit(ALPHA, FAMILY)
+    limit = sidak_z_limit(ALPHA, FAMILY if (name, side, theta) in CI else SLOW_FAMILY)
     for lobe in LOBES:
         mean, se, wo, eta = pfmc_delta(model, wi, lobe)
         if wo is None:
