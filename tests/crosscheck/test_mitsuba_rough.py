@@ -37,8 +37,22 @@ def _assert_agrees(c):
     assert c.quantities == mr.ROUGH_QUANTITIES
 
 
-@pytest.mark.parametrize("name, bsdf, wavelength", CASES, ids=[c[0] for c in CASES])
+# The CI sample (the others are slow): every material once, each distribution family at
+# every alpha (GGX conductors, GGX dielectrics, Beckmann), and the three special cases.
+CI_SAMPLE = {
+    "roughconductor-Au-a0.05", "roughconductor-Cu-a0.8", "roughconductor-custom-a0.3",
+    "roughdielectric-glass-a0.8", "roughdielectric-int-lt-ext-a0.05",
+    "roughconductor-Au-beckmann-a0.3", "roughdielectric-glass-beckmann-a0.05",
+    "roughdielectric-int-lt-ext-beckmann-a0.8",
+    "roughconductor-mirror-a0.3", "roughconductor-Cu-two-sided-a0.3", "roughdielectric-diamond-a0.3",
+}
+
+
+@pytest.mark.parametrize("name, bsdf, wavelength", [
+    c if c[0] in CI_SAMPLE else pytest.param(*c, marks=pytest.mark.slow) for c in CASES], ids=[c[0] for c in CASES])
 def test_01_standard_rough_materials_agree_with_mitsuba(name, bsdf, wavelength):
+    """Mutation: BSDF.eval scaled by 1.02 for RoughConductor (Python layer) fails it (all
+    six conductor cases of the CI sample)."""
     c = mr.compare_rough(bsdf, n_pairs=1000, seed=0, wavelength=wavelength)
     _assert_agrees(c)
     assert c.target == TARGET
@@ -57,6 +71,7 @@ def test_01_standard_rough_materials_agree_with_mitsuba(name, bsdf, wavelength):
 
 def test_02_required_rough_materials_are_in_the_standard_set():
     names = {c[0] for c in CASES}
+    assert CI_SAMPLE <= names
     for alpha in ("0.05", "0.3", "0.8"):
         for material in ("roughconductor-Au", "roughconductor-Cu", "roughconductor-custom",
                          "roughdielectric-glass", "roughdielectric-int-lt-ext",
