@@ -255,8 +255,11 @@ def test_recovers_a_cone():
 def test_recovers_a_slit():
     """Data: 0.9 x the slit reference (FWHM 20 nm, 2 nm trapezoid) of the hand-written dict
     with a 1500 nm film, 2 rows x 4 wavelengths 540-570 nm, 1 % noise. Fitted (bandwidth
-    uniform in [5, 35] nm, scale free, the structure known; 6 emulator nodes): both truths
-    inside their 99.7 % intervals, the interval excludes 10 nm and 30 nm."""
+    uniform in [5, 35] nm, scale free, the structure known; 4 emulator nodes): both truths
+    inside their 99.7 % intervals, the interval excludes 10 nm and 30 nm. The emulator's
+    measured error was 0.002 sigma at 6 nodes and 0.003 at 5 (< 0.3 asserted): 4 nodes, two
+    slit solves fewer.
+    Mutation: the slit's sigma (gonio_instrument points) scaled by 1.3 fails it."""
     wl = [540.0, 550.0, 560.0, 570.0]
     triples = [[30, 30, 0], [30, 40, 0]]
     design = rows(triples, wl)
@@ -265,7 +268,7 @@ def test_recovers_a_slit():
     # design rows run wavelength-major (make_data.design): row j * len(triples) + i
     y, sigma = noisy(0.9 * ref.T.ravel(), 0.01, 4)
     assert np.allclose(design.wavelength_nm, np.repeat(wl, len(triples)), rtol=0, atol=0)
-    iv, post = recover(rows(triples, wl, y, sigma), "bandwidth_nm", (5.0, 35.0), THICK, 6)
+    iv, post = recover(rows(triples, wl, y, sigma), "bandwidth_nm", (5.0, 35.0), THICK, 4)
     assert post.model.max_error_sigma < 0.3, post.model.max_error_sigma
     assert iv["bandwidth_nm"][0] < 20.0 < iv["bandwidth_nm"][1], iv
     assert iv["scale"][0] < 0.9 < iv["scale"][1], iv

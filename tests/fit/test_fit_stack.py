@@ -279,8 +279,12 @@ def test_old_parameter_names_read_with_a_warning():
 def test_structure_study_through_the_cli(tmp_path):
     """`bsdflab fit - --config co.toml`: a config with a [structure] table writes the structure
     study folder, reading its [[dataset]] files (a short run: the folder, not the fit, is
-    checked here) with its predictive checks and warnings (status 3 under --strict); a bad
-    structure key is a one-line error naming it."""
+    checked here) with its predictive checks and warnings (status 0 without --strict); a bad
+    structure key is a one-line error naming it. One study, not two: the same run again
+    under --overwrite --strict (status 3) cost another ~20 CPU-s of figures, and that branch
+    of the report shared by both paths (bsdflab.cli.fit._report) is
+    tests/fit/test_fit_checks.py::test_study_warns_loudly's.
+    Mutation: _report returning 3 on warnings without --strict fails it."""
     import json
     import shutil
 
@@ -299,13 +303,10 @@ def test_structure_study_through_the_cli(tmp_path):
         assert (tmp_path / "co" / name).is_file(), name
     summary = json.loads((tmp_path / "co" / "summary.json").read_text())
     assert summary["rows"] == 124 and "spec.bandwidth_nm" in summary["free"]
-    # 20 steps cannot converge: the warning block on stderr, status 3 under --strict
+    # 20 steps cannot converge: the warning block on stderr, status 0 without --strict
     assert "NOT_CONVERGED" in [w["code"] for w in summary["warnings"]]
     assert "[NOT_CONVERGED]" in r.stderr and "posterior predictive checks" in r.stdout
     assert summary["predictive_checks"]["series"][1]["series"].startswith("spec: specular")
-    r = cli("fit", "-", "--config", str(tmp_path / "co.toml"), "--out", str(tmp_path / "co"), "--quiet",
-            "--overwrite", "--strict")
-    assert r.returncode == 3, r.stderr[-2000:]
 
     (tmp_path / "bad.toml").write_text(text.replace('exterior = "air"', 'exterior = "vacuum"'))
     r = cli("fit", str(tmp_path / "a.csv"), "--config", str(tmp_path / "bad.toml"), "--out", str(tmp_path / "b"))
