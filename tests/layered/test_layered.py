@@ -37,7 +37,7 @@ def test_02_matches_mitsuba_plastic_nonlinear(rho):
     nonlinear=true is exactly this model (its internal diffuse Fresnel reflectance is a
     fitted approximation, accurate to ~1e-3, well below the tolerance below). 10 000
     walks per pair (was 20 000: 13.8 -> 7.0 CPU-s): the z-tests take the estimate's own
-    standard error (family-wise 0.01), and the mean-bias bound grows from 0.33 % to 0.37 %.
+    standard error (family-wise 0.01), and the mean-bias bound's noise term grows by sqrt(2).
     Mutation: Layered.eval_with_error's value scaled by 1.02 fails it (both rho)."""
     n = 64
     wi = random_unit_vectors(n, seed=2, hemisphere="upper")
