@@ -35,12 +35,15 @@ def test_01_create_and_round_trip():
 def test_02_matches_mitsuba_plastic_nonlinear(rho):
     """Dielectric (1.5) over a Lambertian base, no absorption: Mitsuba's `plastic` with
     nonlinear=true is exactly this model (its internal diffuse Fresnel reflectance is a
-    fitted approximation, accurate to ~1e-3, well below the tolerance below)."""
+    fitted approximation, accurate to ~1e-3, well below the tolerance below). 10 000
+    walks per pair (was 20 000: 13.8 -> 7.0 CPU-s): the z-tests take the estimate's own
+    standard error (family-wise 0.01), and the mean-bias bound's noise term grows by sqrt(2).
+    Mutation: Layered.eval_with_error's value scaled by 1.02 fails it (both rho)."""
     n = 64
     wi = random_unit_vectors(n, seed=2, hemisphere="upper")
     wo = random_unit_vectors(n, seed=3, hemisphere="upper")
     m = plastic_stack(rho)
-    value, err = m.eval_with_error(wi, wo, wavelengths=[550.0], samples=20_000)
+    value, err = m.eval_with_error(wi, wo, wavelengths=[550.0], samples=10_000)
     plugin = {"type": "plastic", "int_ior": 1.5, "ext_ior": 1.0, "nonlinear": True,
               "diffuse_reflectance": {"type": "rgb", "value": [rho, rho, rho]}}
     ref = query(plugin, wi, wo, np.zeros(n), np.zeros((n, 2))).eval[:, 0]

@@ -52,7 +52,10 @@ def sampled_albedo(model, wi, n, seed, lobes=Lobe.ALL):
 def test_01_index_matched_smooth_boundary_does_not_change_eval():
     """Splitting a slab by an index-matched smooth boundary (T = 1, no deflection) leaves the
     BSDF unchanged. Before the fix the split stack lost every path rough entry -> mirror
-    base -> rough exit: its eval was ~5 % of the whole (measured albedo 0.038 vs 0.80)."""
+    base -> rough exit: its eval was ~5 % of the whole (measured albedo 0.038 vs 0.80).
+    2000 walks per pair (was 4000; the z-test takes the estimates' own errors, Sidak at
+    ALPHA). Mutation: Layered.estimate scaled by 1.03 for stacks of more than one
+    interface fails it (max |z| 6.8 at 1.05)."""
     n = 48
     wi = random_unit_vectors(n, seed=21, hemisphere="upper")
     wo = random_unit_vectors(n, seed=22, hemisphere="upper")
@@ -62,8 +65,8 @@ def test_01_index_matched_smooth_boundary_does_not_change_eval():
         one = bl.Layered([rough_top()], [bl.Slab(1.0, **slab)], silver(1.5))
         split = bl.Layered([rough_top(), bl.Dielectric(1.5, 1.5)], [bl.Slab(0.4, **slab), bl.Slab(0.6, **slab)],
                            silver(1.5))
-        a = one.estimate(wi, wo, wavelengths=WL, samples=4000, seed=1)
-        b = split.estimate(wi, wo, wavelengths=WL, samples=4000, seed=2)
+        a = one.estimate(wi, wo, wavelengths=WL, samples=2000, seed=1)
+        b = split.estimate(wi, wo, wavelengths=WL, samples=2000, seed=2)
         z = (a.value - b.value)[:, 0] / np.hypot(a.stderr, b.stderr)[:, 0]
         assert np.max(np.abs(z)) < sidak_z_limit(ALPHA, 2 * n), (slab, np.round(z, 1))
         assert a.nonfinite == b.nonfinite == 0

@@ -32,6 +32,7 @@ from bsdflab.testing import random_unit_vectors, sidak_z_limit
 ALPHA = 0.01
 PAIRS = 8
 WALKS = 20_000
+CONTROL_WALKS = 10_000  # test_01 (its docstring)
 SIGMA_A = {"type": "tabulated", "wavelengths": [450.0, 650.0], "values": [0.001, 5.0]}
 
 
@@ -40,11 +41,11 @@ def _model(estimator="pfmc2"):
                       bl.Diffuse(1.0), estimator=estimator)
 
 
-def _z_bright_channel(wavelengths):
+def _z_bright_channel(wavelengths, walks=WALKS):
     m = _model()
     wi = random_unit_vectors(PAIRS, seed=71, hemisphere="upper")
     wo = random_unit_vectors(PAIRS, seed=72, hemisphere="upper")
-    e = m.estimate(wi, wo, wavelengths=wavelengths, samples=WALKS, seed=73)
+    e = m.estimate(wi, wo, wavelengths=wavelengths, samples=walks, seed=73)
     ref, ref_err = AddingDoublingOracle.from_layered(m).eval_with_error(wi, wo, wavelengths=wavelengths)
     assert e.capped == 0 and e.nonfinite == 0
     z = ((e.value - ref) / np.hypot(e.stderr, ref_err))[:, 0]  # 450 nm
@@ -57,7 +58,11 @@ def _check(z, pooled):
 
 
 def test_01_one_channel_at_a_time_agrees():
-    _check(*_z_bright_channel([450.0]))
+    """The control at 10 000 walks per pair (test_02 needs 20 000 for its power against
+    pfmc; the control's z takes the estimate's own error): a 2 % bias still reads pooled z
+    6.7 (max 4.2) against the limit 3.45. Mutation: Layered.estimate's value scaled by
+    1.02 fails it."""
+    _check(*_z_bright_channel([450.0], walks=CONTROL_WALKS))
 
 
 def test_02_bright_channel_next_to_an_absorbed_one_agrees():

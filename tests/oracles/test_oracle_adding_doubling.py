@@ -163,12 +163,15 @@ def test_06_non_scattering_limit_matches_coated_diffuse_oracle(sigma_a):
 
 
 def test_07_stated_accuracy_holds_at_the_hardest_settings():
-    """Defaults vs a run with twice the nodes, 1.5x the orders and a 16x thinner start:
+    """Defaults vs a run with 4/3 the nodes (32), 60 orders and a 16x thinner start:
     relative change <= 1e-5 (the docstring's claim) for forward HG at high albedo,
-    grazing included; eval_with_error bounds that change."""
+    grazing included; eval_with_error bounds that change. The reference at 32 nodes lies
+    within 1.1e-9 relative of one at 48 (twice the nodes, 1.3 against 7.7 CPU-s), 1/140
+    of the change measured (1.6e-7; change / bound 0.070 either way). Mutation: the
+    oracle's eval_with_error value scaled by 1 + 2e-5 fails it."""
     slabs = [bl.Slab.from_albedo(5.0, 0.99, 1.0, PHASES["hg 0.6"])]
     oracle = AddingDoublingOracle(1.5, 1.0, slabs, base_albedo=0.5)
-    fine = AddingDoublingOracle(1.5, 1.0, slabs, base_albedo=0.5, nodes=2 * oracle.nodes,
+    fine = AddingDoublingOracle(1.5, 1.0, slabs, base_albedo=0.5, nodes=4 * oracle.nodes // 3,
                                 orders=60, thin_depth=oracle.thin_depth / 16)
     wi, wo = pairs(np.array([1.0, 0.5, 0.05, 0.02, 0.3]), np.array([0.02, 0.5, 0.05, 0.9, 0.3]),
                    np.array([0.0, 2.0, 3.1, 1.0, 0.2]))

@@ -131,11 +131,14 @@ def test_01_nearest_centre_and_gap_partition(params):
 
 def test_02_search_neighbourhood_at_maximum_jitter():
     """Many random points against per-point candidates from a wider neighbourhood: a search
-    radius below the proven bound misses rims and edges here (rare, hence the count)."""
+    radius below the proven bound misses rims and edges here (rare, hence the count).
+    200 000 points (was 400 000): the short radius still leaves ~10 misses, so it passes
+    with probability ~e^-10. Mutation: ScaleTexture.to_core passing jitter x 0.999 to the
+    core fails it."""
     t = ScaleTexture(jitter=0.3, gap=0.06, dome=1.0, seed=21)
     rng = np.random.default_rng(8)
     mismatches = 0
-    for _ in range(8):  # a radius of 2/sqrt(3) + jitter sqrt(2) leaves ~20 misses here
+    for _ in range(4):  # a radius of 2/sqrt(3) + jitter sqrt(2) leaves ~10 misses here
         u, v = rng.uniform(-50, 50, 50_000), rng.uniform(0, 1, 50_000)
         r = t.lookup(u, v)
         p = metric(t, u, v)

@@ -3,7 +3,7 @@ table_settings: looser orders, a thicker start, what lies below a rough top solv
 4th wavelength and interpolated, coarser fine sub-panels), and what it does not solve.
 
 Tolerances are deterministic: the a-posteriori bound of ``eval_with_error`` must exceed the
-actual error against a reference solve whose every truncation is finer (24 nodes, 256
+actual error against a reference solve whose every truncation is finer (20 nodes, 256
 azimuth samples, every wavelength solved, the default orders, start and fine step).
 """
 from __future__ import annotations
@@ -31,13 +31,15 @@ def pairs(n=12, seed=5):
 def test_01_table_settings_bound_covers_the_error():
     """The snake at table settings (1 %): every channel's error against the reference is
     below the stated bound, and the bound itself is below 2 % relative where the value
-    is above 1 % of the largest (what tables report)."""
+    is above 1 % of the largest (what tables report). The reference at 20 nodes (8.7
+    CPU-s against 11.5 at 24) lies within 1.5 % of the bound of the 24-node one (error /
+    bound 0.628 both). Mutation: eval_with_error's bound scaled by 0.5 fails it."""
     model = preset("xenopeltis")
     wi, wo = pairs()
     settings = table_settings(0.01, len(WL33))
     assert settings["spectral_stride"] == 4
     value, bound = solve(model, WL33, film_lookup=True, **settings).eval_with_error(wi, wo, scattered_only=True)
-    ref = solve(model, WL33, nodes=24, azimuth_samples=256, film_lookup=True).eval(wi, wo, scattered_only=True)
+    ref = solve(model, WL33, nodes=20, azimuth_samples=256, film_lookup=True).eval(wi, wo, scattered_only=True)
     err = np.abs(value - ref)
     ratio = err / np.maximum(bound, 1e-300)
     significant = ref > 0.01 * ref.max()

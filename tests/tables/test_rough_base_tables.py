@@ -44,8 +44,11 @@ Z_MAX = sidak_z_limit(ALPHA, FAMILY)
 def tables(request):
     model = CASES[request.param]
     ad = tabulate(model, GRID, rel_error=0.01, wavelengths=WL, method="adding-doubling", progress=False)
-    pfmc = tabulate(model, GRID, rel_error=0.03, wavelengths=WL, method="pfmc", min_samples=512,
-                    max_samples=8192, seed=3, progress=False)
+    # PFMC at 5 % (at most 4096 walks a cell; was 3 %, 8192: 14.3 -> 11.9 CPU-s for both
+    # cases): the comparison takes its standard errors, and the swapped-part mutants still
+    # read max z 82-670 against Z_MAX 5.0 (134-670 at 3 %)
+    pfmc = tabulate(model, GRID, rel_error=0.05, wavelengths=WL, method="pfmc", min_samples=512,
+                    max_samples=4096, seed=3, progress=False)
     return request.param, ad, pfmc
 
 
@@ -80,7 +83,9 @@ def test_01_auto_picks_adding_doubling_for_every_pair_stacks():
 
 def test_02_every_part_agrees_with_pfmc(tables):
     """All four parts of the adding-doubling table against the PFMC table, per cell and
-    channel (module docstring); the swapped-part mutants are rejected."""
+    channel (module docstring); the swapped-part mutants are rejected. Mutation:
+    Solution.eval and eval_with_error's values scaled by 1.02 fail it (the HG / GGX 0.3
+    case: max z 89)."""
     name, ad, pfmc = tables
     for t in (ad, pfmc):
         assert t.lobes == TWO_SIDED_LOBES and t.two_sided
