@@ -39,15 +39,19 @@ def test_bad_input_is_one_line_exit_2_and_no_files(tmp_path, argv, needle):
 
 
 def test_unwritable_out_is_refused(tmp_path):
+    """Root writes anywhere (CI runs as root): there the read-only folder's run, a whole
+    export that nothing checks, is not made, and the missing folder covers the refusal.
+    Mutation: the out folder's checks dropped (export/exporter.py) fails it."""
     folder = tmp_path / "ro"
     folder.mkdir()
     os.chmod(folder, 0o500)
     try:
-        proc = _run("--preset", "xenopeltis", "--format", "openpbr", "--out", str(folder / "x.mtlx"))
+        if os.geteuid() != 0:
+            proc = _run("--preset", "xenopeltis", "--format", "openpbr", "--out", str(folder / "x.mtlx"))
         missing = _run("--preset", "xenopeltis", "--format", "openpbr", "--out", str(tmp_path / "no" / "x.mtlx"))
     finally:
         os.chmod(folder, 0o700)
-    if os.geteuid() != 0:  # root writes anywhere (CI runs as root); the missing folder covers it
+    if os.geteuid() != 0:
         assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1
         assert os.listdir(folder) == []
     assert missing.returncode == 2 and len(missing.stderr.strip().splitlines()) == 1, missing.stderr

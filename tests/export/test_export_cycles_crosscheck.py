@@ -21,20 +21,19 @@ import json
 import numpy as np
 import pytest
 
-from bsdflab.export import export
 from bsdflab.reference.approximations.cycles import cycles_thin_film_rgb
 from bsdflab.reference.approximations.study import delta_e00, exact_rgb
-from support.cycles_spheres import FILM, blocks, pixel_cosines, render_spheres
+from support.cycles_spheres import blocks, pixel_cosines, render_spheres_seeds
 
 SIZE, BLOCK = 48, 4
 
 
 @pytest.fixture(scope="module")
-def crosscheck(tmp_path_factory):
+def crosscheck(tmp_path_factory, film_blender_export):
+    report, _ = film_blender_export
     folder = tmp_path_factory.mktemp("cycles")
-    report = export(FILM, "blender", str(folder / "film.blend"))
     p = {k: v["value"] for k, v in report["parameters"].items()}
-    renders = [render_spheres(p, [p["film_thickness_nm"]], str(folder), SIZE, seed=s)[0] for s in (0, 1)]
+    renders = list(render_spheres_seeds(p, [p["film_thickness_nm"]], str(folder), SIZE, seeds=(0, 1))[:, 0])
     return report, p, renders
 
 
@@ -50,6 +49,7 @@ def _region():
 
 
 def test_cycles_renders_the_fitted_model(crosscheck):
+    """Mutation: Thin Film IOR + 0.03 in the exported Cycles scene (export/blender.py) fails it."""
     report, p, (a, b) = crosscheck
     cos, full = _region()
     model = cycles_thin_film_rgb(1.0, p["film_ior"], p["base_ior"], p["film_thickness_nm"], cos)
@@ -84,7 +84,7 @@ print("PROBE" + json.dumps({"active": bpy.context.scene.name, "vertices": len(ob
 '''
 
 
-def test_the_blend_holds_the_snake_mesh(crosscheck, tmp_path_factory):
+def test_the_blend_holds_the_snake_mesh(crosscheck, film_blender_export):
     """The .blend's scene "snake": the snake's mesh (bsdflab.export.snake_mesh), its camera,
     the exported material; the sphere stays the active (validation) scene."""
     from bsdflab.export.blender import run_bpy
@@ -92,8 +92,7 @@ def test_the_blend_holds_the_snake_mesh(crosscheck, tmp_path_factory):
 
     report, p, _ = crosscheck
     blend = [f for f in report["files"] if f.endswith(".blend")][0]
-    folder = tmp_path_factory.getbasetemp()
-    path = next(folder.glob(f"cycles*/{blend}"))
+    path = film_blender_export[1] / blend
     out = run_bpy(SNAKE_PROBE, [str(path)])
     got = json.loads(out.split("PROBE", 1)[1].splitlines()[0])
     want = snake_mesh()

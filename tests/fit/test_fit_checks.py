@@ -5,8 +5,6 @@ stop reason stated as it is, and the warning block of the CLI. Small smooth-mode
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import tomllib
@@ -18,6 +16,7 @@ from bsdflab.fit.config import SamplerSettings
 from bsdflab.fit.parameters import ALL_NAMES
 from bsdflab.fit.priors import Prior
 from bsdflab.fit.sampling import stop_reason
+from support.cli import cli_in_process
 
 TRUTH = """
 [truth]
@@ -173,17 +172,19 @@ def test_stop_reason_says_which_criterion():
     assert r.startswith("converged: N / max tau = 51.0 > 50")
 
 
-def test_study_warns_loudly(tmp_path):
+def test_study_warns_loudly(tmp_path, capsys, monkeypatch):
     """A study of data scaled by 0.8, fitted without a scale, at a step cap too short to
     converge: summary.json lists NOT_CONVERGED and PREDICTIVE_CHECK, residuals.png is
-    written, and the CLI prints the warning block on stderr (exit 3 under --strict). With a
-    free noise scale the common misfit moves to NOISE_SCALE."""
+    written, and the CLI prints the warning block on stderr (exit 3 under --strict; its main
+    called in this process, support.cli.cli_in_process: a child's imports cost ~4 CPU-s).
+    With a free noise scale the common misfit moves to NOISE_SCALE. Mutation: the CLI's
+    warning block left out of stderr fails it."""
     path = tmp_path / "d.csv"
     data(5, scale=0.8).write_csv(path)
     cfg = tmp_path / "fit.toml"
     cfg.write_text(FIT.format(seed=0, steps=100, extra="") + APPEARANCE)
-    r = subprocess.run([sys.executable, "-m", "bsdflab.cli.main", "fit", str(path), "--config", str(cfg),
-                        "--out", str(tmp_path / "s"), "--quiet", "--strict"], capture_output=True, text=True)
+    r = cli_in_process(capsys, monkeypatch, "fit", path, "--config", cfg, "--out", tmp_path / "s", "--quiet",
+                       "--strict")
     assert r.returncode == 3, r.stderr   # --strict: a study with warnings fails (0 without it)
     summary = json.loads((tmp_path / "s" / "summary.json").read_text())
     codes = [w["code"] for w in summary["warnings"]]

@@ -235,7 +235,23 @@ def run_cli(*args, cwd):
                           capture_output=True, text=True, timeout=120)
 
 
-def test_cli_import(tmp_path):
+def cli_in_process(capsys, monkeypatch, *args, cwd):
+    """`bsdflab fit import ARGS...` as run_cli, in this process (bsdflab.cli.main.main with a
+    list, as tests call it): (exit status, stdout, stderr), without a child's ~3 CPU-s of
+    imports."""
+    from bsdflab.cli.main import main
+
+    monkeypatch.chdir(cwd)
+    monkeypatch.setenv("BSDFLAB_CACHE_DIR", str(cwd / ".cache"))
+    capsys.readouterr()
+    status = main(["fit", "import", *args])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_cli_import(tmp_path, capsys, monkeypatch):
+    """The first run is the real program (a child process); the others call its main in this
+    process. Mutation: the refusal of an existing --out dropped (cli/fit_import.py) fails it."""
     write(tmp_path / "angles.csv", WIDE)
     write(tmp_path / "angles.csv.toml", 'geometry = "specular"\n[sigma]\nabsolute = 0.2\n')
     r = run_cli("angles.csv", "--out", "data.csv", "--units", "percent", cwd=tmp_path)
@@ -244,17 +260,18 @@ def test_cli_import(tmp_path):
     ds = read_csv(tmp_path / "data.csv")
     np.testing.assert_allclose(ds.reflectance[:3], [0.253, 0.26, 0.275], rtol=1e-9, atol=0)
     # undeclared percent: refused, exit status 2, nothing written
-    r = run_cli("angles.csv", "--out", "other.csv", cwd=tmp_path)
-    assert r.returncode == 2 and "look like percent" in r.stderr and "Traceback" not in r.stderr
+    status, _, err = cli_in_process(capsys, monkeypatch, "angles.csv", "--out", "other.csv", cwd=tmp_path)
+    assert status == 2 and "look like percent" in err and "Traceback" not in err
     assert not (tmp_path / "other.csv").exists()
     # an existing --out is kept
-    r = run_cli("angles.csv", "--out", "data.csv", "--units", "percent", cwd=tmp_path)
-    assert r.returncode == 2 and "already exists" in r.stderr
+    status, _, err = cli_in_process(capsys, monkeypatch, "angles.csv", "--out", "data.csv", "--units", "percent",
+                                    cwd=tmp_path)
+    assert status == 2 and "already exists" in err
     # options alone, no sidecar: --angles per column
     write(tmp_path / "plain.tsv", "nm\ta\tb\n500\t0.3\t0.4\n")
-    r = run_cli("plain.tsv", "--out", "p.csv", "--geometry", "total", "--angles", "8,20", "--sigma-relative", "0.02",
-                cwd=tmp_path)
-    assert r.returncode == 0, r.stderr
+    status, _, err = cli_in_process(capsys, monkeypatch, "plain.tsv", "--out", "p.csv", "--geometry", "total",
+                                    "--angles", "8,20", "--sigma-relative", "0.02", cwd=tmp_path)
+    assert status == 0, err
     assert read_csv(tmp_path / "p.csv").angle_deg.tolist() == [8.0, 20.0]
 
 

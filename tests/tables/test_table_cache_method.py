@@ -94,19 +94,24 @@ def test_04_thickness_nodes_split_over_workers_equal_the_local_table(model, ad_t
     assert one.meta["units"] == 1 and one.values.shape[1] == 1
 
 
-def test_05_cli_method_writes_and_caches(tmp_path):
+def test_05_cli_method_writes_and_caches(tmp_path, capsys, monkeypatch):
+    """The first run is the program (a child process); the cache hit and the refusal call its
+    main in this process (support.cli.cli_in_process). Mutation: cached_table's lookup
+    skipped (always a miss, tables/cache.py) fails it."""
+    from support.cli import cli_in_process
+
     out = tmp_path / "ad.exr"
-    args = [*BSDFLAB, "tabulate", "--preset", "xenopeltis", "--method", "adding-doubling", "--theta-i", "2",
+    args = ["tabulate", "--preset", "xenopeltis", "--method", "adding-doubling", "--theta-i", "2",
             "--theta-o", "3", "--phi", "2", "--wavelengths", *map(str, WL), "--cache-dir", str(tmp_path / "c"),
             "--quiet", "--out", str(out)]
-    first = subprocess.run(args, capture_output=True, text=True, timeout=300)
+    first = subprocess.run([*BSDFLAB, *args], capture_output=True, text=True, timeout=300)
     assert first.returncode == 0, first.stderr
     assert "from cache    no" in first.stdout and "relative deterministic bound" in first.stdout
     table = read_table(out)
     assert table.meta["method"] == "adding-doubling"
-    second = subprocess.run(args, capture_output=True, text=True, timeout=300)
+    second = cli_in_process(capsys, monkeypatch, *args)
     assert second.returncode == 0 and "from cache    yes" in second.stdout, second.stdout + second.stderr
-    bad = subprocess.run([*BSDFLAB, "tabulate", "--preset", "xenopeltis-diffuse", "--method", "adding-doubling",
-                          "--out", str(tmp_path / "x.exr"), "--quiet"], capture_output=True, text=True, timeout=120)
+    bad = cli_in_process(capsys, monkeypatch, "tabulate", "--preset", "xenopeltis-diffuse", "--method",
+                         "adding-doubling", "--out", str(tmp_path / "x.exr"), "--quiet")
     assert bad.returncode == 2 and "tabulates Layered models" in bad.stderr
     assert not (tmp_path / "x.exr").exists()

@@ -14,7 +14,7 @@ import pytest
 
 from bsdflab.tables import read_table
 from bsdflab.tables.summary import relative_error_summary
-from support.cli import BSDFLAB
+from support.cli import BSDFLAB, cli_in_process
 
 ROOT = Path(__file__).resolve().parents[2]
 SMALL = ["--theta-i", "2", "--theta-o", "3", "--phi", "2", "--wavelengths", "450", "550", "650", "--quiet"]
@@ -23,6 +23,12 @@ SMALL = ["--theta-i", "2", "--theta-o", "3", "--phi", "2", "--wavelengths", "450
 def cli(*args, cache: Path):
     return subprocess.run([*BSDFLAB, *map(str, args)], capture_output=True, text=True, timeout=300,
                           env={**os.environ, "BSDFLAB_CACHE_DIR": str(cache)})
+
+
+def here(capsys, monkeypatch, *args, cache: Path):
+    """``cli`` in this process (support.cli.cli_in_process): the tables are made by the
+    program itself (the fixtures' and test_04's children), info and plot are read here."""
+    return cli_in_process(capsys, monkeypatch, *args, env={"BSDFLAB_CACHE_DIR": cache})
 
 
 def achieved_p95(text: str) -> str:
@@ -48,15 +54,16 @@ def ad_file(tmp_path_factory):
     return out, r
 
 
-def test_01_pfmc_info_shows_the_files_p95_and_the_verdict_follows_it(pfmc_file, tmp_path):
+def test_01_pfmc_info_shows_the_files_p95_and_the_verdict_follows_it(pfmc_file, tmp_path, capsys, monkeypatch):
     """`table info` and `tabulate` print the p95 the file's meta records (old: info
     recomputed it from the per-channel errors, 0.05118 against the meta's 0.0494). Power:
-    the per-channel recomputation differs from the meta here, so the old code fails."""
+    the per-channel recomputation differs from the meta here, so the old code fails.
+    Mutation: summary.achieved ignoring the meta's figures fails it."""
     out, tab = pfmc_file
     table = read_table(out)
     p95 = table.meta["rel_error_p95"]
     assert f"{relative_error_summary(table)['p95']:.4g}" != f"{p95:.4g}"
-    info = cli("table", "info", out, cache=tmp_path)
+    info = here(capsys, monkeypatch, "table", "info", out, cache=tmp_path)
     assert info.returncode == 0, info.stderr
     assert achieved_p95(info.stdout) == achieved_p95(tab.stdout) == f"{p95:.4g}"
     met = p95 <= 0.1
@@ -65,11 +72,12 @@ def test_01_pfmc_info_shows_the_files_p95_and_the_verdict_follows_it(pfmc_file, 
     assert "relative standard error of luminance" in info.stdout and "walks per cell" in info.stdout
 
 
-def test_02_ad_info_calls_the_bound_a_bound(ad_file, tmp_path):
+def test_02_ad_info_calls_the_bound_a_bound(ad_file, tmp_path, capsys, monkeypatch):
     """An adding-doubling table: a deterministic bound, the solver's settings, no walk
-    counts (old: 'samples min 1', 'meta max_samples 16777216', 'relative standard error')."""
+    counts (old: 'samples min 1', 'meta max_samples 16777216', 'relative standard error').
+    Mutation: summary.error_kind not calling an adding-doubling table's error a bound fails it."""
     out, tab = ad_file
-    info = cli("table", "info", out, cache=tmp_path)
+    info = here(capsys, monkeypatch, "table", "info", out, cache=tmp_path)
     assert info.returncode == 0, info.stderr
     text = info.stdout
     assert "relative deterministic bound of luminance" in text and "16 nodes per panel" in text
@@ -79,12 +87,13 @@ def test_02_ad_info_calls_the_bound_a_bound(ad_file, tmp_path):
     assert "relative deterministic bound" in tab.stdout and "standard error" not in tab.stdout
 
 
-def test_03_plot_labels_the_bands_and_the_peak_added_at_lookup(ad_file, pfmc_file, tmp_path):
-    ad = cli("table", "plot", ad_file[0], "--out", tmp_path / "a.png", cache=tmp_path)
+def test_03_plot_labels_the_bands_and_the_peak_added_at_lookup(ad_file, pfmc_file, tmp_path, capsys, monkeypatch):
+    """Mutation: plots/table.py labelling the bound's bands as standard errors fails it."""
+    ad = here(capsys, monkeypatch, "table", "plot", ad_file[0], "--out", tmp_path / "a.png", cache=tmp_path)
     assert ad.returncode == 0, ad.stderr
     assert "bands = +- the solver's deterministic bound" in ad.stdout and "standard error" not in ad.stdout
     assert "specular peak included) is added exactly at lookup" in ad.stdout
-    pf = cli("table", "plot", pfmc_file[0], "--out", tmp_path / "p.png", cache=tmp_path)
+    pf = here(capsys, monkeypatch, "table", "plot", pfmc_file[0], "--out", tmp_path / "p.png", cache=tmp_path)
     assert pf.returncode == 0 and "bands = +-2 standard errors" in pf.stdout
 
 
