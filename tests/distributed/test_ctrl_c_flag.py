@@ -16,7 +16,7 @@ from bsdflab.distributed import DaskRunner, connect
 @pytest.fixture(scope="module")
 def client():
     with connect(cluster="local:1") as c:
-        c.wait_for_workers(1, timeout=60)
+        c.wait_for_workers(1, timeout=600)  # a liveness bound, not a timing check
         yield c
 
 
