@@ -223,7 +223,10 @@ class ProcessJobExecutor(JobExecutor):
         for handle in pending:
             handle._finish(error=JobCancelled("executor shut down"))
         for w in pool:
-            if w.handle is not None:
+            # A worker with a job, or one still starting (its imports can take seconds and
+            # it reads no message before they end): killed, as neither has anything to lose.
+            # An idle ready worker is told to stop and exits at once.
+            if w.handle is not None or not w.ready:
                 w.process.kill()
             else:
                 try:

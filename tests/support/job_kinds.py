@@ -36,3 +36,9 @@ def run(request, out_dir, progress, cancelled, client=None):
         progress(i / steps)
         time.sleep(float(request.get("step_s", 0.05)))
     return {"hash": key(request), "pid": os.getpid(), "files": {}}
+
+
+def never_ready(conn, cancel, parent_pid, warm=True):
+    """A worker target that never says "ready" (a worker still in its imports, forever)."""
+    while True:
+        time.sleep(60)
