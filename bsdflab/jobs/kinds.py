@@ -83,9 +83,9 @@ def get_kind(name: str) -> JobKind:
 
 
 def warm_up() -> None:
-    """Import every kind's module and colour-science (seconds of imports a worker process
-    pays once at start rather than inside its first job)."""
-    import colour  # noqa: F401
-
+    """Import every kind's module (seconds of imports a worker process pays once at start
+    rather than inside its first job). Not colour-science: renders and tables no longer
+    import it (bsdflab/spectra/colour_precomputed.py), and a worker that would only import
+    it for a rare figure or fit should not pay 2.4 CPU-s at every start."""
     for name in _MODULES:
         get_kind(name)

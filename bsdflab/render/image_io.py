@@ -5,6 +5,7 @@ import os
 
 import numpy as np
 
+from bsdflab.spectra.srgb_curve import srgb_encode
 from bsdflab.util.files import write_atomically, write_together
 from bsdflab.util.native_output import quiet_native_output
 
@@ -83,11 +84,9 @@ def read_exr(path: str | os.PathLike) -> np.ndarray:
 
 def tone_map(image, exposure: float = 0.0) -> np.ndarray:
     """Linear RGB -> 8-bit sRGB: scale by 2^exposure, clip to [0, 1], sRGB transfer curve
-    (colour-science's IEC 61966-2-1 encoding)."""
-    import colour
-
+    (IEC 61966-2-1, as colour-science encodes it: ``srgb_encode``)."""
     a = np.clip(_rgb(image) * np.float32(2.0 ** exposure), 0.0, 1.0)
-    encoded = colour.cctf_encoding(a, function="sRGB")
+    encoded = srgb_encode(a)
     return np.round(np.nan_to_num(encoded) * 255).astype(np.uint8)
 
 

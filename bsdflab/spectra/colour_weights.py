@@ -19,6 +19,8 @@ from functools import lru_cache
 
 import numpy as np
 
+from bsdflab.spectra import colour_precomputed
+from bsdflab.spectra.grid import DEFAULT_WAVELENGTHS
 from bsdflab.util.args import real_array
 
 
@@ -46,6 +48,14 @@ class SensorModel:
 
 @lru_cache(maxsize=32)
 def _sensor(grid: tuple[float, ...], space: ColourSpace) -> SensorModel:
+    if space == ColourSpace() and colour_precomputed.covers(grid):   # no colour import (its module says why)
+        a = colour_precomputed.stored()
+        return SensorModel(a["cmf"], a["illuminant"], a["xyz_to_rgb"])
+    return compute_sensor(grid, space)
+
+
+def compute_sensor(grid: tuple[float, ...], space: ColourSpace) -> SensorModel:
+    """The sensor model on ``grid``, computed by colour-science."""
     import colour
 
     wl = np.asarray(grid)
@@ -109,6 +119,13 @@ def spectrum_to_rgb(values, wavelengths, space: ColourSpace = ColourSpace()) -> 
 
 @lru_cache(maxsize=32)
 def _basis(grid: tuple[float, ...]) -> np.ndarray:
+    if colour_precomputed.covers(grid):
+        return colour_precomputed.stored()["basis"]
+    return compute_basis(grid)
+
+
+def compute_basis(grid: tuple[float, ...]) -> np.ndarray:
+    """Mallett & Yuksel's sRGB basis on ``grid``, from colour-science's table."""
     import colour
 
     basis = colour.recovery.MSDS_BASIS_FUNCTIONS_sRGB_MALLETT2019
@@ -125,3 +142,17 @@ def rgb_to_spectrum(rgb, wavelengths) -> np.ndarray:
         raise ValueError(f"rgb must end in an axis of 3, got shape {c.shape}")
     wl = real_array("wavelengths", wavelengths, 0.0, lo_open=True, ndim=1)
     return c @ _basis(tuple(float(x) for x in wl))
+
+
+def precomputed_arrays() -> dict[str, np.ndarray]:
+    """What bsdflab/spectra/colour_default_grid.npz must hold: the default grid's sensor
+    model and basis, computed by colour-science now."""
+    grid = tuple(float(x) for x in DEFAULT_WAVELENGTHS)
+    sensor = compute_sensor(grid, ColourSpace())
+    return {"wavelengths": np.asarray(grid), "cmf": sensor.cmf, "illuminant": sensor.illuminant,
+            "xyz_to_rgb": sensor.xyz_to_rgb, "basis": compute_basis(grid)}
+
+
+def store_precomputed() -> None:
+    """Regenerate the stored arrays from colour-science (after an upgrade)."""
+    colour_precomputed.write(precomputed_arrays())
