@@ -274,8 +274,9 @@ def test_recovers_a_slit(slit_reference_rows):
     inside their 99.7 % intervals, the interval excludes 10 nm and 30 nm. The emulator's
     measured error was 0.002 sigma at 6 nodes and 0.003 at 5 (< 0.3 asserted): 4 nodes, two
     slit solves fewer.
-    Mutation: the slit's sigma (gonio_instrument points) scaled by 1.3 fails it (with these
-    rows first at the emulator's bound: 0.32 sigma from the mutated direct solves)."""
+    Mutation: the slit's sigma (gonio_instrument points) scaled by 1.3 fails it: with these
+    rows first at the emulator's bound (0.32 sigma from the mutated direct solves), and with
+    that bound lifted at the interval (bandwidth [14.3, 16.5] nm, excluding 20)."""
     wl = SLIT_WAVELENGTHS
     triples = IN_PLANE[:2]
     design = rows(triples, wl)

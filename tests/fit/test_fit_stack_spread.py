@@ -205,7 +205,9 @@ def test_posterior_recovers_the_spread_from_tmm_data():
     MAP, found as run_sampler finds it, without the chain) is > 2. The chain is 1500 steps
     (3000 before, 20 of the test's 23 CPU-s): at tau ~12.5 that is ~950 effective draws, so
     the 99.7 % interval's ends scatter by ~0.3 posterior sd (0.2 at 3000), against truths
-    measured 0.36-0.65 interval widths (2-4 sd) inside the ends."""
+    measured 0.36-0.65 interval widths (2-4 sd) inside the ends. Mutation: the spread's nodes
+    without the sqrt(2) (thickness_spread) fails it at 1500 steps (spread interval [19.6, 22.8]
+    nm against the truth 15)."""
     from bsdflab.fit.sampling import find_map, run_sampler
     from bsdflab.fit.stack_posterior import StackPosterior
 
