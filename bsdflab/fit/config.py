@@ -200,6 +200,24 @@ class AppearanceSettings:
 
 
 @dataclass(frozen=True)
+class OutputSettings:
+    """What a study writes besides its numbers: ``figures`` false leaves out the PNGs (corner,
+    predictive, residuals, trace, appearance, renders), seconds of matplotlib per study that a
+    batch of fits read only through summary.json and the tables does not need."""
+
+    figures: bool = True
+
+    @classmethod
+    def parse(cls, d: dict) -> OutputSettings:
+        d = _table("output", d)
+        _check_keys("output", d, {"figures": 0})
+        figures = d.get("figures", cls.figures)
+        if not isinstance(figures, bool):
+            raise ValueError(f"[output] figures must be true or false, got {figures!r}")
+        return cls(figures)
+
+
+@dataclass(frozen=True)
 class FitConfig:
     priors: dict[str, Prior]
     fixed: dict[str, float]
@@ -207,6 +225,7 @@ class FitConfig:
     model: ModelSettings = ModelSettings()
     appearance: AppearanceSettings = AppearanceSettings()
     source: str = ""
+    output: OutputSettings = OutputSettings()
 
     @property
     def free(self) -> tuple[str, ...]:
@@ -215,7 +234,7 @@ class FitConfig:
 
     @classmethod
     def parse(cls, d: dict, source: str = "") -> FitConfig:
-        _check_keys("top level", d, {"parameters": 0, "sampler": 0, "model": 0, "appearance": 0})
+        _check_keys("top level", d, {"parameters": 0, "sampler": 0, "model": 0, "appearance": 0, "output": 0})
         params = d.get("parameters", {})
         if not isinstance(params, dict):
             raise ValueError("[parameters] must be a table")
@@ -250,7 +269,8 @@ class FitConfig:
         if sampler.walkers < 2 * len(priors):
             raise ValueError(f"[sampler] walkers must be at least twice the number of free parameters "
                              f"({2 * len(priors)}), got {sampler.walkers}")
-        return cls(priors, fixed, sampler, model, AppearanceSettings.parse(d.get("appearance", {})), source)
+        return cls(priors, fixed, sampler, model, AppearanceSettings.parse(d.get("appearance", {})), source,
+                   OutputSettings.parse(d.get("output", {})))
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> FitConfig:

@@ -116,12 +116,17 @@ def trace_plot(run: RunResult, path: str, tau_multiple: float = 50.0) -> None:
     plt.close(fig)
 
 
+def display_exposure(app: AppearancePosterior) -> float:
+    """The stops that bring the brightest mean colour to 0.9 of the display's white."""
+    peak = float(np.max(app.rgb_mean))
+    return math.log2(0.9 / peak) if peak > 0 else 0.0
+
+
 def appearance_plot(app: AppearancePosterior, path: str) -> float:
     """Colour strips per draw (rows) vs angle (columns) and the Delta E00 interval per
     angle. Returns the display exposure (stops) the strips were brightened by."""
     plt = _plt()
-    peak = float(np.max(app.rgb_mean))
-    exposure = math.log2(0.9 / peak) if peak > 0 else 0.0
+    exposure = display_exposure(app)
     strips = tone_map(np.vstack([app.rgb_mean[None], app.rgb]).astype(np.float32), exposure)
     iv = app.interval(0.9)
     fig, (a0, a1) = plt.subplots(2, 1, figsize=(7.5, 6.8), gridspec_kw={"height_ratios": [1.4, 1]})

@@ -20,7 +20,7 @@ import os
 from dataclasses import dataclass
 
 from bsdflab.fit import parameters as P
-from bsdflab.fit.config import AppearanceSettings, SamplerSettings, _settings, load_toml
+from bsdflab.fit.config import AppearanceSettings, OutputSettings, SamplerSettings, _settings, load_toml
 from bsdflab.fit.full_structure import FullStructure
 from bsdflab.fit.priors import Prior
 from bsdflab.fit.stack_config import DatasetSpec, StackConfig, _dataset_specs, in_domain
@@ -76,10 +76,11 @@ class FullStackConfig:
     model: FullStackModelSettings = FullStackModelSettings()
     appearance: AppearanceSettings = AppearanceSettings()
     source: str = ""
+    output: OutputSettings = OutputSettings()
 
     @classmethod
     def parse(cls, d: dict, source: str = "") -> FullStackConfig:
-        known = {"structure", "instrument", "dataset", "parameters", "model", "sampler", "appearance"}
+        known = {"structure", "instrument", "dataset", "parameters", "model", "sampler", "appearance", "output"}
         unknown = set(d) - known
         if unknown:
             raise ValueError(
@@ -125,6 +126,7 @@ class FullStackConfig:
             FullStackModelSettings.parse(d.get("model", {})),
             AppearanceSettings.parse(d.get("appearance", {})),
             source,
+            OutputSettings.parse(d.get("output", {})),
         )
 
 

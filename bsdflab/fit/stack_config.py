@@ -18,7 +18,7 @@ import re
 from dataclasses import dataclass
 
 from bsdflab.fit import parameters as P
-from bsdflab.fit.config import AppearanceSettings, SamplerSettings, _settings, _table, load_toml
+from bsdflab.fit.config import AppearanceSettings, OutputSettings, SamplerSettings, _settings, _table, load_toml
 from bsdflab.fit.instrument import Instrument
 from bsdflab.fit.priors import Prior
 from bsdflab.fit.stack_forward import BANDWIDTH_NODES, CONE_AZIMUTHS, CONE_NODES
@@ -66,10 +66,11 @@ class StackConfig:
     model: StackModelSettings = StackModelSettings()
     appearance: AppearanceSettings = AppearanceSettings()
     source: str = ""
+    output: OutputSettings = OutputSettings()
 
     @classmethod
     def parse(cls, d: dict, source: str = "") -> StackConfig:
-        known = {"structure", "instrument", "dataset", "parameters", "model", "sampler", "appearance"}
+        known = {"structure", "instrument", "dataset", "parameters", "model", "sampler", "appearance", "output"}
         unknown = set(d) - known
         if unknown:
             raise ValueError(f"top level: unknown key(s) {', '.join(sorted(unknown))}; "
@@ -109,7 +110,7 @@ class StackConfig:
         check_spread_cost(model.thickness_nodes,
                           [n for n in spread if fixed.get(f"{n}_thickness_spread_nm", 1.0) != 0.0])
         return cls(structure, tuple(specs), priors, fixed, sampler, model,
-                   AppearanceSettings.parse(d.get("appearance", {})), source)
+                   AppearanceSettings.parse(d.get("appearance", {})), source, OutputSettings.parse(d.get("output", {})))
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> StackConfig:

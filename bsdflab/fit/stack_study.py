@@ -123,21 +123,26 @@ def _write(datasets, config: StackConfig, folder: str, progress: bool) -> dict:
            f"[{r['ci997_low']:.5g}, {r['ci997_high']:.5g}] | {r['map']:.5g} | {r['tau']:.1f} |" for r in rows]
     _text(os.path.join(folder, "parameters.md"), "\n".join(md) + "\n")
     rng = np.random.default_rng(config.sampler.seed + 1)
-    corner_plot(draws, run.names, os.path.join(folder, "corner.png"))
+    figures = config.output.figures
+    if figures:
+        corner_plot(draws, run.names, os.path.join(folder, "corner.png"))
     pick = draws[rng.choice(len(draws), min(PREDICTIVE_DRAWS, len(draws)), replace=False)]
     model = post.predict(pick)
     scales = post.named(pick)["noise_scale"]
     noise = scales[:, None] * post.dataset.sigma[None, :]
-    predictive_plot(post.dataset, model, model + noise * rng.standard_normal(model.shape),
-                    os.path.join(folder, "predictive.png"))
+    if figures:
+        predictive_plot(post.dataset, model, model + noise * rng.standard_normal(model.shape),
+                        os.path.join(folder, "predictive.png"))
     checks = predictive_checks(post.dataset, model, scales)
-    residual_plot(post.dataset, normalised_residuals(post.dataset, model, scales), checks,
-                  os.path.join(folder, "residuals.png"))
+    if figures:
+        residual_plot(post.dataset, normalised_residuals(post.dataset, model, scales), checks,
+                      os.path.join(folder, "residuals.png"))
     extra = post.summary_extra() if hasattr(post, "summary_extra") else {}
     emulator = extra.get("emulator") or {}   # the full model's, as the snake study warns of it
     alerts = fit_alerts(run, draws, post.config.priors, checks, post.config.domains)
     alerts += emulator_alert({"emulator_max_error_sigma": emulator.get("max_error_sigma")})
-    trace_plot(run, os.path.join(folder, "trace.png"), config.sampler.tau_multiple)
+    if figures:
+        trace_plot(run, os.path.join(folder, "trace.png"), config.sampler.tau_multiple)
     np.savez_compressed(os.path.join(folder, "draws.npz"), draws=draws, names=np.array(run.names))
     for spec, d in zip(config.datasets, datasets, strict=True):
         _text(os.path.join(folder, f"data{'_' + spec.name if spec.name else ''}.csv"), d.to_csv_text())

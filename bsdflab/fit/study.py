@@ -40,6 +40,7 @@ from bsdflab.fit.figures import (
     SYMBOLS,
     appearance_plot,
     corner_plot,
+    display_exposure,
     nested_plot,
     predictive_plot,
     residual_plot,
@@ -115,20 +116,14 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
 
     draws = run.draws()
     rng = np.random.default_rng(config.sampler.seed + 1)
-    corner_plot(draws, run.names, os.path.join(folder, "corner.png"),
-                truths=[truths.get(n) for n in run.names] if truths else None)
     pick = draws[rng.choice(len(draws), min(PREDICTIVE_DRAWS, len(draws)), replace=False)]
     model_draws = logpost.predict(pick)
-    noise = logpost.full(pick)[:, ALL_NAMES.index("noise_scale")][:, None] * data.sigma[None, :]
-    predictive_plot(data, model_draws, model_draws + noise * rng.standard_normal(model_draws.shape),
-                    os.path.join(folder, "predictive.png"))
     scales = logpost.full(pick)[:, ALL_NAMES.index("noise_scale")]
+    # drawn with or without the figures, so that the draws after them do not depend on [output]
+    replicated = model_draws + scales[:, None] * data.sigma[None, :] * rng.standard_normal(model_draws.shape)
     checks = predictive_checks(data, model_draws, scales)
-    residual_plot(data, normalised_residuals(data, model_draws, scales), checks, os.path.join(folder, "residuals.png"))
-    if nested:
-        nested_plot(run, os.path.join(folder, "trace.png"))
-    else:
-        trace_plot(run, os.path.join(folder, "trace.png"), config.sampler.tau_multiple)
+    if config.output.figures:
+        _write_figures(run, draws, truths, data, model_draws, replicated, scales, checks, config, folder)
 
     main, mode_note = main_mode(draws, run.names)
     mean_full = logpost.full(np.mean(main, axis=0))[0]
@@ -140,7 +135,7 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
     material = from_dict(material_dict(mean_full, model=config.model)).to_dict()
     _text(os.path.join(folder, "material.json"), json.dumps(material, indent=1) + "\n")
     _write_scene(mean_full, folder, config.model)
-    if ap.renders:
+    if ap.renders and config.output.figures:
         _write_renders(app_draws[:ap.renders], mean_full, ap, folder, config.sampler.seed,
                        config.model, progress, config.free)
 
@@ -169,6 +164,19 @@ def _write_study(data: Dataset, config: FitConfig, folder: str, progress: bool, 
     })
     _text(os.path.join(folder, "summary.json"), json.dumps(summary, indent=1, default=float) + "\n")
     return summary
+
+
+def _write_figures(run, draws, truths, data: Dataset, model_draws, replicated, scales, checks, config: FitConfig,
+                   folder: str) -> None:
+    """corner.png, predictive.png, residuals.png and trace.png."""
+    corner_plot(draws, run.names, os.path.join(folder, "corner.png"),
+                truths=[truths.get(n) for n in run.names] if truths else None)
+    predictive_plot(data, model_draws, replicated, os.path.join(folder, "predictive.png"))
+    residual_plot(data, normalised_residuals(data, model_draws, scales), checks, os.path.join(folder, "residuals.png"))
+    if config.sampler.kind == "nested":
+        nested_plot(run, os.path.join(folder, "trace.png"))
+    else:
+        trace_plot(run, os.path.join(folder, "trace.png"), config.sampler.tau_multiple)
 
 
 def _sample(logpost, data: Dataset, config: FitConfig, folder: str, progress: bool, truths: dict):
@@ -240,7 +248,8 @@ def _write_appearance(app_draws, mean_full, config: FitConfig, folder: str, prog
                                    config.model.angle_nodes)
     else:
         app = full_appearance(app_draws, mean_full, config.free, ap.angles_deg, config.model, progress)
-    exposure = appearance_plot(app, os.path.join(folder, "appearance.png"))
+    exposure = (appearance_plot(app, os.path.join(folder, "appearance.png")) if config.output.figures
+                else display_exposure(app))
     iv = app.interval(0.9)
     lines = ["angle_deg,delta_e00_median,delta_e00_p05,delta_e00_p95,delta_e00_p90"]
     lines += [f"{a:g},{m:.4f},{lo:.4f},{hi:.4f},{b:.4f}"

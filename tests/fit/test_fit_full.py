@@ -8,6 +8,7 @@ emulator (one module-scoped grid of 5 x 5 solves, shared by recovery and SBC).""
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import replace
 
 import numpy as np
@@ -106,6 +107,11 @@ def test_brdf_rows_in_the_data_file():
 def test_config_of_the_full_model():
     cfg = config()
     assert cfg.free == ("roughness", "sigma_s") and cfg.fixed["hg_g"] == 0.6
+    assert cfg.output.figures and not config(extra="[output]\nfigures = false\n").output.figures
+    for extra, message in [('[output]\nfigures = "no"\n', "figures must be true or false"),
+                           ("[output]\npng = false\n", "unknown key")]:
+        with pytest.raises(ValueError, match=message):
+            config(extra=extra)
     assert "film_thickness_spread_nm" not in cfg.fixed
     smooth = FitConfig.parse({"parameters": {"base_albedo": {"prior": "uniform", "low": 0, "high": 1}}})
     assert smooth.fixed["roughness"] == 0.0 and smooth.fixed["sigma_s"] == 0.0
@@ -201,6 +207,7 @@ def test_recovery_rejects_the_wrong_truth(pfmc_fit):
 
 
 SBC_DATASETS = 40
+SBC_CI_STEPS = 150
 
 
 def full_sbc(logpost_template, datasets: int, seed: int, steps: int = 500, starts: int = 2):
@@ -224,12 +231,12 @@ def full_sbc(logpost_template, datasets: int, seed: int, steps: int = 500, start
 def test_simulation_based_calibration_full_model_small(pfmc_fit):
     """SBC on SBC_DATASETS datasets (two parameters): power stated and checked -- sum z^2
     rejects posteriors 0.7x too narrow with probability >= 0.8 (computed), and rejects these
-    posteriors narrowed by 0.7. CI's runs are 250 steps from one MAP start (half the slow
-    study's cost): at tau 5-11 steps (measured on such posteriors) that keeps >= 160
-    independent draws per run, which inflates E[z^2] by < 1 %, small against the z-sum's
-    band (41-136 around 80 here)."""
+    posteriors narrowed by 0.7. CI's runs are SBC_CI_STEPS = 150 steps from one MAP start
+    (the slow study keeps 500 from two; 250 before): at tau 5-11 steps (measured on such
+    posteriors) and a burn-in of 2 tau that keeps >= ~90 independent draws per run, which
+    inflates E[z^2] by ~1 %, small against the z-sum's band (41-136 around 80 here)."""
     assert z_sum_power(SBC_DATASETS, ndim=2) >= 0.8, z_sum_power(SBC_DATASETS, ndim=2)
-    truths, posteriors = full_sbc(pfmc_fit[2], SBC_DATASETS, seed=21, steps=250, starts=1)
+    truths, posteriors = full_sbc(pfmc_fit[2], SBC_DATASETS, seed=21, steps=SBC_CI_STEPS, starts=1)
     assert calibration_failures(truths, posteriors, bins=4) == []
     failed = calibration_failures(truths, [narrowed(d, NARROW) for d in posteriors], bins=4)
     assert any(name == "sum z^2" for name, *_ in failed), failed
@@ -244,7 +251,12 @@ def test_simulation_based_calibration_full_model_120(pfmc_fit):
 def test_full_model_study_folder(tmp_path):
     """A study of the full model end to end (base albedo free: the emulator needs 3 solves):
     material.json is the rough, scattering model at the posterior mean, the summary records
-    the emulator, the appearance is the gloss colour."""
+    the emulator, the appearance is the gloss colour. No assertion here reads a figure
+    (test_fit_study.py::test_study_folder checks them): the study runs with [output] figures =
+    false, which writes no PNG and everything else (~6 of its 23 CPU-s were matplotlib), and
+    its appearance at the one angle the statement reads (30 deg; [0, 30] before: a third more
+    rows in each of the appearance's three solves at 16 wavelengths).
+    Mutation: [output] figures ignored by run_study (the PNGs written) fails it."""
     from bsdflab.fit import run_study
 
     ds = gonio_design(PAIRS[:4] + PAIRS[10:])
@@ -266,13 +278,19 @@ check_every = 100
 map_starts = 1
 [appearance]
 draws = 4
-angles_deg = [0, 30]
+angles_deg = [30]
 renders = 0
+[output]
+figures = false
 """))
     summary = run_study(data, cfg, tmp_path / "study", progress=False)
     assert summary["forward_model"]["emulator_solves"] == 3
     assert summary["forward_model"]["emulator_max_relative_error"] < 1e-9   # exact in the albedo
-    assert "gloss colour" in summary["appearance"]["statement"]
+    assert "gloss colour at 30 deg" in summary["appearance"]["statement"]
+    assert np.isfinite(summary["appearance"]["display_exposure_stops"])
+    written = set(os.listdir(tmp_path / "study"))
+    assert {"posterior.nc", "parameters.csv", "appearance.csv", "material.json", "summary.json"} <= written
+    assert not [name for name in written if name.endswith(".png")], written
     material = json.loads((tmp_path / "study" / "material.json").read_text())
     top, slab = material["interfaces"][0], material["slabs"][0]
     assert top["type"] == "roughdielectric" and top["alpha"] == 0.08 and slab["sigma_s"] == 0.2

@@ -166,7 +166,10 @@ def test_recovery_of_structure_and_instrument_from_tmm_data():
     interval (for a calibrated posterior each misses with probability 0.003: the family's
     false alarm is 2.4 %, fixed by the seed).
     Power (the issue's mis-specified instrument): the same data fitted with the bandwidth
-    ignored (fixed at 0) excludes at least two truths."""
+    ignored (fixed at 0) excludes at least two truths. Measured at 1000 steps it excludes
+    four: gap thickness, scale and background by 1.8-2.6 interval widths, the angle offset by
+    0.2; so its run is 500 steps (ESS ~400 at tau ~22: the interval's ends move by a few % of
+    its width, not widths; 1000 before, ~4 CPU-s more)."""
     ds = synthetic(TRUTH, [15, 35, 55, 70], np.arange(400.0, 701.0, 12.5), seed=1)
     cfg = StackConfig.parse(two_layer_config(INSTRUMENT_PRIORS, walkers=20, max_steps=2000))
     post = StackPosterior([ds], cfg)
@@ -175,7 +178,7 @@ def test_recovery_of_structure_and_instrument_from_tmm_data():
     assert np.all((lo < truth) & (truth < hi)), list(zip(post.free, lo, truth, hi, strict=True))
 
     wrong = StackConfig.parse(two_layer_config({**INSTRUMENT_PRIORS, "bandwidth_nm": 0.0}, walkers=20,
-                                               max_steps=1000))
+                                               max_steps=500))
     post = StackPosterior([ds], wrong)
     lo, hi = intervals(run_sampler(post, wrong.sampler, progress=False))
     truth = np.array([TRUTH[n] for n in post.free])
@@ -276,7 +279,7 @@ def test_old_parameter_names_read_with_a_warning():
     assert "film_ior" in cfg.priors and cfg.fixed["pigment_absorption"] == 1.0
 
 
-def test_structure_study_through_the_cli(tmp_path):
+def test_structure_study_through_the_cli(tmp_path, capsys, monkeypatch):
     """`bsdflab fit - --config co.toml`: a config with a [structure] table writes the structure
     study folder, reading its [[dataset]] files (a short run: the folder, not the fit, is
     checked here) with its predictive checks and warnings (status 0 without --strict); a bad
@@ -284,11 +287,13 @@ def test_structure_study_through_the_cli(tmp_path):
     under --overwrite --strict (status 3) cost another ~20 CPU-s of figures, and that branch
     of the report shared by both paths (bsdflab.cli.fit._report) is
     tests/fit/test_fit_checks.py::test_study_warns_loudly's.
+    The bad key's error runs in-process (support.cli.cli_in_process: the same main(), without a
+    child's ~2.5 CPU-s of imports); the study above is the real `bsdflab fit` process.
     Mutation: _report returning 3 on warnings without --strict fails it."""
     import json
     import shutil
 
-    from support.cli import cli, one_line_error
+    from support.cli import cli, cli_in_process, one_line_error
 
     shutil.copy("examples/fit/stack_data.csv", tmp_path / "a.csv")
     text = open("examples/fit/stack.toml", encoding="utf-8").read()
@@ -309,5 +314,6 @@ def test_structure_study_through_the_cli(tmp_path):
     assert summary["predictive_checks"]["series"][1]["series"].startswith("spec: specular")
 
     (tmp_path / "bad.toml").write_text(text.replace('exterior = "air"', 'exterior = "vacuum"'))
-    r = cli("fit", str(tmp_path / "a.csv"), "--config", str(tmp_path / "bad.toml"), "--out", str(tmp_path / "b"))
+    r = cli_in_process(capsys, monkeypatch, "fit", tmp_path / "a.csv", "--config", tmp_path / "bad.toml",
+                       "--out", tmp_path / "b")
     one_line_error(r, "unknown material 'vacuum'")

@@ -13,10 +13,12 @@ misfit. Seeds fixed; each study is a few thousand short forward calls."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
+from bsdflab.fit.config import OutputSettings
 from bsdflab.fit.stack_config import StackConfig
 from bsdflab.fit.stack_study import run_stack_study
 from support.stack_data import synthetic, two_layer_config
@@ -60,8 +62,12 @@ def test_right_model_is_quiet(data, tmp_path):
 @pytest.mark.parametrize("instrument, one_layer", [({"scale": 1.0}, False), (SCALE_PRIOR, True)],
                          ids=["scale left out", "gap left out"])
 def test_wrong_model_warns(data, tmp_path, instrument, one_layer):
-    # no convergence needed: the misfit is in every draw (a short run; NOT_CONVERGED may join)
-    s = run_stack_study(config(instrument, one_layer, max_steps=300), tmp_path / "wrong", data, progress=False)
+    """No convergence needed: the misfit is in every draw (a short run; NOT_CONVERGED may
+    join). The warnings come from summary.json's checks, not the figures: [output] figures =
+    false (test_right_model_is_quiet keeps them and reads residuals.png). Mutation: the
+    PREDICTIVE_CHECK alerts dropped from stack_study's fit_alerts fails both cases."""
+    cfg = replace(config(instrument, one_layer, max_steps=300), output=OutputSettings(figures=False))
+    s = run_stack_study(cfg, tmp_path / "wrong", data, progress=False)
     assert "PREDICTIVE_CHECK" in codes(s), s["warnings"]
     assert s["predictive_checks"]["series"][0]["flagged"]          # "all rows" fails
 

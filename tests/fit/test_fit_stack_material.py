@@ -23,6 +23,7 @@ from bsdflab.fit.stack_material import stack_material_dict, stack_material_note
 from bsdflab.fit.stack_study import run_stack_study
 from bsdflab.fit.structure import Structure
 from bsdflab.lobes import Lobe
+from support.cli import cli_in_process
 
 ANGLES, WLS = [0.0, 30.0, 55.0, 75.0], [352.5, 401.0, 477.0, 550.0, 633.3, 700.0]
 
@@ -97,7 +98,8 @@ def cli(*argv, **kw):
 @pytest.fixture(scope="module")
 def study(tmp_path_factory):
     """A short smooth structure study (film thickness and spread free) on data of the model
-    itself: its material.json and summary."""
+    itself: its material.json and summary. No test here reads a figure: [output] figures =
+    false (test_study_writes_material_json checks that no PNG was written)."""
     out = tmp_path_factory.mktemp("stack_material") / "study"
     s = Structure.parse(STRUCTURES["film"])
     angles, wls = [20.0, 50.0], np.arange(400.0, 701.0, 20.0)
@@ -109,13 +111,20 @@ def study(tmp_path_factory):
         "structure": STRUCTURES["film"],
         "parameters": {"film_thickness_nm": {"prior": "uniform", "low": 400.0, "high": 460.0},
                        "film_thickness_spread_nm": {"prior": "uniform", "low": 0.0, "high": 30.0}},
-        "sampler": {"walkers": 8, "max_steps": 300, "check_every": 100, "map_starts": 2, "seed": 3}})
+        "sampler": {"walkers": 8, "max_steps": 300, "check_every": 100, "map_starts": 2, "seed": 3},
+        "output": {"figures": False}})
     summary = run_stack_study(config, out, data=data, progress=False)
     return out, summary
 
 
 def test_study_writes_material_json(study):
+    """material.json at the posterior median; [output] figures = false writes no PNG and the
+    rest of the folder. Mutation: [output] ignored by run_stack_study (the PNGs written)
+    fails it."""
     out, summary = study
+    written = set(p.name for p in out.iterdir())
+    assert {"parameters.csv", "draws.npz", "summary.json", "material.json"} <= written
+    assert not [name for name in written if name.endswith(".png")], written
     model = json.loads((out / "material.json").read_text())
     assert model["type"] == "layered" and model["base"]["reflectance"] == {"type": "constant", "value": 0.0}
     median = {r["parameter"]: r["median"] for r in summary["parameters"]}
@@ -127,9 +136,13 @@ def test_study_writes_material_json(study):
 
 
 @pytest.mark.parametrize("fmt, ext", [("openpbr", "mtlx"), ("usd", "usda"), ("gltf", "glb"), ("blender", "blend")])
-def test_study_material_exports_to_every_format(study, tmp_path, fmt, ext):
+def test_study_material_exports_to_every_format(study, tmp_path, capsys, monkeypatch, fmt, ext):
+    """`bsdflab export` of the study's material.json to each format: openpbr as a real
+    process, the others in-process (support.cli.cli_in_process: the same main() and
+    exporters, without a child's ~3-4 CPU-s of imports each; blender's was 9)."""
     out, _ = study
-    r = cli("export", "--json", str(out / "material.json"), "--format", fmt, "--out", str(tmp_path / f"m.{ext}"))
+    args = ("export", "--json", out / "material.json", "--format", fmt, "--out", tmp_path / f"m.{ext}")
+    r = cli(*map(str, args)) if fmt == "openpbr" else cli_in_process(capsys, monkeypatch, *args)
     assert r.returncode == 0, r.stderr
     assert (tmp_path / f"m.{ext}").is_file()
     report = json.loads((tmp_path / f"m.{ext}.report.json").read_text())

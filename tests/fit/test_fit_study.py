@@ -15,7 +15,7 @@ import pytest
 import tomllib
 
 from bsdflab.fit import FitConfig, LogPosterior, SimulationConfig, run_sampler, run_study, simulate
-from support.cli import interruptible
+from support.cli import cli_in_process, interruptible
 from support.sbc import NARROW, calibration_failures, narrowed, z_sum_power
 
 TRUTH_TOML = """
@@ -97,19 +97,21 @@ def sbc(datasets: int, seed: int, ranks_from: int = 19, steps: int = 500, starts
 
 
 SBC_DATASETS = 48
+SBC_CI_STEPS = 150
 
 
 def test_simulation_based_calibration_small():
     """SBC on SBC_DATASETS datasets, with its power stated and checked: sum z^2 rejects
     posteriors 0.7x too narrow with probability >= 0.9 (computed), and rejects these very
     posteriors narrowed by 0.7 (the coverage and rank tests alone had ~3 % power here).
-    CI's runs are 250 steps from one MAP start (0.46 CPU-s a fit against 0.84 at 500 steps
-    from two; the slow test keeps those): the effective sample size per parameter measured
-    on such runs is 200-370 (tau ~ 10 steps), which inflates E[z^2] by < 0.5 %, small
-    against the z-sum's band for 48 datasets (same datasets, so same band and power).
+    CI's runs are SBC_CI_STEPS = 150 steps from one MAP start (the slow test keeps 500 from
+    two; 250 before, 0.46 CPU-s a fit, and the emcee steps are ~80 % of a fit): at tau ~ 10
+    steps and a burn-in of 2 tau that leaves ~100 effective draws per parameter or more
+    (measured 108-305 on 8 such runs; 200-370 at 250 steps), which inflates E[z^2] by ~1 %,
+    small against the z-sum's band for 48 datasets (same datasets, so same band and power).
     Mutation: the likelihood's residuals divided by 0.7 sigma (posteriors 0.7x too narrow) fails it."""
     assert z_sum_power(SBC_DATASETS) >= 0.9, z_sum_power(SBC_DATASETS)
-    truths, posteriors = sbc(datasets=SBC_DATASETS, seed=11, steps=250, starts=1)
+    truths, posteriors = sbc(datasets=SBC_DATASETS, seed=11, steps=SBC_CI_STEPS, starts=1)
     assert calibration_failures(truths, posteriors, bins=4) == []
     failed = calibration_failures(truths, [narrowed(d, NARROW) for d in posteriors], bins=4)
     assert any(name == "sum z^2" for name, *_ in failed), failed
@@ -172,7 +174,12 @@ def cli(*args, **kw):
     return subprocess.run([sys.executable, "-m", "bsdflab.cli.main", *args], capture_output=True, text=True, **kw)
 
 
-def test_cli_simulate_and_errors(tmp_path):
+def test_cli_simulate_and_errors(tmp_path, capsys, monkeypatch):
+    """`bsdflab fit simulate` as a real process; the two `bsdflab fit` errors in-process
+    (support.cli.cli_in_process: the same main() and error handling, without two children's
+    ~2.5 CPU-s of imports each): the real `bsdflab fit` process and its one-line stderr are
+    test_ctrl_c_leaves_no_half_written_study's. Mutation: the CLI's ValueError handler
+    (bsdflab.cli.errors.run_command) letting the error through fails it."""
     truth = tmp_path / "truth.toml"
     truth.write_text(TRUTH_TOML.format(d=430.0, A=1.83, rel=0.02, seed=1, step=20))
     r = cli("fit", "simulate", "--config", str(truth), "--out", str(tmp_path / "d.csv"))
@@ -180,12 +187,12 @@ def test_cli_simulate_and_errors(tmp_path):
     assert "SYNTHETIC" in (tmp_path / "d.csv").read_text()
     bad = tmp_path / "bad.toml"
     bad.write_text('[parameters]\nfilm_thickness_nm = {prior = "uniform", low = 1}\n')
-    r = cli("fit", str(tmp_path / "d.csv"), "--config", str(bad), "--out", str(tmp_path / "s"))
+    r = cli_in_process(capsys, monkeypatch, "fit", tmp_path / "d.csv", "--config", bad, "--out", tmp_path / "s")
     assert r.returncode == 2 and "missing ['high']" in r.stderr and "Traceback" not in r.stderr
     (tmp_path / "e.csv").write_text("")
     good = tmp_path / "fit.toml"
     good.write_text(FIT_TOML.format(walkers=8, steps=100, seed=0))
-    r = cli("fit", str(tmp_path / "e.csv"), "--config", str(good), "--out", str(tmp_path / "s"))
+    r = cli_in_process(capsys, monkeypatch, "fit", tmp_path / "e.csv", "--config", good, "--out", tmp_path / "s")
     assert r.returncode == 2 and "empty data file" in r.stderr
 
 
