@@ -180,8 +180,9 @@ def mode_alerts(names, draws: np.ndarray, optima) -> list[Alert]:
     return out
 
 
-def check_alert(checks) -> list[Alert]:
-    """One PREDICTIVE_CHECK warning naming the failed checks (bsdflab.fit.checks)."""
+def check_alert(checks, figures: bool = True) -> list[Alert]:
+    """One PREDICTIVE_CHECK warning naming the failed checks (bsdflab.fit.checks); it points
+    at residuals.png when the study draws figures, else at summary.json."""
     failed = [c for c in checks if c.flagged]
     if not failed:
         return []
@@ -189,17 +190,18 @@ def check_alert(checks) -> list[Alert]:
                   f"(family-wise alpha {ALPHA:g}): " + "; ".join(
                       f"{c.series}: p = {c.p_value:.2g}, chi2/n = {c.chi2_per_row:.2f}" for c in failed[:6])
                   + ("; ..." if len(failed) > 6 else "") + " -- the model does not describe these data "
-                  "(see residuals.png)")]
+                  + ("(see residuals.png)" if figures else "(see predictive_checks in summary.json)"))]
 
 
-def fit_alerts(run, draws: np.ndarray, priors: dict, checks, domains: dict | None = None) -> list[Alert]:
+def fit_alerts(run, draws: np.ndarray, priors: dict, checks, domains: dict | None = None,
+               figures: bool = True) -> list[Alert]:
     """Every warning a fit's run and checks raise, in the order a reader should act on them
     (``domains``: parameters beyond the snake model's table, as a structure fit's)."""
     alerts = [] if run.converged else [Alert("NOT_CONVERGED", run.stop_reason)]
     alerts += bound_alerts(run.names, draws, priors, domains)
     alerts += conflict_alerts(run.names, draws, priors)
     alerts += noise_alert(run.names, draws)
-    alerts += check_alert(checks)
+    alerts += check_alert(checks, figures)
     alerts += mode_alerts(run.names, draws, run.map.optima)
     return alerts
 

@@ -139,7 +139,7 @@ def _write(datasets, config: StackConfig, folder: str, progress: bool) -> dict:
                       os.path.join(folder, "residuals.png"))
     extra = post.summary_extra() if hasattr(post, "summary_extra") else {}
     emulator = extra.get("emulator") or {}   # the full model's, as the snake study warns of it
-    alerts = fit_alerts(run, draws, post.config.priors, checks, post.config.domains)
+    alerts = fit_alerts(run, draws, post.config.priors, checks, post.config.domains, figures)
     alerts += emulator_alert({"emulator_max_error_sigma": emulator.get("max_error_sigma")})
     if figures:
         trace_plot(run, os.path.join(folder, "trace.png"), config.sampler.tau_multiple)

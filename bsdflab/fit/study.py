@@ -235,7 +235,7 @@ def _nested_summary(run) -> dict:
 
 def study_alerts(run, draws: np.ndarray, config: FitConfig, checks, forward: dict) -> list[Alert]:
     """Every warning of the study, in the order a reader should act on them."""
-    return fit_alerts(run, draws, config.priors, checks) + emulator_alert(forward)
+    return fit_alerts(run, draws, config.priors, checks, figures=config.output.figures) + emulator_alert(forward)
 
 
 def _write_appearance(app_draws, mean_full, config: FitConfig, folder: str, progress: bool = False) -> dict:

@@ -65,10 +65,14 @@ def test_wrong_model_warns(data, tmp_path, instrument, one_layer):
     """No convergence needed: the misfit is in every draw (a short run; NOT_CONVERGED may
     join). The warnings come from summary.json's checks, not the figures: [output] figures =
     false (test_right_model_is_quiet keeps them and reads residuals.png). Mutation: the
-    PREDICTIVE_CHECK alerts dropped from stack_study's fit_alerts fails both cases."""
+    PREDICTIVE_CHECK alerts dropped from stack_study's fit_alerts fails both cases; the
+    warning pointing at a residuals.png the study did not write fails the last check."""
     cfg = replace(config(instrument, one_layer, max_steps=300), output=OutputSettings(figures=False))
     s = run_stack_study(cfg, tmp_path / "wrong", data, progress=False)
     assert "PREDICTIVE_CHECK" in codes(s), s["warnings"]
+    (message,) = [w["message"] for w in s["warnings"] if w["code"] == "PREDICTIVE_CHECK"]
+    assert "summary.json" in message and "residuals.png" not in message
+    assert not (tmp_path / "wrong" / "residuals.png").exists()
     assert s["predictive_checks"]["series"][0]["flagged"]          # "all rows" fails
 
 
