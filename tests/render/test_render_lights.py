@@ -391,7 +391,7 @@ def test_14_spectral_mode_lights_with_the_suns_own_spectrum():
     shape = colour.SpectralShape(360, 830, 1)
     on_bins = np.searchsorted(np.arange(360.0, 831.0), wl)
     body = colour.sd_blackbody(5778.0, shape).values[on_bins]
-    ybar = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].align(shape).values[on_bins, 1]
+    ybar = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape).values[on_bins, 1]
     d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(shape).values[on_bins]
     through = sun_transmittance(wl, math.radians(90.0 - elevation), turbidity)
     klx = 128.0 * np.sum(ybar * body * through) / np.sum(ybar * body)
