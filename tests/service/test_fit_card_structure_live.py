@@ -53,29 +53,39 @@ def server(tmp_path_factory):
     s.stop()
 
 
-@pytest.fixture
-def page(server):
-    yield from browse(server)
-
-
-def browse(server, key: str | None = None):
-    """The page in Chromium (with ``key`` typed into its API key box); no page error allowed."""
+@pytest.fixture(scope="module")
+def browser():
+    """One Chromium for the module (a launch costs ~2 CPU-s); each test has a context of its
+    own (its localStorage: a typed key stays in its test), as browser.new_page gave it."""
     if not os.path.exists(CHROMIUM):
         pytest.fail("Debian's chromium is required (apt-get install chromium; dev.sh installs it)")
     with playwright.sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-        page = browser.new_page(viewport={"width": 1440, "height": 1100})
-        errors = []
-        page.on("pageerror", lambda e: errors.append(str(e)))
-        page.goto(server.url + "/")
-        if key:  # the page keeps a changed key (localStorage) and reloads with it (app.js)
-            page.fill("#api-key", key)
-            with page.expect_navigation():
-                page.press("#api-key", "Enter")
-            assert page.input_value("#api-key") == key
-        page.evaluate(WATCH)
-        yield page
+        yield browser
         browser.close()
+
+
+@pytest.fixture
+def page(browser, server):
+    yield from browse(browser, server)
+
+
+def browse(browser, server, key: str | None = None):
+    """The page in a fresh context of ``browser`` (with ``key`` typed into its API key box);
+    no page error allowed."""
+    context = browser.new_context(viewport={"width": 1440, "height": 1100})
+    page = context.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(server.url + "/")
+    if key:  # the page keeps a changed key (localStorage) and reloads with it (app.js)
+        page.fill("#api-key", key)
+        with page.expect_navigation():
+            page.press("#api-key", "Enter")
+        assert page.input_value("#api-key") == key
+    page.evaluate(WATCH)
+    yield page
+    context.close()
     assert not errors, errors
 
 
@@ -219,16 +229,22 @@ def test_cancel_a_structure_fit_from_the_page(page, server):
     assert httpx.get(f"{server.url}/v1/fits/{mine[0]['hash']}/files/summary.json", timeout=30).status_code == 404
 
 
-def test_a_structure_fit_with_an_api_key(tmp_path_factory):
+def test_a_structure_fit_with_an_api_key(tmp_path_factory, browser):
     """On a server that requires a key (BSDFLAB_API_KEY), the key typed into the page: the
     job is followed by polling (an EventSource cannot send the key; before: the card stopped
     silently), the figures are fetched with the key (before: broken images, 401) and a
-    file opens with it. The run is the structure example cut to 40 steps."""
+    file opens with it. The run is the structure example cut to 40 steps, one slit, cone and
+    azimuth node and the scale the only free instrument parameter (10 walkers): nothing here
+    depends on the study's size (the full example: test_a_structure_fit_from_the_page), and
+    its 8-parameter corner plot and 168 solves a row cost the worker seconds. Mutation
+    caught: fit.js following the job by EventSource with a key (the card stops silently)."""
     server = ServiceProcess(tmp_path_factory.mktemp("fit-card-key"), env={"BSDFLAB_API_KEY": KEY})
     try:
-        for page in browse(server, KEY):
+        for page in browse(browser, server, KEY):
             config = json.loads(json.dumps(EXAMPLES["structure"]["config"]))
-            config["sampler"].update(max_steps=40, check_every=20)
+            config["sampler"].update(walkers=10, max_steps=40, check_every=20)
+            config["model"].update(bandwidth_nodes=1, cone_nodes=1, cone_azimuths=1)
+            config["instrument"].update(background=0.0, angle_offset_deg=0.0, bandwidth_nm=10.0)
             page.select_option("#fit-example", "structure")
             page.fill("#fit-config", json.dumps(config))
             h = run_example(page, None, [ROOT / "examples" / "fit" / "stack_data.csv"])

@@ -16,6 +16,7 @@ import pytest
 from bsdflab import from_dict
 from bsdflab.fit import FitConfig, run_study
 from bsdflab.fit.readers import ImportSpec, import_files, parse_spec
+from support.fit_figures import no_figures
 from support.service_client import make_client, wait_job
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "fit"
@@ -49,10 +50,12 @@ def long_hash(client):
     return r.json()["hash"]
 
 
-def test_a_fit_as_a_job(client, long_hash, tmp_path):
+def test_a_fit_as_a_job(client, long_hash, tmp_path, monkeypatch):
     """The job's study is the one ``run_study`` writes for the same data and config (the
     sampler is seeded: the same draws, so the same posterior mean and MAP to the last bits
-    up to summation order); the same request again answers 200 from the store."""
+    up to summation order; the reference without its figures: support/fit_figures.py); the
+    same request again answers 200 from the store. Mutation caught: the job's config with
+    another sampler seed (bsdflab.fit.job.config_of)."""
     body = {"config": CONFIG, "data": [{"hash": long_hash, "name": "data.csv"}]}
     r = client.post("/v1/fits", json=body)
     assert r.status_code == 202, r.text
@@ -70,7 +73,8 @@ def test_a_fit_as_a_job(client, long_hash, tmp_path):
 
     (tmp_path / "data.csv").write_bytes(LONG)
     dataset, _ = import_files([str(tmp_path / "data.csv")], ImportSpec(source="sidecar"))
-    reference = run_study(dataset, FitConfig.parse(CONFIG), tmp_path / "study", progress=False)
+    with no_figures(monkeypatch):
+        reference = run_study(dataset, FitConfig.parse(CONFIG), tmp_path / "study", progress=False)
     for name in ("posterior_mean", "map"):
         got, want = summary[name], reference[name]
         assert got.keys() == want.keys()
@@ -261,7 +265,8 @@ def test_a_finished_fit_is_only_shown_to_a_client_holding_its_data(tmp_path):
     """Bob, sending alice's exact request (he knows her data's hash), got her finished study
     from the cache, data.csv included, and read it by hash: now the request is a 422 naming
     the upload, the study and its files 404s. Once bob uploads the same file himself he holds
-    the data, and the cached study is his too (200, not a second run)."""
+    the data, and the cached study is his too (200, not a second run). Mutation caught:
+    _prepare without its ``_may_read`` (bob's request answers 200 from the cache)."""
     from fastapi.testclient import TestClient
 
     from bsdflab.service import Settings, create_app
@@ -272,7 +277,9 @@ def test_a_finished_fit_is_only_shown_to_a_client_holding_its_data(tmp_path):
     octet = {"Content-Type": "application/octet-stream"}
     with TestClient(create_app(settings)) as c:
         up = c.post("/v1/fits/datasets", params={"name": "data.csv"}, content=LONG, headers={**alice, **octet}).json()
-        body = {"config": {**CONFIG, "appearance": {"draws": 2, "renders": 0, "angles_deg": [0]}},
+        # a short run (40 steps): who may see a finished study does not depend on its length
+        body = {"config": {**CONFIG, "sampler": {**CONFIG["sampler"], "max_steps": 40},
+                           "appearance": {"draws": 2, "renders": 0, "angles_deg": [0]}},
                 "data": [{"hash": up["hash"], "name": "data.csv"}]}
         job = c.post("/v1/fits", json=body, headers=alice).json()
         assert wait_job(c, job["id"], timeout=600, headers=alice)["state"] == "done"

@@ -15,6 +15,7 @@ import tomllib
 
 from bsdflab.fit.full_stack_config import load_structure_config, parse_structure_config
 from bsdflab.fit.stack_study import run_stack_study
+from support.fit_figures import no_figures
 from support.service_client import make_client, wait_job
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "fit"
@@ -124,25 +125,29 @@ def same(got: dict, want: dict) -> None:
         assert np.allclose(g, w, rtol=1e-9, atol=0), (name, g, w)
 
 
-def test_a_structure_fit_as_a_job(client, tmp_path):
-    """One dataset: the job's study is the one ``bsdflab fit stack_data.csv --config`` writes."""
+def test_a_structure_fit_as_a_job(client, tmp_path, monkeypatch):
+    """One dataset: the job's study is the one ``bsdflab fit stack_data.csv --config`` writes
+    (the reference without its figures: support/fit_figures.py). Mutation caught: the job's
+    config with another sampler seed (bsdflab.fit.job.structure_config)."""
     h = upload(client, STACK, "stack_data.csv")
     summary = run_job(client, {"config": tomllib.loads(ONE), "data": [{"hash": h, "name": "stack_data.csv"}]})
     assert summary["model"] == "structure" and summary["free"] == ["film_thickness_nm", "scale"]
     (tmp_path / "config.toml").write_text(ONE)
     (tmp_path / "stack_data.csv").write_bytes(STACK)
-    want = run_stack_study(
-        load_structure_config(tmp_path / "config.toml"),
-        tmp_path / "study",
-        str(tmp_path / "stack_data.csv"),
-        progress=False,
-    )
+    with no_figures(monkeypatch):
+        want = run_stack_study(
+            load_structure_config(tmp_path / "config.toml"),
+            tmp_path / "study",
+            str(tmp_path / "stack_data.csv"),
+            progress=False,
+        )
     same(summary, want)
 
 
-def test_a_co_refinement_as_a_job(client, tmp_path):
+def test_a_co_refinement_as_a_job(client, tmp_path, monkeypatch):
     """Two datasets, each its own scale, named by upload hash: the same study as the config
-    naming the two files by path run locally (each dataset's rows, in order)."""
+    naming the two files by path run locally (each dataset's rows, in order; the reference
+    without its figures). Mutation caught: the job's config with another sampler seed."""
     ha, hb = upload(client, A, "at15.csv"), upload(client, B, "rest.csv")
     body = {
         "config": tomllib.loads(two(ha, hb, "hash")),
@@ -153,7 +158,8 @@ def test_a_co_refinement_as_a_job(client, tmp_path):
     (tmp_path / "at15.csv").write_bytes(A)
     (tmp_path / "rest.csv").write_bytes(B)
     (tmp_path / "config.toml").write_text(two("at15.csv", "rest.csv"))
-    want = run_stack_study(load_structure_config(tmp_path / "config.toml"), tmp_path / "study", progress=False)
+    with no_figures(monkeypatch):
+        want = run_stack_study(load_structure_config(tmp_path / "config.toml"), tmp_path / "study", progress=False)
     same(summary, want)
 
 
@@ -260,10 +266,11 @@ def test_a_running_structure_fit_streams_progress_and_is_cancelled(client):
     assert client.get(f"/v1/fits/{job['hash']}/files/summary.json").status_code == 404
 
 
-def test_a_full_model_structure_fit_as_a_job(client, tmp_path):
+def test_a_full_model_structure_fit_as_a_job(client, tmp_path, monkeypatch):
     """The full model of a [structure] (its emulator: 3 nodes over one free structure
-    parameter, 3 solves) over HTTP: the study ``bsdflab fit`` writes for the same config,
-    and the emulator's solves counted as the limit counts them."""
+    parameter, 3 solves) over HTTP: the study ``bsdflab fit`` writes for the same config
+    (the reference without its figures), and the emulator's solves counted as the limit
+    counts them."""
     text = (EXAMPLES / "structure_full" / "structure.toml").read_text()
     data = (EXAMPLES / "structure_full" / "data.csv").read_bytes()
     config = tomllib.loads(text)
@@ -275,7 +282,8 @@ def test_a_full_model_structure_fit_as_a_job(client, tmp_path):
     assert summary["emulator"]["solves"] == 3**1, summary["emulator"]
     assert "material.json" in summary["files"]  # the full model's posterior median, renderable
     (tmp_path / "data.csv").write_bytes(data)
-    want = run_stack_study(
-        parse_structure_config(config), tmp_path / "study", str(tmp_path / "data.csv"), progress=False
-    )
+    with no_figures(monkeypatch):
+        want = run_stack_study(
+            parse_structure_config(config), tmp_path / "study", str(tmp_path / "data.csv"), progress=False
+        )
     same(summary, want)

@@ -16,36 +16,13 @@ import numpy as np
 
 from bsdflab.export.blender import blender_script, run_bpy
 from bsdflab.validation.checks.cycles import (  # noqa: F401 -- the report's Cycles check's sphere, one implementation
-    LOOP,
     SETTINGS,
     pixel_cosines,
     render_spheres,
 )
 
-# render_spheres' loop for several seeds in one bpy process: Cycles' images of a seed do not
-# depend on the process (one render_spheres call per seed: the same pixels to 6e-8), and each bpy
-# process costs ~4 CPU-s of start and scene build against ~0.3 s a 48 x 48 render.
-SEEDS_LOOP = SETTINGS + """
-for s in cfg["seeds"]:
-    scene.cycles.seed = s
-    for i, d in enumerate(cfg["thicknesses"]):
-        bsdf.inputs["Thin Film Thickness"].default_value = d
-        scene.render.filepath = os.path.join(cfg["folder"], f"sphere_{s}_{i}.exr")
-        bpy.ops.render.render(write_still=True)
-"""
-
-
-def render_spheres_seeds(params: dict, thicknesses, folder: str, size: int = 48, spp: int = 4,
-                         seeds=(0, 1)) -> np.ndarray:
-    """render_spheres for each seed, in one bpy process: (len(seeds), T, size, size, 3)."""
-    from bsdflab.render.image_io import read_exr
-
-    cfg = {"size": size, "spp": spp, "seeds": list(seeds), "folder": folder,
-           "thicknesses": [float(d) for d in thicknesses]}
-    env = dict(os.environ, CYCLES_CHECK_SPHERES=json.dumps(cfg))
-    run_bpy(blender_script(params, "cycles-check") + SEEDS_LOOP, env=env)
-    return np.stack([np.stack([read_exr(os.path.join(folder, f"sphere_{s}_{i}.exr"))[..., :3]
-                               for i in range(len(thicknesses))]) for s in seeds])
+# the report's check renders every seed in one bpy process (~4 CPU-s a process saved)
+render_spheres_seeds = render_spheres
 
 
 # The same sphere seen in perspective, as both renderers' cameras can hold it: a pinhole at

@@ -229,10 +229,10 @@ def test_cycles_check_statistic_rejects_the_materialx_model():
     from bsdflab.reference.approximations.cycles import cycles_thin_film_rgb
     from bsdflab.validation.checks.cycles import pixel_cosines
 
-    def stand_in(params, thicknesses, folder, size=48, spp=4, seed=0):
+    def stand_in(params, thicknesses, folder, size=48, spp=4, seeds=(0, 1)):
         cos = np.nan_to_num(pixel_cosines(size), nan=1.0)
         img = np.stack([cycles_thin_film_rgb(1.0, params["film_ior"], params["base_ior"], d, cos) for d in thicknesses])
-        return img + 1e-4 * np.random.default_rng(seed).standard_normal(img.shape)
+        return np.stack([img + 1e-4 * np.random.default_rng(s).standard_normal(img.shape) for s in seeds])
 
     check = REGISTRY["export/cycles-model-vs-cycles"]
     good = _run(check, lambda: {"model": cycles_thin_film_rgb, "render": stand_in})

@@ -15,6 +15,12 @@ GRIDS = effort({"grid": [4, 6, 5], "check_samples": 4000}, {"grid": [6, 10, 9], 
                {"grid": [12, 24, 13], "check_samples": 16000})
 
 
+# the snake's table is tabulated once per grid in a run, with this seed, and read by both
+# checks below (the chi-square check's own seed draws its samples): 1.5 CPU-s at quick
+TABLE_SEED = 41
+_TABLES: dict[tuple[int, ...], tuple] = {}
+
+
 def _xenopeltis_table(ctx):
     """(model, TableBSDF, table) for the snake preset, tabulated at 3 wavelengths with
     4096 walks per cell at least (fewer leave PFMC's heavy tail under-sampled and the cell
@@ -22,10 +28,13 @@ def _xenopeltis_table(ctx):
     import bsdflab as bl
     from bsdflab.tables import TableBSDF, TableGrid, tabulate
 
-    model = bl.presets.xenopeltis(samples=64)
-    table = tabulate(model, TableGrid(*ctx.effort["grid"]), rel_error=0.03, wavelengths=WAVELENGTHS,
-                     min_samples=4096, seed=ctx.seed, progress=False)
-    return model, TableBSDF(table), table
+    grid = tuple(int(n) for n in ctx.effort["grid"])
+    if grid not in _TABLES:
+        model = bl.presets.xenopeltis(samples=64)
+        table = tabulate(model, TableGrid(*grid), rel_error=0.03, wavelengths=WAVELENGTHS,
+                         min_samples=4096, seed=TABLE_SEED, progress=False)
+        _TABLES[grid] = (model, TableBSDF(table), table)
+    return _TABLES[grid]
 
 
 @REGISTRY.check(name="tables/xenopeltis-vs-pfmc", family="tables",
