@@ -94,8 +94,9 @@ def test_a_low_sun_in_haze_is_a_valid_light(elevation, turbidity):
     import colour
 
     wl = np.arange(360.0, 831.0)
-    body = colour.sd_blackbody(5778.0, colour.SpectralShape(360, 830, 1)).values
-    ybar = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(colour.SpectralShape(360, 830, 1)).values[:, 1]
+    shape = colour.SpectralShape(360, 830, 1)
+    body = colour.sd_blackbody(5778.0, shape).values
+    ybar = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape).values[:, 1]
     kept = np.sum(ybar * body * sun_transmittance(wl, math.radians(90.0 - elevation), turbidity)) / np.sum(ybar * body)
     assert 128.0 * kept <= rgb @ LUMINANCE <= 1.02 * 128.0 * kept
     plane = Shape({"type": "rectangle", "size": [4, 4]}, "white", name="floor")
