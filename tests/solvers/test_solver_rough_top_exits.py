@@ -28,7 +28,7 @@ import bsdflab as bl
 from bsdflab.optics.fresnel import fresnel_reflectance
 from bsdflab.solvers import solve
 from bsdflab.testing import sidak_significance, spherical_directions
-from support.solver_pairs import assert_solver_matches_pfmc, pairs_by_kind, z_scores
+from support.solver_pairs import assert_solver_matches_pfmc, hemisphere_integrals, pairs_by_kind, z_scores
 
 WL = [450.0, 550.0, 650.0]
 FAMILY_SIGNIFICANCE = 0.01
@@ -116,23 +116,6 @@ def test_02_mutations_fail():
 def lossless(below_ior):
     slab = bl.Slab(5.0, sigma_a=0.0, sigma_s=3.0, phase={"type": "hg", "g": 0.5})  # tau 15
     return bl.Layered([bl.RoughDielectric(0.3, 1.5, 1.0, multiscatter=True)], [slab], bl.Dielectric(below_ior, 1.5))
-
-
-def hemisphere_integrals(sol, lights, n_mu, n_phi):
-    """Integral of eval(wi, light) / |cos theta_light| over wi in the upper and in the lower
-    half-space, (lights, 2, C): Gauss-Legendre in the outside cosine, the trapezoid rule in
-    azimuth (periodic); every light and half-space in one eval (each call pays the rough
-    exits' set-up)."""
-    x, w = np.polynomial.legendre.leggauss(n_mu)
-    mu, w = 0.5 * (x + 1.0), 0.5 * w
-    phi = 2.0 * np.pi * np.arange(n_phi) / n_phi
-    t, p = np.meshgrid(np.arccos(mu), phi, indexing="ij")
-    up = spherical_directions(t.ravel(), p.ravel())
-    half = [up * np.array([1.0, 1.0, h]) for h in (1.0, -1.0)]
-    wi = np.concatenate([d for _ in lights for d in half])
-    wo = np.concatenate([np.repeat(light, 2 * len(up), axis=0) for light in lights])
-    f_cos = sol.eval(wi, wo).reshape(len(lights), 2, len(up), -1) / np.abs(lights[:, :, 2])[:, :, None, None]
-    return (2.0 * np.pi / n_phi) * np.sum(np.repeat(w * mu, n_phi)[:, None] * f_cos, axis=2)
 
 
 ALL_ANGLES = (0.0, 60.0, 80.0)
