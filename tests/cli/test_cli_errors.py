@@ -6,15 +6,13 @@ from __future__ import annotations
 
 import json
 import os
-import signal
 import subprocess
-import threading
 
 import pytest
 
 from bsdflab.render.image_io import read_exr
 from bsdflab.tables import write_table
-from support.cli import BSDFLAB, cli, interruptible, one_line_error, wait_for_cpu
+from support.cli import BSDFLAB, cli, interrupt_when, interruptible, one_line_error
 from support.tables import valid_table
 
 
@@ -90,24 +88,7 @@ def test_sigint_is_one_line_and_exit_130(tmp_path):
                         str(2**28), "--out", str(tmp_path / "r.exr")],
                        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                        env={**os.environ, "BSDFLAB_MAX_SPP": str(2**28)}) as proc:
-        seen = threading.Event()
-        chunks = []
-
-        def read():
-            for chunk in iter(lambda: proc.stderr.read(1), b""):
-                chunks.append(chunk)
-                if b"rendering" in b"".join(chunks[-64:]):
-                    seen.set()
-
-        reader = threading.Thread(target=read, daemon=True)
-        reader.start()
-        while not seen.wait(0.05):
-            assert proc.poll() is None, b"".join(chunks)
-        wait_for_cpu(proc, 1.0, b"".join(chunks))
-        proc.send_signal(signal.SIGINT)
-        rc = proc.wait(300)
-        reader.join(10)
-    err = b"".join(chunks).decode(errors="replace")
+        rc, err = interrupt_when(proc, b"rendering", cpu_after=1.0)
     tail = [line for line in err.replace("\r", "\n").splitlines() if line.strip() and "rendering" not in line]
     assert rc == 130 and tail == ["bsdflab render: interrupted"], (rc, err[-2000:])
     assert os.listdir(tmp_path) == []  # no EXR, no PNG, no temporary (the exit skips teardown: cli/leave.py)

@@ -6,6 +6,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 from collections.abc import Iterator
 
 BSDFLAB = [sys.executable, "-m", "bsdflab.cli.main"]
@@ -36,8 +37,6 @@ def cpu_seconds(pid: int) -> float:
 def wait_for_cpu(proc: subprocess.Popen, seconds: float, what: str = "") -> None:
     """Wait until the process has spent `seconds` more CPU time than now: proof that its
     work is under way whatever the machine's load (a wall-clock sleep proves nothing)."""
-    import threading
-
     target = cpu_seconds(proc.pid) + seconds
     pause = threading.Event()
     while cpu_seconds(proc.pid) < target:
@@ -64,6 +63,42 @@ def interruptible(args, **kwargs) -> Iterator[subprocess.Popen]:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def interrupt_when(proc: subprocess.Popen, marker: bytes, cpu_after: float = 0.0,
+                   hang_s: float = 300) -> tuple[int, str]:
+    """SIGINT to `proc` once `marker` has appeared on its stderr (a binary pipe) and it has
+    spent `cpu_after` more CPU-seconds; returns (exit status, the whole of stderr).
+
+    One thread reads all of stderr. Before, the fit's test read the start through the text
+    wrapper and the rest with communicate(), which reads the raw pipe: what the wrapper had
+    buffered was lost, and the rest could begin mid-line (a bar's tail such as "s]"), a
+    stray line under load. `hang_s` only bounds a hang."""
+    seen = threading.Event()
+    chunks: list[bytes] = []
+
+    def read():
+        start = b""
+        while chunk := proc.stderr.read1(4096):
+            chunks.append(chunk)
+            if not seen.is_set():
+                start += chunk
+                if marker in start:
+                    seen.set()
+        seen.set()  # EOF: the process ended; the check below reports it
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    while not seen.wait(0.05):  # polling for a hang, not a synchronisation
+        pass
+    assert proc.poll() is None and marker in b"".join(chunks), \
+        f"the process ended before {marker!r}: {b''.join(chunks)[-2000:]!r}"
+    if cpu_after:
+        wait_for_cpu(proc, cpu_after, b"".join(chunks)[-2000:])
+    proc.send_signal(signal.SIGINT)
+    status = proc.wait(hang_s)
+    reader.join(hang_s)
+    return status, b"".join(chunks).decode(errors="replace")
 
 
 def cli_in_process(capsys, monkeypatch, *args, env=None) -> subprocess.CompletedProcess:
