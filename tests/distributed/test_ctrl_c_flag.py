@@ -11,12 +11,13 @@ import signal
 import pytest
 
 from bsdflab.distributed import DaskRunner, connect
+from support.liveness import HANG_S
 
 
 @pytest.fixture(scope="module")
 def client():
     with connect(cluster="local:1") as c:
-        c.wait_for_workers(1, timeout=600)  # a liveness bound, not a timing check
+        c.wait_for_workers(1, timeout=HANG_S)
         yield c
 
 

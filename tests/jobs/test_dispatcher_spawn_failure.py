@@ -7,10 +7,9 @@ restarted. Fails at 2ed4d37 (TimeoutError). Fix: catch the spawn's error in the 
 the waiting job, or retry with a back-off), or mark the executor stopped so submit raises."""
 from __future__ import annotations
 
-import time
-
 from bsdflab.jobs import processes, register_kind
 from bsdflab.jobs.processes import ProcessJobExecutor
+from support.liveness import HANG_S, wait_until
 
 register_kind("test-steps", "support.job_kinds")
 
@@ -27,20 +26,18 @@ def test_a_failed_worker_start_does_not_stop_the_pool_for_good(tmp_path, monkeyp
     monkeypatch.setattr(processes, "_Worker", flaky)
     executor = ProcessJobExecutor(1, cancel_grace_s=0.0, warm=False)
     try:
-        assert executor.submit("test-steps", {"steps": 1, "step_s": 0.0}, tmp_path).result(60)
+        assert executor.submit("test-steps", {"steps": 1, "step_s": 0.0}, tmp_path).result(HANG_S)
         pid = executor.worker_pids()[0]
         import os
         import signal
         os.kill(pid, signal.SIGKILL)   # a check past its deadline is killed the same way
-        end = time.monotonic() + 30
-        while executor.worker_pids() and time.monotonic() < end:   # retired
-            time.sleep(0.05)
+        wait_until(lambda: not executor.worker_pids(), "retired worker")
         first = executor.submit("test-steps", {"steps": 1, "step_s": 0.0}, tmp_path)
         try:   # the job that met the failed start may fail (or wait for a retried start)
             first.result(20)
         except Exception:   # noqa: BLE001
             pass
         later = executor.submit("test-steps", {"steps": 1, "step_s": 0.0}, tmp_path)
-        assert later.result(30)   # at 2ed4d37: TimeoutError, the dispatcher thread is gone
+        assert later.result(HANG_S)   # at 2ed4d37: TimeoutError, the dispatcher thread is gone
     finally:
         executor.shutdown()

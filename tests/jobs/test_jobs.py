@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import importlib.util
 import os
-import time
 
 import numpy as np
 import pytest
@@ -15,18 +14,15 @@ from bsdflab.jobs import tabulate as tabulate_kind
 from bsdflab.jobs.processes import ProcessJobExecutor
 from bsdflab.jobs.threads import ThreadJobExecutor
 from bsdflab.tables import TableGrid, cache_key, read_table, tabulate
+from support.liveness import HANG_S, wait_until
 
 register_kind("test-steps", "support.job_kinds")
 SMALL = {"preset": "xenopeltis-thin-film", "grid": {"n_theta_i": 2, "n_theta_o": 3, "n_phi": 3},
          "rel_error": 0.2, "min_samples": 64, "max_samples": 64, "seed": 7, "method": "pfmc"}
 
 
-def wait_for(predicate, timeout=60.0):
-    end = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > end:
-            raise AssertionError("timed out waiting")
-        time.sleep(0.02)
+def wait_for(predicate):
+    wait_until(predicate, "state the test waits for")
 
 
 def test_tabulate_kind_equals_the_python_api(tmp_path):
@@ -101,7 +97,7 @@ def test_thread_executor_progress_and_cancel(tmp_path):
         assert queued.cancel() and queued.state == "cancelled"   # never started
         running.cancel()
         with pytest.raises(JobCancelled):
-            running.result(timeout=60)
+            running.result(timeout=HANG_S)
     assert not (tmp_path / f"{get_kind('tabulate').key(long)}.exr").exists()
 
 
@@ -117,7 +113,7 @@ def test_process_executor_runs_jobs_in_a_worker(processes, tmp_path):
     wait_for(lambda: handle.progress()[0] > 0.2)
     fraction, elapsed, eta = handle.progress()
     assert handle.state == "running" and elapsed > 0 and eta is not None and eta > 0
-    result = handle.result(timeout=60)
+    result = handle.result(timeout=HANG_S)
     assert result["pid"] != os.getpid() and result["pid"] in processes.worker_pids()
 
 
@@ -126,15 +122,15 @@ def test_process_executor_cancel_failure_and_crash(processes, tmp_path):
     wait_for(lambda: slow.state == "running")
     slow.cancel()
     with pytest.raises(JobCancelled):
-        slow.result(timeout=30)
+        slow.result(timeout=HANG_S)
     with pytest.raises(JobFailed, match="asked to fail") as failed:
-        processes.submit("test-steps", {"action": "fail"}, tmp_path).result(timeout=30)
+        processes.submit("test-steps", {"action": "fail"}, tmp_path).result(timeout=HANG_S)
     assert failed.value.error_type == "ValueError"
     with pytest.raises(JobFailed, match="worker process died") as died:
-        processes.submit("test-steps", {"action": "crash"}, tmp_path).result(timeout=30)
+        processes.submit("test-steps", {"action": "crash"}, tmp_path).result(timeout=HANG_S)
     assert died.value.error_type == "WorkerDied"
     # a new worker takes the next job
-    assert processes.submit("test-steps", {"steps": 1}, tmp_path).result(timeout=60)["pid"] != os.getpid()
+    assert processes.submit("test-steps", {"steps": 1}, tmp_path).result(timeout=HANG_S)["pid"] != os.getpid()
 
 
 def test_make_executor_specs():

@@ -8,6 +8,7 @@ import socket
 import httpx2 as httpx
 import pytest
 
+from support.liveness import HANG_S
 from support.service_process import ServiceProcess
 
 CAP = 4
@@ -24,7 +25,7 @@ def server(tmp_path_factory):
 
 
 def _open(server, first: bytes = b"") -> socket.socket:
-    s = socket.create_connection(("127.0.0.1", server.port), timeout=60)
+    s = socket.create_connection(("127.0.0.1", server.port), timeout=HANG_S)
     if first:
         s.sendall(first)
     return s
@@ -32,7 +33,7 @@ def _open(server, first: bytes = b"") -> socket.socket:
 
 def _closed_by_server(s: socket.socket) -> bool:
     """True when the server closes the socket (recv answers b"" or a reset) within the
-    socket's 60 s timeout; the server's timeout is 1 s."""
+    socket's HANG_S timeout (a liveness bound); the server's timeout is 1 s."""
     try:
         while s.recv(4096):
             pass
@@ -45,17 +46,17 @@ def _closed_by_server(s: socket.socket) -> bool:
 
 def test_healthz_answers_at_the_connection_cap_and_idle_sockets_close(server):
     """Mutation caught: uvicorn's own ``limit_concurrency`` (healthz 503) or no header
-    deadline (the idle sockets are never closed: the recv times out after 60 s)."""
+    deadline (the idle sockets are never closed: the recv times out after HANG_S)."""
     idle = [_open(server) for _ in range(CAP + 2)]
     slow_headers = _open(server, b"GET /v1/presets HTTP/1.1\r\nHost: x\r\n")        # never finishes its headers
     slow_body = _open(server, b"POST /v1/thinfilm/spectrum HTTP/1.1\r\nHost: x\r\nContent-Type: application/json"
                               b"\r\nContent-Length: 100\r\n\r\n{")                 # never finishes its body
     try:
-        with httpx.Client(base_url=server.url, timeout=30) as client:
+        with httpx.Client(base_url=server.url, timeout=HANG_S) as client:
             assert client.get("/healthz").status_code == 200
             assert client.get("/v1/presets").status_code == 503
         assert all(_closed_by_server(s) for s in [*idle, slow_headers, slow_body])
-        with httpx.Client(base_url=server.url, timeout=30) as client:
+        with httpx.Client(base_url=server.url, timeout=HANG_S) as client:
             assert client.get("/v1/presets").status_code == 200
     finally:
         for s in [*idle, slow_headers, slow_body]:

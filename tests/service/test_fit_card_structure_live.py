@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 from playwright import sync_api as playwright
 
+from support.liveness import HANG_MS, HANG_S
 from support.service_process import ServiceProcess
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
@@ -97,16 +98,16 @@ def run_example(page, example: str | None, files: list[Path]) -> str:
     page.set_input_files("#fit-data", [str(f) for f in files])
     page.click("#fit-button")
     # the study, or the card at rest with its message (a refusal, a failed job): no wait for a study never coming
-    page.wait_for_function(STUDY_OR_STOP, timeout=600_000)
+    page.wait_for_function(STUDY_OR_STOP, timeout=HANG_MS)
     assert page.get_attribute("#fit-out", "data-hash"), page.inner_text("#fit-status")
     page.wait_for_function(
-        "['fit-corner', 'fit-predictive'].every(id => document.getElementById(id).naturalWidth > 0)", timeout=60_000
+        "['fit-corner', 'fit-predictive'].every(id => document.getElementById(id).naturalWidth > 0)", timeout=HANG_MS
     )
     return page.evaluate("document.getElementById('fit-out').dataset.hash")
 
 
 def get(server, path: str, key: str | None = None):
-    r = httpx.get(server.url + path, headers={"X-API-Key": key} if key else {}, timeout=30)
+    r = httpx.get(server.url + path, headers={"X-API-Key": key} if key else {}, timeout=HANG_S)
     assert r.status_code == 200, (path, r.status_code, r.text)
     return r
 
@@ -176,7 +177,7 @@ def test_a_structure_fit_from_the_page(page, server):
     # the same request again answers from the artefact store at once: the same study shown
     table = shown_table(page)
     page.click("#fit-button")
-    page.wait_for_function(STUDY_OR_STOP, timeout=60_000)
+    page.wait_for_function(STUDY_OR_STOP, timeout=HANG_MS)
     assert page.inner_text("#fit-status") == "from the artefact store (fitted before)"
     assert page.get_attribute("#fit-out", "data-hash") == h and shown_table(page) == table
 
@@ -218,15 +219,15 @@ def test_cancel_a_structure_fit_from_the_page(page, server):
     page.click("#fit-button")
     # the sampling stage begins at 25 % of the bar (bsdflab.fit.job.STAGES)
     page.wait_for_function(
-        "/^running · (2[5-9]|[3-9]\\d)% · /.test(document.getElementById('fit-status').textContent)", timeout=600_000
+        "/^running · (2[5-9]|[3-9]\\d)% · /.test(document.getElementById('fit-status').textContent)", timeout=HANG_MS
     )
     page.click("#fit-cancel")
-    page.wait_for_function("document.getElementById('fit-status').textContent.startsWith('cancelled')", timeout=120_000)
+    page.wait_for_function("document.getElementById('fit-status').textContent.startsWith('cancelled')", timeout=HANG_MS)
     assert page.inner_text("#fit-status") == "cancelled: sampling cancelled"
     assert page.is_enabled("#fit-button") and not page.is_visible("#fit-cancel")
     mine = get(server, "/v1/jobs?state=cancelled").json()["jobs"]
     assert len(mine) == 1 and mine[0]["kind"] == "fit", mine
-    assert httpx.get(f"{server.url}/v1/fits/{mine[0]['hash']}/files/summary.json", timeout=30).status_code == 404
+    assert httpx.get(f"{server.url}/v1/fits/{mine[0]['hash']}/files/summary.json", timeout=HANG_S).status_code == 404
 
 
 def test_a_structure_fit_with_an_api_key(tmp_path_factory, browser):

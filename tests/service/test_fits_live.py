@@ -12,6 +12,7 @@ import httpx2 as httpx
 import pytest
 from playwright import sync_api as playwright
 
+from support.liveness import HANG_MS, HANG_S
 from support.service_process import ServiceProcess, follow_events
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
@@ -35,16 +36,16 @@ def test_a_fit_over_http_in_a_worker_process(server):
     worker processes, which register the kind by name): the progress never goes back, the
     last event is done, and the study's summary is the fit of the uploaded rows."""
     up = httpx.post(f"{server.url}/v1/fits/datasets", params={"name": "data.csv"}, content=DATA.read_bytes(),
-                    headers={"Content-Type": "application/octet-stream"}, timeout=60)
+                    headers={"Content-Type": "application/octet-stream"}, timeout=HANG_S)
     assert up.status_code == 200, up.text
     body = {"config": {**CONFIG, "sampler": {**CONFIG["sampler"], "seed": 9}},
             "data": [{"hash": up.json()["hash"], "name": "data.csv"}]}
-    r = httpx.post(f"{server.url}/v1/fits", json=body, timeout=60)
+    r = httpx.post(f"{server.url}/v1/fits", json=body, timeout=HANG_S)
     assert r.status_code == 202, r.text
     events = follow_events(server.url, r.json()["id"], timeout=600)
     progress = [job["progress"] for name, job in events if name == "progress"]
     assert progress == sorted(progress) and events[-1][0] == "done", events
-    summary = httpx.get(f"{server.url}/v1/fits/{events[-1][1]['hash']}/files/summary.json", timeout=30).json()
+    summary = httpx.get(f"{server.url}/v1/fits/{events[-1][1]['hash']}/files/summary.json", timeout=HANG_S).json()
     assert summary["rows"] == up.json()["summary"]["rows"] == 189 and summary["sampler"] == "emcee"
 
 
@@ -63,20 +64,20 @@ def test_a_fit_from_the_page(server):
         page.set_input_files("#fit-data", str(DATA))
         page.fill("#fit-config", json.dumps(CONFIG))
         page.click("#fit-button")
-        page.wait_for_selector("#fit-corner:not([hidden])", timeout=600_000)
-        page.wait_for_function("document.getElementById('fit-corner').naturalWidth > 0", timeout=60_000)
+        page.wait_for_selector("#fit-corner:not([hidden])", timeout=HANG_MS)
+        page.wait_for_function("document.getElementById('fit-corner').naturalWidth > 0", timeout=HANG_MS)
         h = page.evaluate("document.getElementById('fit-out').dataset.hash")
         shown = page.inner_text("#fit-summary")
         links = page.eval_on_selector_all("#fit-files a", "as => as.map(a => a.getAttribute('href'))")
         corner_src = page.evaluate("document.getElementById('fit-corner').src")
         browser.close()
     assert not errors, errors
-    info = httpx.get(f"{server.url}/v1/fits/{h}", timeout=30).json()
+    info = httpx.get(f"{server.url}/v1/fits/{h}", timeout=HANG_S).json()
     assert info["state"] == "done" and info["job"]["state"] == "done", info
     assert sorted(links) == sorted(f"/v1/fits/{h}/files/{name}" for name in info["files"])
-    summary = httpx.get(f"{server.url}/v1/fits/{h}/files/summary.json", timeout=30).json()
+    summary = httpx.get(f"{server.url}/v1/fits/{h}/files/summary.json", timeout=HANG_S).json()
     for name in summary["free"]:
         assert f"{name} = {summary['posterior_mean'][name]:.5g}" in shown, (name, shown)
-    corner = httpx.get(corner_src, timeout=30)
+    corner = httpx.get(corner_src, timeout=HANG_S)
     assert corner.status_code == 200 and corner.content == httpx.get(
-        f"{server.url}/v1/fits/{h}/files/corner.png", timeout=30).content
+        f"{server.url}/v1/fits/{h}/files/corner.png", timeout=HANG_S).content

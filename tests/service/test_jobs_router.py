@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import pytest
 
+from support.liveness import wait_until
 from support.service_client import LONG_TABLE, TINY_TABLE, make_client, wait_job
 
 
@@ -38,7 +39,6 @@ def test_progress_streams_per_key_are_capped_and_released(tmp_path):
     cap). Two streams open, the third is 429; when the job ends the streams end and their
     slots come back. Mutation caught: no ``stream_slot`` (the third stream opens, 200)."""
     import contextlib
-    import time
 
     with make_client(tmp_path, limit_event_streams_per_key=2) as client:
         job_id = client.post("/v1/tables", json=LONG_TABLE).json()["id"]
@@ -51,9 +51,6 @@ def test_progress_streams_per_key_are_capped_and_released(tmp_path):
             client.delete(f"/v1/jobs/{job_id}")
             for s in streams[:2]:
                 assert [line for line in s.iter_lines() if line.startswith("event:")][-1] == "event: cancelled"
-        end = time.monotonic() + 30
-        while client.app.state.event_streams and time.monotonic() < end:
-            time.sleep(0.05)
-        assert not client.app.state.event_streams
+        wait_until(lambda: not client.app.state.event_streams, "end of the event streams")
         again = client.get(f"/v1/jobs/{job_id}/events")   # the job has finished: one event
         assert again.status_code == 200 and "event: cancelled" in again.text

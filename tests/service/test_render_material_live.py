@@ -13,6 +13,7 @@ import pytest
 from playwright import sync_api as playwright
 
 from support.cli import cli
+from support.liveness import HANG_MS, HANG_S
 from support.service_process import ServiceProcess, wait_state
 
 GRID = {"n_theta_i": 4, "n_theta_o": 8, "n_phi": 5}
@@ -44,7 +45,7 @@ def test_a_render_job_reuses_the_clis_cached_table(server, cache):
     before = (files[0].read_bytes(), files[0].stat().st_mtime_ns)
     material = {"type": "tabulated", "model": {"preset": "xenopeltis-thin-film"}, "grid": GRID, "rel_error": 0.5}
     r = httpx.post(f"{server.url}/v1/renders", json={"scene": "sphere", "options": {"variant": "full",
-                   "material": material}, "width": 16, "height": 9, "spp": 1}, timeout=60)
+                   "material": material}, "width": 16, "height": 9, "spp": 1}, timeout=HANG_S)
     assert r.status_code == 202, r.text
     assert wait_state(server.url, r.json()["id"], ("done", "failed", "cancelled"))["state"] == "done"
     summary = httpx.get(f"{server.url}/v1/renders/{r.json()['hash']}").json()["summary"]
@@ -70,7 +71,7 @@ def test_the_page_renders_and_tabulates_the_edited_material(server):
         errors = []
         page.on("pageerror", lambda e: errors.append(str(e)))
         page.goto(server.url + "/")
-        page.wait_for_function("+(document.body.dataset.lobeUpdates || 0) >= 1", timeout=300_000)
+        page.wait_for_function("+(document.body.dataset.lobeUpdates || 0) >= 1", timeout=HANG_MS)
         page.select_option("#preset", "xenopeltis-thin-film")
         page.fill("#film_thickness_nm", "555")
         page.select_option("#scene", "sphere")
@@ -85,8 +86,8 @@ def test_the_page_renders_and_tabulates_the_edited_material(server):
         assert material["type"] == "tabulated", body
         assert material["model"] == {"preset": "xenopeltis-thin-film",
                                      "overrides": {**material["model"]["overrides"], "film_thickness_nm": 555}}
-        page.wait_for_selector("#render-image:not([hidden])", timeout=300_000)
-        page.wait_for_function("document.getElementById('render-image').naturalWidth === 160", timeout=60_000)
+        page.wait_for_selector("#render-image:not([hidden])", timeout=HANG_MS)
+        page.wait_for_function("document.getElementById('render-image').naturalWidth === 160", timeout=HANG_MS)
 
         page.select_option("#tables-grid", "4x8x5")
         with page.expect_request(lambda r: r.url.endswith("/v1/tables") and r.method == "POST") as table_sent:
@@ -94,7 +95,7 @@ def test_the_page_renders_and_tabulates_the_edited_material(server):
         table_body = table_sent.value.post_data_json
         assert table_body["preset"] == "xenopeltis-thin-film" and table_body["grid"] == GRID
         assert table_body["overrides"]["film_thickness_nm"] == 555
-        page.wait_for_function("document.body.dataset.tableHash", timeout=300_000)
+        page.wait_for_function("document.body.dataset.tableHash", timeout=HANG_MS)
         shown = page.evaluate("document.body.dataset.tableHash")
         method = page.text_content("#tables-result dd[data-field='method']")
         browser.close()
@@ -103,4 +104,4 @@ def test_the_page_renders_and_tabulates_the_edited_material(server):
     assert info["meta"].get("method") == method == "adding-doubling"
     assert info["model"] == httpx.post(f"{server.url}/v1/bsdf/lobe", json={
         "preset": table_body["preset"], "overrides": table_body["overrides"], "points": 3, "resolution": 3,
-        "view": "plane"}, timeout=120).json()["model"]
+        "view": "plane"}, timeout=HANG_S).json()["model"]

@@ -15,6 +15,7 @@ import httpx2 as httpx
 import pytest
 from prometheus_client.parser import text_string_to_metric_families
 
+from support.liveness import HANG_S, wait_until
 from support.service_process import ServiceProcess, wait_state
 
 HEAVY = 2
@@ -27,8 +28,6 @@ LONG_EVAL = {"preset": "xenopeltis", "theta_i": [30], "theta_o": [float(x) for x
 # server allows that many walks; the default limit is 2^18)
 ENDLESS_EVAL = {**LONG_EVAL, "theta_o": [5.0 + 80.0 * k / 599 for k in range(600)]}
 ENDLESS_WALKS = 600 * 16_384
-# How long a wait may last before it counts as a hang: a liveness bound, never a timing check.
-HANG_S = 600
 
 
 def rss_mib(pid: int) -> float:
@@ -44,7 +43,7 @@ def cpu_s(pid: int) -> float:
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     s = ServiceProcess(tmp_path_factory.mktemp("saturation"), log_level="info", env={
-        "BSDFLAB_HEAVY_CONCURRENCY": str(HEAVY), "BSDFLAB_COMPUTE_DEADLINE_S": str(HANG_S), "BSDFLAB_THREADS": "1",
+        "BSDFLAB_HEAVY_CONCURRENCY": str(HEAVY), "BSDFLAB_COMPUTE_DEADLINE_S": str(int(HANG_S)), "BSDFLAB_THREADS": "1",
         "BSDFLAB_LIMIT_WALKS": str(ENDLESS_WALKS)})
     yield s
     s.stop()
@@ -61,13 +60,6 @@ def evals_ended(url: str, status: str | None = None) -> float:
     """How many /v1/bsdf/eval requests the server has finished (with ``status``)."""
     labels = {"route": "/v1/bsdf/eval"} | ({"status": status} if status else {})
     return metric(url, "bsdflab_http_request_duration_seconds_count", **labels)
-
-
-def wait_until(predicate, what: str) -> None:
-    end = time.monotonic() + HANG_S   # only a hang fails on this clock
-    while not predicate():
-        assert time.monotonic() < end, f"no {what} within {HANG_S} s"
-        time.sleep(0.05)
 
 
 def open_eval(port: int, body: dict) -> socket.socket:

@@ -21,6 +21,7 @@ from hypothesis import strategies as st
 from schemathesis.generation import GenerationMode
 from schemathesis.specs.openapi.checks import positive_data_acceptance
 
+from support.liveness import HANG_S
 from support.service_process import ServiceProcess
 
 EXCLUDED = [positive_data_acceptance]
@@ -78,7 +79,7 @@ def cancel_job(url: str, response) -> None:
         job = json.loads(response.content)["id"]
     except (ValueError, KeyError, TypeError):
         return   # no job named: the response checks judge the body
-    httpx.delete(f"{url}/v1/jobs/{job}", timeout=30)   # 200, or 409 for a job finished already
+    httpx.delete(f"{url}/v1/jobs/{job}", timeout=HANG_S)   # 200, or 409 for a job finished already
 
 
 def fuzz(url: str, examples_per_operation: int) -> dict:

@@ -20,6 +20,7 @@ from bsdflab.jobs import get_kind
 from bsdflab.jobs.render import build_scene
 from bsdflab.render import read_exr, render
 from bsdflab.tables import TableGrid, read_table, tabulate
+from support.liveness import HANG_MS, HANG_S, wait_until
 from support.service_process import ServiceProcess, follow_events, wait_state
 
 # PFMC explicitly: the jobs' progress, restarts and kills need a table that takes walks
@@ -61,7 +62,7 @@ def test_table_and_render_end_to_end(server, tmp_path):
     url = server.url
     # two identical requests at once share one job
     with ThreadPoolExecutor(2) as pool:
-        first, second = pool.map(lambda _: httpx.post(f"{url}/v1/tables", json=SMALL_TABLE, timeout=60), range(2))
+        first, second = pool.map(lambda _: httpx.post(f"{url}/v1/tables", json=SMALL_TABLE, timeout=HANG_S), range(2))
     assert first.status_code == second.status_code == 202, first.text
     job = first.json()
     assert second.json()["id"] == job["id"]
@@ -78,7 +79,7 @@ def test_table_and_render_end_to_end(server, tmp_path):
     np.testing.assert_array_equal(table.values, direct_table(SMALL_TABLE).values)
     assert httpx.post(f"{url}/v1/tables", json=SMALL_TABLE).status_code == 200   # cached now
 
-    r = httpx.post(f"{url}/v1/renders", json=SMALL_RENDER, timeout=60)
+    r = httpx.post(f"{url}/v1/renders", json=SMALL_RENDER, timeout=HANG_S)
     assert r.status_code == 202, r.text
     done = wait_state(url, r.json()["id"], ("done", "failed", "cancelled"))
     assert done["state"] == "done", done
@@ -103,11 +104,11 @@ def test_sigkill_mid_job_then_restart_completes_it(tmp_path):
                "min_samples": 4096, "max_samples": 4096}
     first = ServiceProcess(tmp_path)
     try:
-        job = httpx.post(f"{first.url}/v1/tables", json=request, timeout=60).json()
+        job = httpx.post(f"{first.url}/v1/tables", json=request, timeout=HANG_S).json()
         wait_state(first.url, job["id"], ("running",))
         # until the store has recorded the start (``started``): a crash counts a start only
         # for a job the store shows running (its live progress can come first)
-        deadline = time.monotonic() + 300
+        deadline = time.monotonic() + HANG_S
         while True:
             seen = httpx.get(f"{first.url}/v1/jobs/{job['id']}").json()
             if seen["progress"] > 0 and seen["started"] is not None:
@@ -118,10 +119,9 @@ def test_sigkill_mid_job_then_restart_completes_it(tmp_path):
         assert workers, "the server runs its jobs in worker processes"
     finally:
         first.kill()
-    end = time.monotonic() + 10   # the workers die with their server (PR_SET_PDEATHSIG)
-    while any(alive(pid) for pid in workers):
-        assert time.monotonic() < end, f"worker processes {workers} outlived the killed server"
-        time.sleep(0.05)
+    # the workers die with their server (PR_SET_PDEATHSIG); one that outlived it would go on
+    # and write the table (checked below)
+    wait_until(lambda: not any(alive(pid) for pid in workers), f"end of the worker processes {workers}")
     artefact = tmp_path / "tables" / f"{job['hash']}.exr"   # the server's table cache (ServiceProcess)
     time.sleep(1.0)   # a worker that outlived its server would go on and write the table
     assert not artefact.exists(), "the job finished before the kill: make it longer"
@@ -132,7 +132,7 @@ def test_sigkill_mid_job_then_restart_completes_it(tmp_path):
         done = wait_state(second.url, job["id"], ("done", "failed", "cancelled"))
         assert done["state"] == "done", done
         # (the first table key of a fresh process takes seconds: bsdflab.jobs.tabulate.key)
-        assert httpx.post(f"{second.url}/v1/tables", json=request, timeout=120).status_code == 200
+        assert httpx.post(f"{second.url}/v1/tables", json=request, timeout=HANG_S).status_code == 200
     finally:
         second.stop()
     assert not [p.name for p in artefact.parent.iterdir() if p.name.startswith(".")]   # no temp files
@@ -163,10 +163,10 @@ def test_page_in_chromium(server, tmp_path):
         # one request at a time: the server has 2 computing slots and answers 429 beyond
         # them (BSDFLAB_HEAVY_CONCURRENCY), and the page does not retry; changing the quality
         # while the first lobe still computes lost that race under load
-        page.wait_for_function("+(document.body.dataset.lobeUpdates || 0) >= 1", timeout=300_000)
-        page.wait_for_function("document.querySelectorAll('.swatch').length === 18", timeout=120_000)
+        page.wait_for_function("+(document.body.dataset.lobeUpdates || 0) >= 1", timeout=HANG_MS)
+        page.wait_for_function("document.querySelectorAll('.swatch').length === 18", timeout=HANG_MS)
         page.select_option("#quality", "4")
-        page.wait_for_function("+(document.body.dataset.lobeUpdates || 0) >= 2", timeout=120_000)
+        page.wait_for_function("+(document.body.dataset.lobeUpdates || 0) >= 2", timeout=HANG_MS)
 
         def lobe_red():
             return page.evaluate("document.getElementById('polar').data[0].r")
@@ -176,11 +176,11 @@ def test_page_in_chromium(server, tmp_path):
 
         before_lobe, before_swatches = lobe_red(), swatches()
         updates = int(page.evaluate("document.body.dataset.lobeUpdates"))
-        with page.expect_response(lambda r: r.url.endswith("/v1/bsdf/lobe") and r.ok, timeout=120_000) as lobe:
+        with page.expect_response(lambda r: r.url.endswith("/v1/bsdf/lobe") and r.ok, timeout=HANG_MS) as lobe:
             page.fill("#film_thickness_nm", "650")     # a range input: fill sets it and fires input
-        page.wait_for_function(f"+document.body.dataset.lobeUpdates > {updates}", timeout=120_000)
+        page.wait_for_function(f"+document.body.dataset.lobeUpdates > {updates}", timeout=HANG_MS)
         page.wait_for_function(f"document.querySelector('.swatch').dataset.colour !== '{before_swatches[0]}'",
-                               timeout=60_000)
+                               timeout=HANG_MS)
         assert lobe_red() != before_lobe
         assert swatches() != before_swatches and len(swatches()) == 18
         shown = lobe_red()
@@ -198,8 +198,8 @@ def test_page_in_chromium(server, tmp_path):
         page.select_option("#size", "160x90")
         page.select_option("#spp", "4")
         page.click("#render-button")
-        page.wait_for_selector("#render-image:not([hidden])", timeout=180_000)
-        page.wait_for_function("document.getElementById('render-image').naturalWidth === 160", timeout=60_000)
+        page.wait_for_selector("#render-image:not([hidden])", timeout=HANG_MS)
+        page.wait_for_function("document.getElementById('render-image').naturalWidth === 160", timeout=HANG_MS)
         page.evaluate("window.scrollTo(0, 0)")
         src = page.evaluate("document.getElementById('render-image').src")
         box = page.locator("#render-image").bounding_box()
@@ -217,7 +217,7 @@ def _assert_screenshot_shows(shot, box, src):
 
     from PIL import Image
 
-    served = np.asarray(Image.open(BytesIO(httpx.get(src, timeout=60).content)).convert("RGB"), float)
+    served = np.asarray(Image.open(BytesIO(httpx.get(src, timeout=HANG_S).content)).convert("RGB"), float)
     seen = np.asarray(Image.open(shot).convert("RGB"), float)
     x0, y0 = int(box["x"]) + 2, int(box["y"]) + 2      # inside the box: no border or antialiased edge
     x1, y1 = int(box["x"] + box["width"]) - 2, int(box["y"] + box["height"]) - 2

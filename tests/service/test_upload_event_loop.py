@@ -16,6 +16,7 @@ import pytest
 from bsdflab.bsdfs import RoughConductor
 from bsdflab.measured import export_model
 from bsdflab.service import uploads
+from support.liveness import HANG_S
 from support.service_client import make_client
 
 LONG = (Path(__file__).resolve().parents[2] / "examples" / "fit" / "data.csv").read_bytes()
@@ -66,7 +67,7 @@ def test_a_request_cancelled_while_its_file_is_stored_keeps_its_turn_until_store
 
         def held_put_upload(*args, **kwargs):
             entered.set()
-            release.wait(60)
+            release.wait(HANG_S)
             return put_upload(*args, **kwargs)
 
         jobs.store.put_upload = held_put_upload

@@ -16,6 +16,7 @@ from bsdflab.measured.rgl_file import read_rgl
 from bsdflab.service.auth import Client
 from bsdflab.service.upload_gate import UploadGate
 from bsdflab.service.uploads import DESCRIPTION_PREVIEW
+from support.liveness import HANG_S
 from support.service_client import make_client
 
 
@@ -156,5 +157,5 @@ def test_concurrent_uploads_of_one_key_do_not_overshoot_its_quota(tmp_path, rgl_
         for t in threads:
             t.start()
         for t in threads:
-            t.join(60)
+            t.join(HANG_S)
         assert sorted(codes) == [200, 413], codes

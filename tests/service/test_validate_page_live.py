@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 from playwright import sync_api as playwright
 
+from support.liveness import HANG_MS
 from support.service_process import ServiceProcess
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
@@ -48,13 +49,13 @@ def test_validate_card_runs_a_quick_validation_and_opens_the_report(server, tmp_
             ),
         )
         page.goto(server.url + "/")
-        page.wait_for_selector("#validate-families input[value='fit']", timeout=60_000)
+        page.wait_for_selector("#validate-families input[value='fit']", timeout=HANG_MS)
         labels = page.eval_on_selector_all("#validate-families input", "boxes => boxes.map(b => b.value)")
         assert {"solvers", "coverage", "fit", "measured", "export", "service"} <= set(labels), labels
         page.select_option("#validate-level", "quick")
         page.check("#validate-families input[value='fit']")
         page.click("#validate-button")
-        page.wait_for_selector("#validate-report:not([hidden])", timeout=300_000)
+        page.wait_for_selector("#validate-report:not([hidden])", timeout=HANG_MS)
         assert posted == [{"level": "quick", "families": ["fit"]}], posted
         status = page.inner_text("#validate-status")
         assert status.startswith("done: 1 pass, 0 fail"), status

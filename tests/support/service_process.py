@@ -14,6 +14,8 @@ from pathlib import Path
 
 import httpx2 as httpx
 
+from support.liveness import HANG_S
+
 # pytest-xdist's workers (PYTEST_XDIST_WORKER gw0, gw1, ...) each draw ports from a band of
 # their own below Linux's ephemeral range (32768-60999): a port one worker has probed and not
 # yet handed to its server cannot be taken by the other worker's probe, nor by any
@@ -60,7 +62,7 @@ class ServiceProcess:
             stdout=self.log, stderr=subprocess.STDOUT, env={**os.environ, **(env or {})})
         self._wait_healthy()
 
-    def _wait_healthy(self, timeout: float = 120.0) -> None:
+    def _wait_healthy(self, timeout: float = HANG_S) -> None:
         end = time.monotonic() + timeout
         while time.monotonic() < end:
             if self.process.poll() is not None:
@@ -123,7 +125,7 @@ def follow_events(url: str, job_id: str, timeout: float = 300.0) -> list[tuple[s
 def wait_state(url: str, job_id: str, states, timeout: float = 300.0) -> dict:
     end = time.monotonic() + timeout
     while True:
-        job = httpx.get(f"{url}/v1/jobs/{job_id}", timeout=30).json()
+        job = httpx.get(f"{url}/v1/jobs/{job_id}", timeout=HANG_S).json()
         if job["state"] in states:
             return job
         if time.monotonic() > end:

@@ -39,6 +39,7 @@ from bsdflab.cli.main import main as cli_main
 from bsdflab.tables import TableBSDF, TableGrid, tabulate, write_table
 from bsdflab.testing import albedo_sampled, albedo_uniform, bsdf_chi2, sidak_z_limit
 from support.cli import interruptible, wait_for_cpu
+from support.liveness import HANG_S
 
 ALPHA = 0.01
 WL = [450.0, 550.0, 650.0]  # spectral tables: 27x cheaper walks than 81-wavelength RGB
@@ -473,13 +474,13 @@ def test_11_interrupted_tabulation_leaves_nothing(tmp_path):
 
         reader = threading.Thread(target=read, daemon=True)
         reader.start()
-        assert started.wait(300), f"tabulation never started: {err.decode(errors='replace')}"
+        assert started.wait(HANG_S), f"tabulation never started: {err.decode(errors='replace')}"
         wait_for_cpu(proc, 1.0, err.decode(errors="replace"))  # inside the tabulation, at any load
         proc.send_signal(signal.SIGINT)
         sent = time.monotonic()
-        rc = proc.wait(timeout=300)   # a hang guard; the latency is printed, not asserted
+        rc = proc.wait(timeout=HANG_S)   # a hang guard; the latency is printed, not asserted
         print(f"stopped {time.monotonic() - sent:.2f} s after SIGINT")
-    reader.join(5)
+    reader.join(HANG_S)
     text = err.decode(errors="replace")
     assert rc != 0
     assert rc not in (-signal.SIGABRT, -signal.SIGSEGV) and "terminate called" not in text, (rc, text[-2000:])
@@ -557,6 +558,6 @@ def test_16_cli_bad_input_as_a_process(tmp_path):
     for argv, match in ((["--rel-error", "-1"], "rel_error must be >"),
                         (["--theta-o", "many"], "invalid int value")):
         r = subprocess.run([*BSDFLAB, "tabulate", "--quiet", *argv], capture_output=True, text=True,
-                           env=env, timeout=60)
+                           env=env, timeout=HANG_S)
         assert r.returncode == 2 and match in r.stderr, r.stderr
     assert os.listdir(tmp_path) == []

@@ -26,6 +26,7 @@ import pytest
 
 from bsdflab.validation import REGISTRY, load_checks
 from bsdflab.validation.runner import run_check
+from support.liveness import HANG_S
 
 load_checks()
 NEW = ("solvers", "coverage", "fit", "measured", "export", "service")
@@ -143,7 +144,7 @@ def test_service_fails_a_server_that_answers_500(tmp_path):
     try:
         import urllib.request
 
-        with urllib.request.urlopen(f"{url}/openapi.json", timeout=30) as response:
+        with urllib.request.urlopen(f"{url}/openapi.json", timeout=HANG_S) as response:
             schema = response.read()
     finally:
         stop()
