@@ -42,7 +42,8 @@ def wait_done(client, job_id: str, who: str) -> dict:
 
 @pytest.fixture(scope="module")
 def served(tmp_path_factory):
-    settings = Settings(data_dir=tmp_path_factory.mktemp("auth"), executor="threads", workers=1,
+    settings = Settings(data_dir=(folder := tmp_path_factory.mktemp("auth")), cache_dir=folder / "tables",
+                        executor="threads", workers=1,
                         api_keys=KEYS, progress_interval_s=0.05)
     with TestClient(create_app(settings)) as client:
         job = client.post("/v1/tables", json=TINY, headers=key(ALICE)).json()

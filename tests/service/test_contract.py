@@ -16,7 +16,8 @@ ANGLES = {"theta_i": [0], "theta_o": [0]}
 
 @pytest.fixture(scope="module")
 def client(tmp_path_factory):
-    settings = Settings(data_dir=tmp_path_factory.mktemp("contract"), executor="threads", workers=1,
+    settings = Settings(data_dir=(folder := tmp_path_factory.mktemp("contract")), cache_dir=folder / "tables",
+                        executor="threads", workers=1,
                         limit_body_bytes=64 << 10)
     with TestClient(create_app(settings)) as c:
         yield c

@@ -243,7 +243,8 @@ def test_a_fit_never_shows_another_tenants_job(tmp_path):
 
     alice, bob = {"X-API-Key": "a" * 32}, {"X-API-Key": "b" * 32}
     keys = {"alice": {"key": "a" * 32}, "bob": {"key": "b" * 32}}
-    settings = Settings(data_dir=tmp_path, executor="threads", workers=1, api_keys=keys, progress_interval_s=0.05)
+    settings = Settings(data_dir=tmp_path, cache_dir=tmp_path / "tables",
+                        executor="threads", workers=1, api_keys=keys, progress_interval_s=0.05)
     with TestClient(create_app(settings)) as c:
         up = c.post("/v1/fits/datasets", params={"name": "data.csv"}, content=LONG,
                     headers={**alice, "Content-Type": "application/octet-stream"}).json()
@@ -273,7 +274,8 @@ def test_a_finished_fit_is_only_shown_to_a_client_holding_its_data(tmp_path):
 
     alice, bob = {"X-API-Key": "a" * 32}, {"X-API-Key": "b" * 32}
     keys = {"alice": {"key": "a" * 32}, "bob": {"key": "b" * 32}}
-    settings = Settings(data_dir=tmp_path, executor="threads", workers=1, api_keys=keys, progress_interval_s=0.05)
+    settings = Settings(data_dir=tmp_path, cache_dir=tmp_path / "tables",
+                        executor="threads", workers=1, api_keys=keys, progress_interval_s=0.05)
     octet = {"Content-Type": "application/octet-stream"}
     with TestClient(create_app(settings)) as c:
         up = c.post("/v1/fits/datasets", params={"name": "data.csv"}, content=LONG, headers={**alice, **octet}).json()

@@ -16,7 +16,8 @@ LONG_EVAL = {"preset": "xenopeltis", "theta_i": [30], "theta_o": [float(x) for x
 
 def test_a_request_past_its_deadline_stops(tmp_path):
     """Before: no deadline (2^24 walks of xenopeltis, allowed, were 15 CPU-minutes)."""
-    settings = Settings(data_dir=tmp_path, executor="threads", workers=1, compute_deadline_s=0.5,
+    settings = Settings(data_dir=tmp_path, cache_dir=tmp_path / "tables",
+                        executor="threads", workers=1, compute_deadline_s=0.5,
                         heavy_concurrency=1)
     with TestClient(create_app(settings)) as client:
         one = {**LONG_EVAL, "theta_o": [40.0]}

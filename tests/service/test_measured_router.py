@@ -44,7 +44,8 @@ def files(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def client(tmp_path_factory):
-    settings = Settings(data_dir=tmp_path_factory.mktemp("measured-data"), executor="threads", workers=1,
+    settings = Settings(data_dir=(folder := tmp_path_factory.mktemp("measured-data")), cache_dir=folder / "tables",
+                        executor="threads", workers=1,
                         api_keys=KEYS, limit_measured_bytes=CAP)
     with TestClient(create_app(settings)) as c:
         yield c

@@ -15,7 +15,8 @@ SLOW = {"steps": 400, "step_s": 0.05}   # 20 s: still running when the service s
 
 
 def _service(tmp_path) -> JobService:
-    return JobService(Settings(data_dir=tmp_path, executor="threads", workers=1, progress_interval_s=0.02))
+    return JobService(Settings(data_dir=tmp_path, cache_dir=tmp_path / "tables",
+                               executor="threads", workers=1, progress_interval_s=0.02))
 
 
 def _wait_running(service: JobService, job_id: str, timeout: float = 60.0) -> None:

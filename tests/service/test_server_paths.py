@@ -24,7 +24,8 @@ def served(tmp_path_factory):
     folder = tmp_path_factory.mktemp("paths")
     outside = folder / "outside.exr"
     write_table(outside, tabulate(Diffuse(0.3), TableGrid(2, 4, 3), progress=False))
-    settings = Settings(data_dir=folder / "data", executor="threads", workers=1, progress_interval_s=0.05)
+    settings = Settings(data_dir=folder / "data", cache_dir=folder / "tables",
+                        executor="threads", workers=1, progress_interval_s=0.05)
     with TestClient(create_app(settings)) as client:
         r = client.post("/v1/tables", json={"model": {"type": "diffuse", "reflectance": 0.5},
                                             "grid": {"n_theta_i": 2, "n_theta_o": 4, "n_phi": 3}})

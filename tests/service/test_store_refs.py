@@ -20,7 +20,8 @@ GRID = {"n_theta_i": 2, "n_theta_o": 4, "n_phi": 3}
 
 @pytest.fixture(scope="module")
 def client(tmp_path_factory):
-    settings = Settings(data_dir=tmp_path_factory.mktemp("refs-data"), executor="threads", workers=1,
+    settings = Settings(data_dir=(folder := tmp_path_factory.mktemp("refs-data")), cache_dir=folder / "tables",
+                        executor="threads", workers=1,
                         progress_interval_s=0.05)
     with TestClient(create_app(settings)) as c:
         yield c
@@ -147,6 +148,7 @@ def test_the_model_cache_is_bounded_by_bytes(tmp_path):
         cache.get(spec)
     assert len(cache) == 2 and cache.bytes <= 2.5 * one
     assert one > 2 * (folder / "0.bsdf").stat().st_size   # the file counted twice, and the model's overhead
-    settings = Settings(data_dir=tmp_path / "d", executor="threads", workers=1, model_cache_bytes=12345)
+    settings = Settings(data_dir=tmp_path / "d", cache_dir=tmp_path / "tables",
+                        executor="threads", workers=1, model_cache_bytes=12345)
     with TestClient(create_app(settings)):
         assert MODELS.max_bytes == 12345

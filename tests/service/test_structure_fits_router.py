@@ -225,7 +225,7 @@ def test_another_tenants_hash_is_refused(tmp_path):
 
     alice, bob = {"X-API-Key": "a" * 32}, {"X-API-Key": "b" * 32}
     keys = {"alice": {"key": "a" * 32}, "bob": {"key": "b" * 32}}
-    settings = Settings(data_dir=tmp_path, executor="threads", workers=1, api_keys=keys)
+    settings = Settings(data_dir=tmp_path, cache_dir=tmp_path / "tables", executor="threads", workers=1, api_keys=keys)
     with TestClient(create_app(settings)) as c:
         ha, hb = upload(c, A, "at15.csv", alice), upload(c, B, "rest.csv", bob)
         body = {

@@ -19,7 +19,8 @@ LONG = {"preset": "xenopeltis-thin-film", "grid": {"n_theta_i": 12, "n_theta_o":
 
 @pytest.fixture(scope="module")
 def client(tmp_path_factory):
-    settings = Settings(data_dir=tmp_path_factory.mktemp("edges"), executor="threads", workers=1, api_keys=KEYS,
+    settings = Settings(data_dir=(folder := tmp_path_factory.mktemp("edges")), cache_dir=folder / "tables",
+                        executor="threads", workers=1, api_keys=KEYS,
                         progress_interval_s=0.05)
     with TestClient(create_app(settings)) as c:
         yield c
@@ -64,7 +65,8 @@ def test_a_render_never_shows_another_tenants_job(tmp_path):
     /v1/renders/{hash} of alice's running render answered her job (id, state, progress).
     Mutation caught: ``render_info`` without ``jobs.visible`` (bob sees the job id)."""
     keys = {"alice": {"key": ALICE}, "bob": {"key": BOB}}
-    settings = Settings(data_dir=tmp_path, executor="threads", workers=1, api_keys=keys, progress_interval_s=0.05)
+    settings = Settings(data_dir=tmp_path, cache_dir=tmp_path / "tables",
+                        executor="threads", workers=1, api_keys=keys, progress_interval_s=0.05)
     with TestClient(create_app(settings)) as c:
         job = c.post("/v1/renders", json={"scene": "sphere", "width": 64, "height": 64, "spp": 256},
                      headers={"X-API-Key": ALICE}).json()
